@@ -1,0 +1,19 @@
+# Every dependency is a Debian package (scripts/install_deps.sh installs them).
+# Nothing is vendored or downloaded at build time.
+find_package(OpenMP REQUIRED)
+find_package(HDF5 REQUIRED COMPONENTS C)
+find_package(TIFF REQUIRED)
+find_package(nlohmann_json 3 REQUIRED)
+find_package(CLI11 REQUIRED)
+find_package(fmt REQUIRED)
+find_package(tomlplusplus REQUIRED)
+# CGAL first, then Eigen with NO_MODULE: CGAL's own FindEigen3 module would
+# otherwise shadow Eigen's config and no Eigen3::Eigen target would exist.
+find_package(CGAL QUIET)
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+if(TOMOGRAIN_TESTS)
+  find_package(GTest REQUIRED)
+endif()
+if(TOMOGRAIN_BENCH)
+  find_package(benchmark REQUIRED)
+endif()

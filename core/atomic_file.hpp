@@ -1,0 +1,31 @@
+// Atomic outputs: write to a temporary beside the target, rename on success.
+// An error (exception, early return) leaves no half-written output behind:
+// the destructor removes the temporary unless commit() ran.
+//
+//   AtomicPath out("labels.h5");
+//   write_everything(out.temp());   // may throw
+//   out.commit();                   // rename(temp, "labels.h5")
+#pragma once
+#include <filesystem>
+#include <string>
+
+namespace tg {
+
+class AtomicPath {
+ public:
+  explicit AtomicPath(std::filesystem::path target);
+  ~AtomicPath();
+  AtomicPath(const AtomicPath&) = delete;
+  AtomicPath& operator=(const AtomicPath&) = delete;
+
+  const std::filesystem::path& temp() const { return temp_; }
+  const std::filesystem::path& target() const { return target_; }
+  // Renames the temporary (file or folder) onto the target, replacing it.
+  void commit();
+
+ private:
+  std::filesystem::path target_, temp_;
+  bool committed_ = false;
+};
+
+}  // namespace tg

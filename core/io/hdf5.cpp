@@ -1,0 +1,357 @@
+#include "core/io/hdf5.hpp"
+
+#include <hdf5.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <sstream>
+
+#include "core/atomic_file.hpp"
+#include "core/progress.hpp"
+
+namespace tg {
+namespace fs = std::filesystem;
+
+namespace {
+
+// RAII for hid_t handles; the closer matches the object kind.
+class Handle {
+ public:
+  Handle() = default;
+  Handle(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
+  ~Handle() { reset(); }
+  Handle(Handle&& o) noexcept : id_(o.id_), close_(o.close_) { o.id_ = -1; }
+  Handle& operator=(Handle&& o) noexcept {
+    if (this != &o) { reset(); id_ = o.id_; close_ = o.close_; o.id_ = -1; }
+    return *this;
+  }
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  hid_t get() const { return id_; }
+  bool ok() const { return id_ >= 0; }
+  void reset() { if (id_ >= 0 && close_) close_(id_); id_ = -1; }
+
+ private:
+  hid_t id_ = -1;
+  herr_t (*close_)(hid_t) = nullptr;
+};
+
+Handle file_h(hid_t id) { return {id, H5Fclose}; }
+Handle dset_h(hid_t id) { return {id, H5Dclose}; }
+Handle space_h(hid_t id) { return {id, H5Sclose}; }
+Handle plist_h(hid_t id) { return {id, H5Pclose}; }
+Handle type_h(hid_t id) { return {id, H5Tclose}; }
+Handle attr_h(hid_t id) { return {id, H5Aclose}; }
+Handle group_h(hid_t id) { return {id, H5Gclose}; }
+
+template <class T> hid_t native_type();
+template <> hid_t native_type<uint8_t>() { return H5T_NATIVE_UINT8; }
+template <> hid_t native_type<uint16_t>() { return H5T_NATIVE_UINT16; }
+template <> hid_t native_type<uint32_t>() { return H5T_NATIVE_UINT32; }
+template <> hid_t native_type<float>() { return H5T_NATIVE_FLOAT; }
+
+std::string norm(const std::string& ds) { return ds.empty() || ds[0] != '/' ? "/" + ds : ds; }
+
+bool path_exists(hid_t file, const std::string& path) {
+  // H5Lexists needs every parent to exist: walk the components.
+  std::string cur;
+  std::istringstream is(path);
+  std::string part;
+  while (std::getline(is, part, '/')) {
+    if (part.empty()) continue;
+    cur += "/" + part;
+    if (H5Lexists(file, cur.c_str(), H5P_DEFAULT) <= 0) return false;
+  }
+  return !cur.empty();
+}
+
+void write_attr_doubles(hid_t obj, const char* name, const double* v, hsize_t n) {
+  Handle sp = space_h(H5Screate_simple(1, &n, nullptr));
+  Handle a = attr_h(H5Acreate2(obj, name, H5T_NATIVE_DOUBLE, sp.get(), H5P_DEFAULT, H5P_DEFAULT));
+  H5Awrite(a.get(), H5T_NATIVE_DOUBLE, v);
+}
+
+void write_attr_string(hid_t obj, const char* name, const std::string& s) {
+  Handle t = type_h(H5Tcopy(H5T_C_S1));
+  H5Tset_size(t.get(), std::max<size_t>(1, s.size()));
+  Handle sp = space_h(H5Screate(H5S_SCALAR));
+  if (H5Aexists(obj, name) > 0) H5Adelete(obj, name);
+  Handle a = attr_h(H5Acreate2(obj, name, t.get(), sp.get(), H5P_DEFAULT, H5P_DEFAULT));
+  std::string buf = s.empty() ? std::string(1, '\0') : s;
+  H5Awrite(a.get(), t.get(), buf.data());
+}
+
+bool read_attr_doubles(hid_t obj, const char* name, double* v, size_t n) {
+  if (H5Aexists(obj, name) <= 0) return false;
+  Handle a = attr_h(H5Aopen(obj, name, H5P_DEFAULT));
+  Handle sp = space_h(H5Aget_space(a.get()));
+  if (H5Sget_simple_extent_npoints(sp.get()) != static_cast<hssize_t>(n)) return false;
+  return H5Aread(a.get(), H5T_NATIVE_DOUBLE, v) >= 0;
+}
+
+std::string read_attr_string(hid_t obj, const char* name) {
+  if (H5Aexists(obj, name) <= 0) return "";
+  Handle a = attr_h(H5Aopen(obj, name, H5P_DEFAULT));
+  Handle ft = type_h(H5Aget_type(a.get()));
+  if (H5Tget_class(ft.get()) != H5T_STRING) return "";
+  if (H5Tis_variable_str(ft.get()) > 0) {
+    char* s = nullptr;
+    Handle mt = type_h(H5Tcopy(H5T_C_S1));
+    H5Tset_size(mt.get(), H5T_VARIABLE);
+    if (H5Aread(a.get(), mt.get(), &s) < 0 || !s) return "";
+    std::string out(s);
+    H5free_memory(s);
+    return out;
+  }
+  const size_t n = H5Tget_size(ft.get());
+  std::string buf(n, '\0');
+  H5Aread(a.get(), ft.get(), buf.data());
+  return std::string(buf.c_str());
+}
+
+hid_t lcpl_intermediate() {
+  hid_t p = H5Pcreate(H5P_LINK_CREATE);
+  H5Pset_create_intermediate_group(p, 1);
+  return p;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------ writer
+struct H5Writer::Impl {
+  std::string path;
+  AtomicPath out;
+  Handle file;
+  explicit Impl(const std::string& p) : path(p), out(p) {}
+};
+
+H5Writer::H5Writer(const std::string& path) : impl_(std::make_unique<Impl>(path)) {
+  impl_->file = file_h(H5Fcreate(impl_->out.temp().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
+  if (!impl_->file.ok()) throw InputError(path + ": cannot create HDF5 file");
+}
+
+H5Writer::~H5Writer() = default;
+
+template <class T>
+void H5Writer::write_volume(const std::string& dataset, const Volume<T>& v, int compression) {
+  const std::string ds = norm(dataset);
+  const auto& s = v.shape();
+  if (s.empty()) throw UsageError(impl_->path + ":" + ds + ": cannot store an empty volume " + s.str());
+  if (compression < 0 || compression > 9) throw UsageError("HDF5 compression level must be 0..9");
+  const hsize_t dims[3] = {static_cast<hsize_t>(s.nz), static_cast<hsize_t>(s.ny), static_cast<hsize_t>(s.nx)};
+  // Chunks of up to 16 slices x 256 x 256: small enough for partial reads, large for throughput.
+  const hsize_t chunk[3] = {std::min<hsize_t>(dims[0], 16), std::min<hsize_t>(dims[1], 256),
+                            std::min<hsize_t>(dims[2], 256)};
+  Handle space = space_h(H5Screate_simple(3, dims, nullptr));
+  Handle dcpl = plist_h(H5Pcreate(H5P_DATASET_CREATE));
+  H5Pset_chunk(dcpl.get(), 3, chunk);
+  if (compression > 0) {
+    H5Pset_shuffle(dcpl.get());
+    H5Pset_deflate(dcpl.get(), static_cast<unsigned>(compression));
+  }
+  Handle lcpl = plist_h(lcpl_intermediate());
+  Handle d = dset_h(H5Dcreate2(impl_->file.get(), ds.c_str(), native_type<T>(), space.get(), lcpl.get(), dcpl.get(),
+                               H5P_DEFAULT));
+  if (!d.ok()) throw InputError(impl_->path + ":" + ds + ": cannot create dataset");
+  // Write in slabs of whole chunk rows so progress can be shown and the chunk cache stays small.
+  Progress bar("writing " + fs::path(impl_->path).filename().string() + ds, static_cast<double>(s.nz));
+  for (hsize_t z0 = 0; z0 < dims[0]; z0 += chunk[0]) {
+    const hsize_t start[3] = {z0, 0, 0}, count[3] = {std::min(chunk[0], dims[0] - z0), dims[1], dims[2]};
+    Handle fsp = space_h(H5Dget_space(d.get()));
+    H5Sselect_hyperslab(fsp.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
+    Handle msp = space_h(H5Screate_simple(3, count, nullptr));
+    if (H5Dwrite(d.get(), native_type<T>(), msp.get(), fsp.get(), H5P_DEFAULT,
+                 v.data() + static_cast<int64_t>(z0) * s.slice_voxels()) < 0)
+      throw InputError(impl_->path + ":" + ds + ": write failed");
+    bar.update(static_cast<double>(z0 + count[0]));
+  }
+  const auto& g = v.geometry();
+  write_attr_doubles(d.get(), "voxel_size_m", g.voxel_size_m.data(), 3);
+  write_attr_doubles(d.get(), "origin_m", g.origin_m.data(), 3);
+  write_attr_string(d.get(), "units", "voxel_size_m and origin_m in metres, (z, y, x) order");
+  // Same geometry on the root, so tools that look at the file see it too.
+  write_attr_doubles(impl_->file.get(), "voxel_size_m", g.voxel_size_m.data(), 3);
+  write_attr_doubles(impl_->file.get(), "origin_m", g.origin_m.data(), 3);
+}
+
+void H5Writer::write_volume(const std::string& dataset, const AnyVolume& v, int compression) {
+  std::visit([&](const auto& vol) { write_volume(dataset, vol, compression); }, v);
+}
+
+void H5Writer::write_table(const std::string& group, const Table& t) {
+  const std::string g = norm(group);
+  Handle lcpl = plist_h(lcpl_intermediate());
+  Handle grp = group_h(H5Gcreate2(impl_->file.get(), g.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT));
+  if (!grp.ok()) throw InputError(impl_->path + ":" + g + ": cannot create table group");
+  std::string names;
+  for (const auto& c : t.columns()) {
+    names += (names.empty() ? "" : ",") + c.name;
+    const hsize_t n = static_cast<hsize_t>(c.size());
+    Handle sp = space_h(H5Screate_simple(1, &n, nullptr));
+    if (!c.is_text) {
+      Handle d = dset_h(H5Dcreate2(grp.get(), c.name.c_str(), H5T_NATIVE_DOUBLE, sp.get(), H5P_DEFAULT, H5P_DEFAULT,
+                                   H5P_DEFAULT));
+      if (!d.ok() || (n > 0 && H5Dwrite(d.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, c.num.data()) < 0))
+        throw InputError(impl_->path + ":" + g + "/" + c.name + ": write failed");
+    } else {
+      size_t w = 1;
+      for (const auto& s : c.text) w = std::max(w, s.size());
+      std::vector<char> buf(w * std::max<size_t>(1, c.text.size()), '\0');
+      for (size_t r = 0; r < c.text.size(); ++r) std::memcpy(buf.data() + r * w, c.text[r].data(), c.text[r].size());
+      Handle st = type_h(H5Tcopy(H5T_C_S1));
+      H5Tset_size(st.get(), w);
+      Handle d = dset_h(H5Dcreate2(grp.get(), c.name.c_str(), st.get(), sp.get(), H5P_DEFAULT, H5P_DEFAULT,
+                                   H5P_DEFAULT));
+      if (!d.ok() || (n > 0 && H5Dwrite(d.get(), st.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0))
+        throw InputError(impl_->path + ":" + g + "/" + c.name + ": write failed");
+    }
+  }
+  write_attr_string(grp.get(), "columns", names);
+}
+
+void H5Writer::write_attribute(const std::string& name, const std::string& value) {
+  write_attr_string(impl_->file.get(), name.c_str(), value);
+}
+
+void H5Writer::commit() {
+  if (H5Fflush(impl_->file.get(), H5F_SCOPE_GLOBAL) < 0) throw InputError(impl_->path + ": flush failed");
+  impl_->file.reset();
+  impl_->out.commit();
+}
+
+template void H5Writer::write_volume(const std::string&, const Volume<uint8_t>&, int);
+template void H5Writer::write_volume(const std::string&, const Volume<uint16_t>&, int);
+template void H5Writer::write_volume(const std::string&, const Volume<uint32_t>&, int);
+template void H5Writer::write_volume(const std::string&, const Volume<float>&, int);
+
+// ------------------------------------------------------------------ reader
+struct H5Reader::Impl {
+  std::string path;
+  Handle file;
+};
+
+H5Reader::H5Reader(const std::string& path) : impl_(std::make_unique<Impl>()) {
+  impl_->path = path;
+  if (!fs::is_regular_file(path)) throw InputError(path + ": no such file");
+  if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(path + ": not an HDF5 file");
+  impl_->file = file_h(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
+  if (!impl_->file.ok()) throw InputError(path + ": cannot open HDF5 file (corrupt or truncated?)");
+}
+
+H5Reader::~H5Reader() = default;
+
+bool H5Reader::has(const std::string& dataset) const { return path_exists(impl_->file.get(), norm(dataset)); }
+
+std::vector<std::string> H5Reader::datasets() const {
+  std::vector<std::string> out;
+  auto cb = [](hid_t, const char* name, const H5O_info_t* info, void* data) -> herr_t {
+    if (info->type == H5O_TYPE_DATASET) static_cast<std::vector<std::string>*>(data)->push_back("/" + std::string(name));
+    return 0;
+  };
+  H5Ovisit2(impl_->file.get(), H5_INDEX_NAME, H5_ITER_NATIVE, cb, &out, H5O_INFO_BASIC);  // HDF5 1.10 API
+  return out;
+}
+
+AnyVolume H5Reader::read_volume(const std::string& dataset, bool progress) const {
+  const std::string ds = norm(dataset);
+  const std::string where = impl_->path + ":" + ds;
+  if (!has(ds)) {
+    std::string avail;
+    for (const auto& d : datasets()) avail += (avail.empty() ? "" : ", ") + d;
+    throw InputError(where + ": no such dataset" + (avail.empty() ? "" : " (file has: " + avail + ")"));
+  }
+  Handle d = dset_h(H5Dopen2(impl_->file.get(), ds.c_str(), H5P_DEFAULT));
+  if (!d.ok()) throw InputError(where + ": not a dataset");
+  Handle ft = type_h(H5Dget_type(d.get()));
+  const H5T_class_t cls = H5Tget_class(ft.get());
+  const size_t size = H5Tget_size(ft.get());
+  DType dt;
+  if (cls == H5T_INTEGER && H5Tget_sign(ft.get()) == H5T_SGN_NONE && size == 1) dt = DType::u8;
+  else if (cls == H5T_INTEGER && H5Tget_sign(ft.get()) == H5T_SGN_NONE && size == 2) dt = DType::u16;
+  else if (cls == H5T_INTEGER && H5Tget_sign(ft.get()) == H5T_SGN_NONE && size == 4) dt = DType::u32;
+  else if (cls == H5T_FLOAT && size == 4) dt = DType::f32;
+  else throw InputError(where + ": element type is not uint8/uint16/uint32/float32");
+  Handle sp = space_h(H5Dget_space(d.get()));
+  const int rank = H5Sget_simple_extent_ndims(sp.get());
+  if (rank != 3 && rank != 2) throw InputError(where + ": dataset has rank " + std::to_string(rank) + ", expected 3 (z, y, x)");
+  hsize_t dims[3] = {1, 1, 1};
+  H5Sget_simple_extent_dims(sp.get(), rank == 3 ? dims : dims + 1, nullptr);
+  const Shape shape{static_cast<int64_t>(dims[0]), static_cast<int64_t>(dims[1]), static_cast<int64_t>(dims[2])};
+  if (shape.empty()) throw InputError(where + ": dataset is empty " + shape.str());
+  Geometry g;
+  double buf[3];
+  if (read_attr_doubles(d.get(), "voxel_size_m", buf, 3) || read_attr_doubles(impl_->file.get(), "voxel_size_m", buf, 3))
+    g.voxel_size_m = {buf[0], buf[1], buf[2]};
+  if (read_attr_doubles(d.get(), "origin_m", buf, 3)) g.origin_m = {buf[0], buf[1], buf[2]};
+  for (double v : g.voxel_size_m)
+    if (!(v >= 0 && std::isfinite(v))) throw InputError(where + ": attribute voxel_size_m is invalid");
+  AnyVolume out = make_volume(dt, shape, g);
+  std::visit(
+      [&](auto& v) {
+        using T = typename std::decay_t<decltype(v)>::value_type;
+        Progress bar("reading " + fs::path(impl_->path).filename().string() + ds, static_cast<double>(shape.nz));
+        const hsize_t step = 16;
+        for (hsize_t z0 = 0; z0 < static_cast<hsize_t>(shape.nz); z0 += step) {
+          hsize_t start[3] = {z0, 0, 0};
+          hsize_t count[3] = {std::min<hsize_t>(step, shape.nz - z0), dims[1], dims[2]};
+          Handle fsp = space_h(H5Dget_space(d.get()));
+          if (rank == 3) H5Sselect_hyperslab(fsp.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
+          Handle msp = space_h(H5Screate_simple(rank, rank == 3 ? count : count + 1, nullptr));
+          if (H5Dread(d.get(), native_type<T>(), msp.get(), fsp.get(), H5P_DEFAULT,
+                      v.data() + static_cast<int64_t>(z0) * shape.slice_voxels()) < 0)
+            throw InputError(where + ": read failed (corrupt or truncated file?)");
+          if (progress) bar.update(static_cast<double>(z0 + count[0]));
+        }
+      },
+      out);
+  return out;
+}
+
+Table H5Reader::read_table(const std::string& group) const {
+  const std::string g = norm(group);
+  const std::string where = impl_->path + ":" + g;
+  if (!has(g)) throw InputError(where + ": no such table");
+  Handle grp = group_h(H5Gopen2(impl_->file.get(), g.c_str(), H5P_DEFAULT));
+  if (!grp.ok()) throw InputError(where + ": not a table group");
+  std::vector<std::string> names;
+  {
+    std::istringstream is(read_attr_string(grp.get(), "columns"));
+    std::string n;
+    while (std::getline(is, n, ',')) names.push_back(n);
+  }
+  Table t;
+  t.source = where;
+  for (const auto& n : names) {
+    Handle d = dset_h(H5Dopen2(grp.get(), n.c_str(), H5P_DEFAULT));
+    if (!d.ok()) throw InputError(where + ": column '" + n + "' missing");
+    Handle sp = space_h(H5Dget_space(d.get()));
+    if (H5Sget_simple_extent_ndims(sp.get()) != 1) throw InputError(where + "/" + n + ": column is not 1-D");
+    const hssize_t rows = H5Sget_simple_extent_npoints(sp.get());
+    check_allocation(rows * 8, where + "/" + n);
+    Handle ft = type_h(H5Dget_type(d.get()));
+    if (H5Tget_class(ft.get()) == H5T_STRING) {
+      const size_t w = H5Tget_size(ft.get());
+      if (H5Tis_variable_str(ft.get()) > 0 || w == 0) throw InputError(where + "/" + n + ": unsupported string column");
+      std::vector<char> buf(w * static_cast<size_t>(std::max<hssize_t>(1, rows)));
+      if (rows > 0 && H5Dread(d.get(), ft.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0)
+        throw InputError(where + "/" + n + ": read failed");
+      std::vector<std::string> col(static_cast<size_t>(rows));
+      for (hssize_t r = 0; r < rows; ++r) col[r] = std::string(buf.data() + r * w, strnlen(buf.data() + r * w, w));
+      t.add_text(n, std::move(col));
+    } else {
+      std::vector<double> col(static_cast<size_t>(rows));
+      if (rows > 0 && H5Dread(d.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, col.data()) < 0)
+        throw InputError(where + "/" + n + ": read failed");
+      t.add(n, std::move(col));
+    }
+  }
+  return t;
+}
+
+std::string H5Reader::read_attribute(const std::string& name) const {
+  return read_attr_string(impl_->file.get(), name.c_str());
+}
+
+}  // namespace tg

@@ -1,0 +1,51 @@
+// HDF5: the native container. A tomograin file holds
+//   /volume  u16 or f32 grey values (z, y, x), chunked, optionally deflated
+//   /labels  u32 particle labels (0 = void)
+//   tables (particles, truth) as groups of 1-D datasets, one per column
+// with attributes voxel_size_m and origin_m (3 doubles, z y x) and units on
+// every volume. Several datasets go into one file with H5Writer, which writes
+// to a temporary and renames on commit().
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/dtype.hpp"
+#include "core/table.hpp"
+
+namespace tg {
+
+class H5Writer {
+ public:
+  // Overwrites `path` on commit(); nothing is left behind if commit() never runs.
+  explicit H5Writer(const std::string& path);
+  ~H5Writer();
+  template <class T>
+  void write_volume(const std::string& dataset, const Volume<T>& v, int compression = 0);
+  void write_volume(const std::string& dataset, const AnyVolume& v, int compression = 0);
+  void write_table(const std::string& group, const Table& t);
+  // A string attribute on the root group (e.g. provenance JSON).
+  void write_attribute(const std::string& name, const std::string& value);
+  void commit();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+class H5Reader {
+ public:
+  explicit H5Reader(const std::string& path);
+  ~H5Reader();
+  bool has(const std::string& dataset) const;
+  std::vector<std::string> datasets() const;  // all dataset paths, for messages and `info`
+  AnyVolume read_volume(const std::string& dataset, bool progress = false) const;
+  Table read_table(const std::string& group) const;
+  std::string read_attribute(const std::string& name) const;  // "" if absent
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace tg

@@ -1,0 +1,50 @@
+// Reading and writing volumes by file name. The format follows the name:
+//   *.tif, *.tiff            multi-page TIFF (BigTIFF past 4 GB)
+//   a folder                 TIFF slices, sorted naturally (slice_9 before slice_10)
+//   *.json (+ raw beside)    raw + JSON sidecar, see core/io/raw.hpp
+//   *.h5, *.hdf5[:/path]     HDF5; default dataset /volume (or /labels for u32)
+// Every reader validates sizes against the file and available memory and
+// throws InputError("FILE: problem"); every writer is atomic.
+#pragma once
+#include <string>
+
+#include "core/dtype.hpp"
+
+namespace tg {
+
+enum class NonFinite { error, allow };
+
+struct ReadOptions {
+  double voxel_um = 0;  // > 0: override (or supply) the file's voxel size, micrometres
+  // Float volumes with NaN/Inf voxels: `error` (default) rejects the file with
+  // the count and the first position; `allow` keeps them (e.g. for `info`).
+  NonFinite nonfinite = NonFinite::error;
+  bool progress = true;
+};
+
+struct WriteOptions {
+  int compression = 0;  // HDF5 deflate level 0..9 (0 = none)
+  bool progress = true;
+};
+
+enum class FileFormat { tiff, tiff_folder, raw, hdf5 };
+FileFormat format_of(const std::string& spec, bool for_writing);
+
+// `spec` is a path, or for HDF5 "file.h5:/dataset".
+AnyVolume read_volume(const std::string& spec, const ReadOptions& opt = {});
+
+// Reads and checks the element type: "FILE: holds float32, expected uint16".
+template <class T>
+Volume<T> read_volume_as(const std::string& spec, const ReadOptions& opt = {});
+
+void write_volume(const AnyVolume& v, const std::string& spec, const WriteOptions& opt = {});
+template <class T>
+void write_volume(const Volume<T>& v, const std::string& spec, const WriteOptions& opt = {});
+
+// Splits "file.h5:/path" into ("file.h5", "/path"); dataset empty if absent.
+std::pair<std::string, std::string> split_dataset_spec(const std::string& spec);
+
+// Count of NaN/Inf voxels and the linear index of the first one (-1 if none).
+std::pair<int64_t, int64_t> count_nonfinite(const Volume<float>& v);
+
+}  // namespace tg

@@ -1,0 +1,86 @@
+#include "core/memory.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "core/errors.hpp"
+
+namespace tg {
+namespace {
+
+int64_t meminfo_field(const char* path, const std::string& key) {
+  std::ifstream f(path);
+  std::string line;
+  while (std::getline(f, line)) {
+    if (line.rfind(key, 0) == 0) {
+      std::istringstream is(line.substr(key.size()));
+      int64_t kb = 0;
+      is >> kb;
+      return kb * 1024;
+    }
+  }
+  return -1;
+}
+
+int64_t cgroup_limit_bytes() {
+  // cgroup v2, then v1; "max" or absurd values mean no limit.
+  for (const char* p : {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {
+    std::ifstream f(p);
+    std::string s;
+    if (f >> s && s != "max") {
+      char* end = nullptr;
+      const long long v = std::strtoll(s.c_str(), &end, 10);
+      if (end && *end == '\0' && v > 0 && v < (1LL << 60)) return v;
+    }
+  }
+  return -1;
+}
+
+int64_t parse_bytes(const char* s) {
+  char* end = nullptr;
+  double v = std::strtod(s, &end);
+  if (end == s || v <= 0) return -1;
+  switch (*end) {
+    case 'k': case 'K': v *= 1024.0; break;
+    case 'm': case 'M': v *= 1024.0 * 1024; break;
+    case 'g': case 'G': v *= 1024.0 * 1024 * 1024; break;
+    default: break;
+  }
+  return static_cast<int64_t>(v);
+}
+
+}  // namespace
+
+int64_t available_memory_bytes() {
+  int64_t avail = meminfo_field("/proc/meminfo", "MemAvailable:");
+  if (avail < 0) avail = std::numeric_limits<int64_t>::max();
+  if (const int64_t cg = cgroup_limit_bytes(); cg > 0 && cg < avail) avail = cg;
+  if (const char* env = std::getenv("TOMOGRAIN_MEMORY_LIMIT")) {
+    if (const int64_t lim = parse_bytes(env); lim > 0 && lim < avail) avail = lim;
+  }
+  return avail;
+}
+
+void check_allocation(int64_t bytes, const std::string& what) {
+  if (bytes < 0) throw ResourceError(what + ": negative allocation size");
+  const int64_t avail = available_memory_bytes();
+  if (bytes > avail)
+    throw ResourceError(what + " needs " + human_bytes(static_cast<double>(bytes)) + " but only " +
+                        human_bytes(static_cast<double>(avail)) + " of memory is available");
+}
+
+int64_t peak_rss_bytes() { return meminfo_field("/proc/self/status", "VmHWM:"); }
+
+std::string human_bytes(double b) {
+  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
+  int u = 0;
+  while (b >= 1024.0 && u < 6) { b /= 1024.0; ++u; }
+  char buf[32];
+  std::snprintf(buf, sizeof buf, u == 0 ? "%.0f %s" : "%.2f %s", b, units[u]);
+  return buf;
+}
+
+}  // namespace tg

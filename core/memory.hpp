@@ -1,0 +1,23 @@
+// Check an allocation against the memory this machine can still give, so a
+// too-large request fails with a clear message instead of the OOM killer.
+#pragma once
+#include <cstdint>
+#include <string>
+
+namespace tg {
+
+// Bytes of memory available now (MemAvailable from /proc/meminfo; the cgroup
+// limit if one is set and lower). Returns INT64_MAX when neither can be read.
+int64_t available_memory_bytes();
+
+// Throws ResourceError naming `what` if `bytes` exceeds what is available.
+// The environment variable TOMOGRAIN_MEMORY_LIMIT (bytes, accepts K/M/G
+// suffix) lowers the limit, which tests and shared machines use.
+void check_allocation(int64_t bytes, const std::string& what);
+
+// Peak resident set size of this process so far (VmHWM), in bytes.
+int64_t peak_rss_bytes();
+
+std::string human_bytes(double bytes);
+
+}  // namespace tg

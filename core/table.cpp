@@ -1,0 +1,173 @@
+#include "core/table.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "core/atomic_file.hpp"
+#include "core/errors.hpp"
+
+namespace tg {
+
+int Table::find(const std::string& name) const {
+  for (size_t c = 0; c < cols_.size(); ++c)
+    if (cols_[c].name == name) return static_cast<int>(c);
+  return -1;
+}
+
+void Table::add(std::string name, std::vector<double> values) {
+  if (!cols_.empty() && static_cast<int64_t>(values.size()) != rows())
+    throw UsageError("column '" + name + "' has " + std::to_string(values.size()) + " rows, table has " +
+                     std::to_string(rows()));
+  if (has(name)) throw UsageError("duplicate column '" + name + "'");
+  cols_.push_back(Column{std::move(name), std::move(values), {}, false});
+}
+
+void Table::add_text(std::string name, std::vector<std::string> values) {
+  if (!cols_.empty() && static_cast<int64_t>(values.size()) != rows())
+    throw UsageError("column '" + name + "' has " + std::to_string(values.size()) + " rows, table has " +
+                     std::to_string(rows()));
+  if (has(name)) throw UsageError("duplicate column '" + name + "'");
+  cols_.push_back(Column{std::move(name), {}, std::move(values), true});
+}
+
+const std::vector<double>& Table::num(const std::string& name) const {
+  const int c = find(name);
+  if (c < 0) throw InputError(source + ": missing column '" + name + "'");
+  if (cols_[c].is_text) throw InputError(source + ": column '" + name + "' is not numeric");
+  return cols_[c].num;
+}
+
+const std::vector<std::string>& Table::text(const std::string& name) const {
+  const int c = find(name);
+  if (c < 0) throw InputError(source + ": missing column '" + name + "'");
+  if (!cols_[c].is_text) throw InputError(source + ": column '" + name + "' is not text");
+  return cols_[c].text;
+}
+
+namespace {
+
+void append_number(std::string& out, double v) {
+  if (std::isnan(v)) { out += "nan"; return; }
+  if (std::isinf(v)) { out += v > 0 ? "inf" : "-inf"; return; }
+  char buf[32];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, r.ptr);
+}
+
+bool parse_number(std::string_view s, double& v) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  if (s.empty()) return false;
+  if (s.front() == '+') s.remove_prefix(1);
+  auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+  return r.ec == std::errc() && r.ptr == s.data() + s.size();
+}
+
+std::vector<std::string> split_line(const std::string& line) {
+  std::vector<std::string> cells;
+  std::string cur;
+  for (char ch : line) {
+    if (ch == ',') { cells.push_back(cur); cur.clear(); }
+    else if (ch != '\r') cur += ch;
+  }
+  cells.push_back(cur);
+  for (auto& c : cells) {  // trim
+    const auto b = c.find_first_not_of(" \t"), e = c.find_last_not_of(" \t");
+    c = b == std::string::npos ? "" : c.substr(b, e - b + 1);
+  }
+  return cells;
+}
+
+}  // namespace
+
+std::string to_csv(const Table& t) {
+  std::string out;
+  const auto& cols = t.columns();
+  for (size_t c = 0; c < cols.size(); ++c) out += (c ? "," : "") + cols[c].name;
+  out += '\n';
+  for (int64_t r = 0; r < t.rows(); ++r) {
+    for (size_t c = 0; c < cols.size(); ++c) {
+      if (c) out += ',';
+      if (cols[c].is_text) out += cols[c].text[r];
+      else append_number(out, cols[c].num[r]);
+    }
+    out += '\n';
+  }
+  return out;
+}
+
+void write_csv(const Table& t, const std::filesystem::path& path) {
+  AtomicPath out(path);
+  {
+    std::ofstream f(out.temp(), std::ios::binary);
+    const std::string s = to_csv(t);
+    f.write(s.data(), static_cast<std::streamsize>(s.size()));
+    if (!f) throw InputError(path.string() + ": cannot write");
+  }
+  out.commit();
+}
+
+Table parse_csv(const std::string& text, const std::string& source, const std::vector<std::string>& required) {
+  std::istringstream in(text);
+  std::string line;
+  int64_t lineno = 0;
+  std::vector<std::string> header;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (line.empty() || line == "\r" || line[0] == '#') continue;
+    header = split_line(line);
+    break;
+  }
+  if (header.empty()) throw InputError(source + ": empty file, expected a CSV header line");
+  for (size_t c = 0; c < header.size(); ++c) {
+    if (header[c].empty()) throw InputError(source + ":" + std::to_string(lineno) + ": empty column name");
+    for (size_t d = 0; d < c; ++d)
+      if (header[d] == header[c]) throw InputError(source + ": duplicate column '" + header[c] + "'");
+  }
+  std::vector<std::vector<std::string>> cells(header.size());
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (line.empty() || line == "\r" || line[0] == '#') continue;
+    auto row = split_line(line);
+    if (row.size() != header.size())
+      throw InputError(source + ":" + std::to_string(lineno) + ": " + std::to_string(row.size()) +
+                       " cells, header has " + std::to_string(header.size()));
+    for (size_t c = 0; c < row.size(); ++c) cells[c].push_back(std::move(row[c]));
+  }
+  Table t;
+  t.source = source;
+  for (size_t c = 0; c < header.size(); ++c) {
+    std::vector<double> nums(cells[c].size());
+    bool numeric = true;
+    for (size_t r = 0; r < cells[c].size() && numeric; ++r) numeric = parse_number(cells[c][r], nums[r]);
+    if (numeric) t.add(header[c], std::move(nums));
+    else t.add_text(header[c], std::move(cells[c]));
+  }
+  for (const auto& name : required) {
+    const int c = t.find(name);
+    if (c < 0) throw InputError(source + ": missing column '" + name + "'");
+    if (t.columns()[c].is_text) {
+      // Name the first bad cell so the user can find it.
+      const auto& col = t.columns()[c].text;
+      for (size_t r = 0; r < col.size(); ++r) {
+        double v;
+        if (!parse_number(col[r], v))
+          throw InputError(source + ": column '" + name + "', data row " + std::to_string(r + 1) + ": '" + col[r] +
+                           "' is not a number");
+      }
+    }
+  }
+  return t;
+}
+
+Table read_csv(const std::filesystem::path& path, const std::vector<std::string>& required) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw InputError(path.string() + ": cannot open");
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  return parse_csv(ss.str(), path.string(), required);
+}
+
+}  // namespace tg

@@ -1,0 +1,165 @@
+#include "segmentation/threshold.hpp"
+
+#include <omp.h>
+
+#include <cmath>
+
+#include "core/errors.hpp"
+
+namespace tg {
+namespace {
+
+// First and last non-empty bins; throws for empty and constant histograms.
+std::pair<int64_t, int64_t> trimmed_span(const std::vector<int64_t>& h, const char* who) {
+  int64_t first = -1, last = -1;
+  for (int64_t b = 0; b < int64_t(h.size()); ++b)
+    if (h[size_t(b)] > 0) {
+      if (first < 0) first = b;
+      last = b;
+    }
+  if (first < 0) throw InputError(std::string(who) + " threshold: the histogram is empty (no voxels)");
+  if (first == last)
+    throw InputError(std::string(who) + " threshold: every voxel has the grey value " + std::to_string(first) +
+                     "; a constant volume has no solid/void contrast to threshold");
+  return {first, last};
+}
+
+// Two grey levels a < b only: the threshold is a (a void, b solid).
+bool two_levels(const std::vector<int64_t>& h, int64_t first, int64_t last) {
+  for (int64_t b = first + 1; b < last; ++b)
+    if (h[size_t(b)] > 0) return false;
+  return true;
+}
+
+ThresholdResult two_level_result(int64_t first, int64_t last, ThresholdMethod m) {
+  ThresholdResult r;
+  r.method = m;
+  r.value = static_cast<uint16_t>(first);
+  r.note = "only two grey levels (" + std::to_string(first) + ", " + std::to_string(last) +
+           "): threshold set to the lower one, " + std::to_string(last) + " is solid";
+  return r;
+}
+
+}  // namespace
+
+const char* threshold_method_name(ThresholdMethod m) {
+  switch (m) {
+    case ThresholdMethod::moments: return "moments";
+    case ThresholdMethod::otsu: return "otsu";
+    case ThresholdMethod::manual: return "manual";
+  }
+  return "?";
+}
+
+ThresholdMethod parse_threshold_method(const std::string& s) {
+  if (s == "moments") return ThresholdMethod::moments;
+  if (s == "otsu") return ThresholdMethod::otsu;
+  if (s == "manual") return ThresholdMethod::manual;
+  throw UsageError("threshold method '" + s + "': expected moments, otsu or manual");
+}
+
+std::vector<int64_t> histogram_u16(const Volume<uint16_t>& v) {
+  const int nthreads = omp_get_max_threads();
+  std::vector<std::vector<int64_t>> part(static_cast<size_t>(nthreads));
+  const uint16_t* x = v.data();
+  const int64_t n = v.size();
+#pragma omp parallel num_threads(nthreads)
+  {
+    auto& h = part[size_t(omp_get_thread_num())];
+    h.assign(65536, 0);
+#pragma omp for schedule(static)
+    for (int64_t i = 0; i < n; ++i) ++h[x[i]];
+  }
+  std::vector<int64_t> hist(65536, 0);
+  for (const auto& h : part)
+    if (!h.empty())
+      for (size_t b = 0; b < 65536; ++b) hist[b] += h[b];
+  return hist;
+}
+
+ThresholdResult moments_threshold(const std::vector<int64_t>& hist) {
+  const auto [first, last] = trimmed_span(hist, "moments");
+  if (two_levels(hist, first, last)) return two_level_result(first, last, ThresholdMethod::moments);
+
+  double total = 0;
+  for (int64_t b = first; b <= last; ++b) total += double(hist[size_t(b)]);
+  double m1 = 0, m2 = 0, m3 = 0;
+  const double m0 = 1.0;
+  for (int64_t b = first; b <= last; ++b) {
+    const double p = double(hist[size_t(b)]) / total, i = double(b - first);
+    m1 += i * p;
+    m2 += i * i * p;
+    m3 += i * i * i * p;
+  }
+  const double cd = m0 * m2 - m1 * m1;
+  const double c0 = (-m2 * m2 + m1 * m3) / cd;
+  const double c1 = (m0 * -m3 + m2 * m1) / cd;
+  const double disc = c1 * c1 - 4.0 * c0;
+  // With >= 3 grey levels cd > 0 and disc > 0 in exact arithmetic; guard the
+  // rounding anyway rather than return a NaN threshold.
+  if (!(cd > 0) || !(disc >= 0) || !std::isfinite(disc))
+    throw InputError("moments threshold: the histogram's moments have no two-level solution (cd = " +
+                     std::to_string(cd) + ", discriminant = " + std::to_string(disc) + ")");
+  const double z0 = 0.5 * (-c1 - std::sqrt(disc));
+  const double z1 = 0.5 * (-c1 + std::sqrt(disc));
+  const double p0 = (z1 - m1) / (z1 - z0);
+
+  ThresholdResult r;
+  r.method = ThresholdMethod::moments;
+  r.p0 = p0;
+  r.z0 = z0 + double(first);
+  r.z1 = z1 + double(first);
+  double sum = 0;
+  int64_t t = last;
+  for (int64_t b = first; b <= last; ++b) {
+    sum += double(hist[size_t(b)]) / total;
+    if (sum > p0) {
+      t = b;
+      break;
+    }
+  }
+  r.value = static_cast<uint16_t>(t);
+  return r;
+}
+
+ThresholdResult otsu_threshold(const std::vector<int64_t>& hist) {
+  const auto [first, last] = trimmed_span(hist, "otsu");
+  if (two_levels(hist, first, last)) return two_level_result(first, last, ThresholdMethod::otsu);
+  double n = 0, s = 0;
+  for (int64_t b = first; b <= last; ++b) {
+    n += double(hist[size_t(b)]);
+    s += double(hist[size_t(b)]) * double(b - first);
+  }
+  // Between-class variance for class 0 = [first, t]: (s n0 - n s0)^2 / (n0 n1),
+  // a form without the mean subtraction of the textbook one.
+  double n0 = 0, s0 = 0, best = -1;
+  int64_t t = first;
+  for (int64_t b = first; b < last; ++b) {
+    n0 += double(hist[size_t(b)]);
+    s0 += double(hist[size_t(b)]) * double(b - first);
+    const double n1 = n - n0;
+    if (n0 == 0 || n1 == 0) continue;
+    const double d = s0 * n - s * n0;
+    const double var = d * d / (n0 * n1);
+    if (var > best) {
+      best = var;
+      t = b;
+    }
+  }
+  ThresholdResult r;
+  r.method = ThresholdMethod::otsu;
+  r.value = static_cast<uint16_t>(t);
+  return r;
+}
+
+Volume<uint8_t> binarise(const Volume<uint16_t>& v, uint16_t t) {
+  Volume<uint8_t> m(v.shape(), v.geometry());
+  const uint16_t* x = v.data();
+  uint8_t* y = m.data();
+  const int64_t n = v.size();
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < n; ++i) y[i] = x[i] > t ? 1 : 0;
+  return m;
+}
+
+}  // namespace tg

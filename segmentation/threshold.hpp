@@ -1,0 +1,64 @@
+// Global grey-level thresholds on the full 16-bit histogram: Tsai's
+// moment-preserving threshold (the reference study's choice), Otsu, manual.
+//
+// Convention (as Fiji's Auto_Threshold): the threshold t is a grey level and
+// voxels with value > t are solid, voxels <= t are void.
+//
+// Moments (Tsai 1985, "Moment-preserving thresholding: a new approach",
+// Computer Vision, Graphics, and Image Processing 29:377-393,
+// doi:10.1016/0734-189X(85)90133-1). The image is replaced by a two-level
+// image (levels z0 < z1, a fraction p0 at z0) that has the same first three
+// moments m1, m2, m3 as the normalised histogram (m0 = 1):
+//   cd = m0 m2 - m1^2,  c0 = (m1 m3 - m2^2) / cd,  c1 = (m1 m2 - m0 m3) / cd,
+//   z0,1 = (-c1 -/+ sqrt(c1^2 - 4 c0)) / 2,        p0 = (z1 - m1) / (z1 - z0),
+// and t is the first grey level whose cumulative normalised histogram exceeds
+// p0. As in Fiji, the moments are taken on the histogram trimmed to its first
+// and last non-empty bins (grey levels counted from the first non-empty bin;
+// the result is shifted back), which also keeps i^3 ~ 2.8e14 from eating the
+// double precision of m3.
+//
+// Otsu (1979, doi:10.1109/TSMC.1979.4310076): t maximises the between-class
+// variance w0 w1 (mu0 - mu1)^2 over the same trimmed histogram; ties go to
+// the lowest t.
+//
+// Degenerate histograms: an empty or constant volume throws InputError (there
+// is nothing to separate); a volume with exactly two grey levels a < b gets
+// t = a with a note in ThresholdResult::note (both methods would otherwise
+// divide 0 by 0 or hinge on the last bit of a rounding).
+//
+// Cost: the histogram is one OpenMP pass over the volume (per-thread integer
+// histograms of 65536 bins, summed in thread order); each method is O(65536).
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/volume.hpp"
+
+namespace tg {
+
+enum class ThresholdMethod { moments, otsu, manual };
+const char* threshold_method_name(ThresholdMethod m);
+// "moments" | "otsu" | "manual"; throws UsageError naming the valid set.
+ThresholdMethod parse_threshold_method(const std::string& s);
+
+struct ThresholdResult {
+  uint16_t value = 0;  // voxels > value are solid
+  ThresholdMethod method = ThresholdMethod::moments;
+  double p0 = 0;       // moments only: fraction of void voxels of the two-level image
+  double z0 = 0, z1 = 0;  // moments only: the two preserved grey levels
+  std::string note;    // non-empty for special cases (two grey levels only)
+};
+
+// 65536-bin histogram of a 16-bit volume.
+std::vector<int64_t> histogram_u16(const Volume<uint16_t>& v);
+
+// Tsai moment-preserving threshold of a histogram (any size, typically 65536).
+ThresholdResult moments_threshold(const std::vector<int64_t>& hist);
+// Otsu threshold of the same histogram.
+ThresholdResult otsu_threshold(const std::vector<int64_t>& hist);
+
+// Solid mask (1 where v > t, else 0), geometry kept.
+Volume<uint8_t> binarise(const Volume<uint16_t>& v, uint16_t t);
+
+}  // namespace tg

@@ -285,8 +285,19 @@ std::vector<std::string> tiff_slices_in(const std::string& dir) {
 
 AnyVolume read_tiff(const std::string& path, bool progress) {
   TiffPtr t = open_read(path);
+  g_tiff_error.clear();
   const int npages = TIFFNumberOfDirectories(t.get());
   if (npages <= 0) fail(path, "TIFF holds no pages");
+  // A cut file keeps its first pages readable; libtiff then reports a broken
+  // link to the next page. Refuse it rather than return fewer slices.
+  if (!g_tiff_error.empty()) fail(path, "truncated or corrupt: the chain of pages breaks after page " + std::to_string(npages - 1));
+  char* desc = nullptr;
+  if (TIFFGetField(t.get(), TIFFTAG_IMAGEDESCRIPTION, &desc) && desc && std::strncmp(desc, "ImageJ=", 7) == 0) {
+    const char* im = std::strstr(desc, "\nimages=");
+    if (im && std::atoi(im + 8) > npages)
+      fail(path, "truncated: ImageJ metadata announces " + std::to_string(std::atoi(im + 8)) + " pages, file holds " +
+                     std::to_string(npages));
+  }
   const PageInfo first = page_info(t.get(), path, 0);
   switch (first.dtype) {
     case DType::u8: return read_pages<uint8_t>(t.get(), path, npages, first, progress);

@@ -43,6 +43,8 @@ FileFormat format_of(const std::string& spec, bool for_writing) {
                    "' (use .tif/.tiff, a folder of TIFF slices, .json raw sidecar, or .h5[:/dataset])");
 }
 
+static AnyVolume read_volume_unchecked(const std::string& spec, const ReadOptions& opt);
+
 std::pair<int64_t, int64_t> count_nonfinite(const Volume<float>& v) {
   int64_t n = 0, first = -1;
   const float* p = v.data();
@@ -56,6 +58,17 @@ std::pair<int64_t, int64_t> count_nonfinite(const Volume<float>& v) {
 }
 
 AnyVolume read_volume(const std::string& spec, const ReadOptions& opt) {
+  try {
+    return read_volume_unchecked(spec, opt);
+  } catch (const ResourceError& e) {
+    // Allocation and size checks deep in the readers do not know the file: name it here.
+    const std::string what = e.what();
+    if (what.rfind(split_dataset_spec(spec).first, 0) == 0) throw;
+    throw ResourceError(spec + ": " + what);
+  }
+}
+
+static AnyVolume read_volume_unchecked(const std::string& spec, const ReadOptions& opt) {
   const auto [path, ds] = split_dataset_spec(spec);
   if (!fs::exists(path)) throw InputError(path + ": no such file or folder");
   AnyVolume v;

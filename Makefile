@@ -1,0 +1,46 @@
+# tomograin: the two commands a new machine needs (see README.md)
+#   make demo   install what is missing, build (Release), run the main job
+#   make test   install what is missing, build, run every test (ctest), incl. the sanitizer build
+#   make bench  benchmarks (bench/); long, not part of the tests
+JOBS ?= $(shell nproc)
+BUILD ?= build/release
+ASAN_BUILD ?= build/asan
+CMAKE_FLAGS ?=
+
+.PHONY: all deps build demo test test-release test-asan bench fuzz clean
+
+all: build
+
+deps:
+	@scripts/install_deps.sh
+
+$(BUILD)/CMakeCache.txt: | deps
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS)
+
+build: deps $(BUILD)/CMakeCache.txt
+	cmake --build $(BUILD) -j $(JOBS)
+
+demo: build
+	$(BUILD)/apps/tomograin demo
+
+test: test-release test-asan
+
+test-release: build
+	ctest --test-dir $(BUILD) -j $(JOBS) --output-on-failure --timeout 600
+
+# Unit tests again under AddressSanitizer + UndefinedBehaviorSanitizer (-O1 -g).
+test-asan: deps
+	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" \
+	  -DTOMOGRAIN_SANITIZE=ON -DTOMOGRAIN_BENCH=OFF -DTOMOGRAIN_APPS=OFF $(CMAKE_FLAGS)
+	cmake --build $(ASAN_BUILD) -j $(JOBS)
+	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  ctest --test-dir $(ASAN_BUILD) -j $(JOBS) -L unit -LE slow --output-on-failure --timeout 900
+
+bench: deps
+	scripts/install_deps.sh --bench
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DTOMOGRAIN_BENCH=ON $(CMAKE_FLAGS)
+	cmake --build $(BUILD) -j $(JOBS)
+	bench/run_all.sh $(BUILD)
+
+clean:
+	rm -rf build

@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# Hostile inputs to the CLI: each must exit 2 with exactly one line on stderr
+# naming the file, and leave no output behind.
+set -u
+TG=$1
+W=$(mktemp -d)
+trap 'rm -rf "$W"' EXIT
+cd "$W"
+fails=0; passes=0
+
+# expect_bad NAME PATTERN -- COMMAND...: exit 2, one stderr line matching PATTERN, no out.* left.
+expect_bad() {
+  local name=$1 pattern=$2; shift 3
+  rm -rf out.* .out.*
+  "$@" >stdout.txt 2>stderr.txt
+  local rc=$? lines
+  lines=$(wc -l <stderr.txt)
+  if [[ $rc -ne 2 || $lines -ne 1 ]] || ! grep -q -- "$pattern" stderr.txt || compgen -G "out.*" >/dev/null || compgen -G ".out.*" >/dev/null; then
+    echo "FAIL $name: rc=$rc lines=$lines stderr=$(cat stderr.txt) left=$(ls -A | grep out || true)"
+    fails=$((fails+1))
+  else
+    echo "ok   $name: $(cat stderr.txt)"
+    passes=$((passes+1))
+  fi
+}
+
+# A valid 4x64x64 u16 volume to damage.
+printf '{"shape_zyx":[4,64,64],"dtype":"uint16","voxel_size_um":10}' > good.json
+head -c 32768 /dev/urandom > good.raw
+"$TG" convert good.json -o good.tif >/dev/null || { echo "FAIL setup"; exit 1; }
+size=$(stat -c %s good.tif)
+
+head -c $((size / 2)) good.tif > cut.tif
+expect_bad "truncated TIFF" "cut.tif: truncated" -- "$TG" convert cut.tif -o out.h5
+
+head -c 200 good.tif > header_only.tif
+expect_bad "TIFF cut inside page data" "header_only.tif" -- "$TG" convert header_only.tif -o out.h5
+
+echo "not a tiff at all" > junk.tif
+expect_bad "wrong header" "junk.tif: not a readable TIFF" -- "$TG" info junk.tif
+
+mkdir mixed
+"$TG" convert good.tif -o mixed/ >/dev/null
+printf '{"shape_zyx":[1,64,60],"dtype":"uint16"}' > small.json; head -c 7680 /dev/urandom > small.raw
+"$TG" convert small.json -o mixed/slice_0099.tif >/dev/null
+expect_bad "mixed slice sizes" "mixed slice sizes" -- "$TG" convert mixed -o out.h5
+
+printf '{"shape_zyx":[4,64,65],"dtype":"uint16","files":{"volume_raw":"good.raw"}}' > wrongsize.json
+expect_bad "sidecar with wrong size" "good.raw: file has 32768 bytes" -- "$TG" convert wrongsize.json -o out.tif
+
+printf '{"shape_zyx":[100000000,100000000,100000000],"dtype":"uint16","files":{"volume_raw":"good.raw"}}' > absurd.json
+expect_bad "absurd shape (overflow)" "64-bit" -- "$TG" convert absurd.json -o out.tif
+
+printf '{"shape_zyx":[100000,100000,100000],"dtype":"uint16","files":{"volume_raw":"good.raw"}}' > huge.json
+expect_bad "absurd shape (size mismatch before allocation)" "huge.json" -- "$TG" info huge.json
+
+printf '{"shape_zyx":[2,2,2],"dtype":"float32"}' > nan.json
+printf '\x00\x00\x80\x3f\x00\x00\xc0\x7f\x00\x00\x80\x3f\x00\x00\x80\x3f\x00\x00\x80\x3f\x00\x00\x80\x7f\x00\x00\x80\x3f\x00\x00\x80\x3f' > nan.raw
+expect_bad "NaN/Inf in float input" "2 NaN/Inf voxel(s), first at (z,y,x)=(0,0,1)" -- "$TG" convert nan.json -o out.h5 --to uint16
+
+"$TG" convert good.tif -o g.h5 >/dev/null
+expect_bad "missing HDF5 dataset" "g.h5:/labels: no such dataset" -- "$TG" info g.h5:/labels
+expect_bad "missing input" "none.tif: no such file" -- "$TG" convert none.tif -o out.h5
+expect_bad "unknown format" "unknown volume format" -- "$TG" convert good.tif -o out.xyz
+printf '{"shape_zyx":[1,1,2],"dtype":"float32"}' > f.json; printf '\x00\x00\x80\x3f\x00\x00\x00\x40' > f.raw
+expect_bad "bad --range" "--range must be" -- "$TG" convert f.json -o out.h5 --to uint16 --range 5,1
+expect_bad "unknown option" "tomograin:" -- "$TG" convert good.tif -o out.h5 --frobnicate
+
+# NaN policy: `info` reports instead of refusing.
+"$TG" info nan.json | grep -q "2 NaN/Inf voxels" && { echo "ok   info reports NaN"; passes=$((passes+1)); } || { echo "FAIL info NaN"; fails=$((fails+1)); }
+
+echo "$passes passed, $fails failed"
+[[ $fails -eq 0 ]]

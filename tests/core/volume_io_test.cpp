@@ -1,0 +1,249 @@
+// Round trips between every format for every element type must be bit-exact;
+// bad files must raise InputError naming the file and leave nothing behind.
+#include "core/io/volume_io.hpp"
+
+#include <gtest/gtest.h>
+#include <tiffio.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "core/io/hdf5.hpp"
+#include "core/io/tiff.hpp"
+
+namespace tg {
+namespace fs = std::filesystem;
+
+namespace {
+
+class TempDir {
+ public:
+  TempDir() {
+    path_ = fs::temp_directory_path() / ("tg_io_" + std::to_string(::getpid()) + "_" +
+                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  std::string operator/(const std::string& n) const { return (path_ / n).string(); }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+template <class T>
+Volume<T> random_volume(Shape s, uint64_t seed) {
+  Volume<T> v(s, Geometry{{12.3e-6, 11e-6, 10e-6}, {0.5, -1.0, 2.0}});
+  std::mt19937_64 rng(seed);
+  for (auto& x : v) {
+    if constexpr (std::is_floating_point_v<T>) x = static_cast<T>(std::normal_distribution<double>(0, 1e3)(rng));
+    else x = static_cast<T>(rng());
+  }
+  return v;
+}
+
+template <class T>
+void expect_same(const Volume<T>& a, const AnyVolume& b_any) {
+  ASSERT_TRUE(std::holds_alternative<Volume<T>>(b_any)) << "element type changed";
+  const auto& b = std::get<Volume<T>>(b_any);
+  ASSERT_EQ(a.shape(), b.shape());
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), static_cast<size_t>(a.bytes())), 0);
+}
+
+bool nothing_but(const fs::path& dir, size_t n) {
+  return static_cast<size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator())) == n;
+}
+
+}  // namespace
+
+template <class T>
+class RoundTrip : public ::testing::Test {};
+using Types = ::testing::Types<uint8_t, uint16_t, uint32_t, float>;
+TYPED_TEST_SUITE(RoundTrip, Types);
+
+TYPED_TEST(RoundTrip, EveryFormatBitExact) {
+  TempDir d;
+  const auto v = random_volume<TypeParam>(Shape{5, 7, 9}, 42);
+  for (const std::string name : {"a.tif", "slices", "a.json", "a.h5", "b.h5:/group/data"}) {
+    write_volume(v, d / name);
+    ReadOptions ro;
+    ro.nonfinite = NonFinite::allow;
+    const AnyVolume r = read_volume(d / name, ro);
+    expect_same(v, r);
+    const Geometry g = geometry_of(r);
+    // HDF5 and raw keep the geometry exactly; TIFF keeps the voxel size (float32 resolution tags,
+    // ImageJ spacing in text) but has no origin.
+    EXPECT_NEAR(g.voxel_size_m[2], 10e-6, 1e-12) << name;
+    EXPECT_NEAR(g.voxel_size_m[1], 11e-6, 1e-12) << name;
+    EXPECT_NEAR(g.voxel_size_m[0], 12.3e-6, 1e-12) << name;
+    if (name.find(".h5") != std::string::npos || name == "a.json") {
+      EXPECT_EQ(g, v.geometry()) << name;
+    }
+  }
+}
+
+TEST(VolumeIO, HDF5CompressedAndTables) {
+  TempDir d;
+  const auto v = random_volume<uint16_t>(Shape{20, 30, 40}, 3);
+  Table t;
+  t.add("id", {1, 2, 3});
+  t.add_text("kind", {"grain", "half", "chip"});
+  {
+    H5Writer w(d / "f.h5");
+    w.write_volume("/volume", v, 4);
+    w.write_table("/particles", t);
+    w.commit();
+  }
+  H5Reader r(d / "f.h5");
+  expect_same(v, r.read_volume("/volume"));
+  const Table rt = r.read_table("/particles");
+  EXPECT_EQ(rt.num("id")[2], 3);
+  EXPECT_EQ(rt.text("kind")[1], "half");
+  EXPECT_THROW(read_volume(d / "f.h5:/nope"), InputError);
+}
+
+TEST(VolumeIO, NaturalSortOfSlices) {
+  EXPECT_TRUE(natural_less("slice_9.tif", "slice_10.tif"));
+  EXPECT_FALSE(natural_less("slice_10.tif", "slice_9.tif"));
+  EXPECT_TRUE(natural_less("a2b3", "a2b10"));
+  EXPECT_TRUE(natural_less("s_01.tif", "s_2.tif"));
+  // Folder with unpadded names must read in numeric order.
+  TempDir d;
+  fs::create_directories(d.path() / "in");
+  for (int k = 0; k < 12; ++k) {
+    Volume<uint8_t> s = Volume<uint8_t>::filled(Shape{1, 2, 2}, static_cast<uint8_t>(k));
+    write_volume(s, (d.path() / "in" / ("slice_" + std::to_string(k) + ".tif")).string());
+  }
+  const auto r = read_volume_as<uint8_t>((d.path() / "in").string());
+  ASSERT_EQ(r.shape().nz, 12);
+  for (int k = 0; k < 12; ++k) EXPECT_EQ(r(k, 0, 0), k);
+}
+
+TEST(VolumeIO, TruncatedTiffIsAnInputError) {
+  TempDir d;
+  const auto v = random_volume<uint16_t>(Shape{4, 64, 64}, 1);
+  write_volume(v, d / "ok.tif");
+  const auto size = fs::file_size(d / "ok.tif");
+  fs::copy_file(d / "ok.tif", d / "cut.tif");
+  fs::resize_file(d / "cut.tif", size / 2);
+  try {
+    read_volume(d / "cut.tif");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(d / "cut.tif", 0), 0u) << e.what();
+  }
+  std::ofstream(d / "junk.tif") << "this is not a tiff";
+  EXPECT_THROW(read_volume(d / "junk.tif"), InputError);
+}
+
+TEST(VolumeIO, MixedSliceSizesAreAnInputError) {
+  TempDir d;
+  fs::create_directories(d.path() / "in");
+  write_volume(Volume<uint16_t>::filled(Shape{1, 4, 4}, 1), (d.path() / "in" / "s_0.tif").string());
+  write_volume(Volume<uint16_t>::filled(Shape{1, 4, 5}, 1), (d.path() / "in" / "s_1.tif").string());
+  try {
+    read_volume((d.path() / "in").string());
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("mixed slice sizes"), std::string::npos) << e.what();
+  }
+}
+
+TEST(VolumeIO, RawSidecarWithWrongSizeIsAnInputError) {
+  TempDir d;
+  write_volume(random_volume<uint16_t>(Shape{2, 3, 4}, 1), d / "v.json");
+  std::ofstream(d / "w.json") << R"({"shape_zyx": [2, 3, 5], "dtype": "uint16", "files": {"volume_raw": "v.raw"}})";
+  try {
+    read_volume(d / "w.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("file has 48 bytes"), std::string::npos) << e.what();
+  }
+  std::ofstream(d / "x.json") << R"({"shape_zyx": [2, -3, 5]})";
+  EXPECT_THROW(read_volume(d / "x.json"), InputError);
+  std::ofstream(d / "y.json") << R"({"shape_zyx": [4000000000, 4000000000, 4000000000], "files": {"volume_raw": "v.raw"}})";
+  EXPECT_THROW(read_volume(d / "y.json"), std::runtime_error);  // overflow: ResourceError
+}
+
+TEST(VolumeIO, BigEndianRaw) {
+  TempDir d;
+  std::ofstream(d / "b.raw", std::ios::binary).write("\x01\x02\x03\x04", 4);
+  std::ofstream(d / "b.json") << R"({"shape_zyx": [1, 1, 2], "dtype": "uint16", "byte_order": "big", "voxel_size_um": 5})";
+  const auto v = read_volume_as<uint16_t>(d / "b.json");
+  EXPECT_EQ(v[0], 0x0102);
+  EXPECT_EQ(v[1], 0x0304);
+  EXPECT_DOUBLE_EQ(v.geometry().voxel_size_m[0], 5e-6);
+}
+
+TEST(VolumeIO, NonFiniteFloatPolicy) {
+  TempDir d;
+  Volume<float> v = Volume<float>::filled(Shape{2, 2, 2}, 1.f);
+  v(1, 0, 1) = NAN;
+  v(1, 1, 1) = INFINITY;
+  write_volume(v, d / "nan.h5");
+  try {
+    read_volume(d / "nan.h5");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("2 NaN/Inf voxel(s), first at (z,y,x)=(1,0,1)"), std::string::npos)
+        << e.what();
+  }
+  ReadOptions allow;
+  allow.nonfinite = NonFinite::allow;
+  EXPECT_TRUE(std::isnan(read_volume_as<float>(d / "nan.h5", allow)(1, 0, 1)));
+}
+
+TEST(VolumeIO, MissingDatasetAndFilesAreInputErrors) {
+  TempDir d;
+  write_volume(Volume<uint16_t>::filled(Shape{1, 2, 2}, 1), d / "a.h5");
+  EXPECT_THROW(read_volume(d / "a.h5:/labels"), InputError);
+  EXPECT_THROW(read_volume(d / "none.tif"), InputError);
+  EXPECT_THROW(read_volume_as<uint32_t>(d / "a.h5"), InputError);
+  std::ofstream(d / "fake.h5") << "not hdf5";
+  EXPECT_THROW(read_volume(d / "fake.h5"), InputError);
+}
+
+TEST(VolumeIO, FailedWriteLeavesNothingBehind) {
+  TempDir d;
+  EXPECT_THROW(write_volume(Volume<uint16_t>(Shape{0, 4, 4}), d / "e.tif"), UsageError);
+  EXPECT_THROW(write_volume(Volume<uint16_t>(Shape{0, 4, 4}), d / "e.h5"), UsageError);
+  EXPECT_TRUE(nothing_but(d.path(), 0));
+  EXPECT_THROW(write_volume(Volume<uint16_t>::filled(Shape{1, 1, 1}, 0), d / "no/such/dir/x.tif"), InputError);
+}
+
+TEST(VolumeIO, TiledTiffReads) {
+  // Tiled pages come from other tools (not our writer): build one with libtiff directly.
+  TempDir d;
+  const std::string p = d / "tiled.tif";
+  TIFF* t = TIFFOpen(p.c_str(), "w");
+  const uint32_t W = 40, H = 33;
+  TIFFSetField(t, TIFFTAG_IMAGEWIDTH, W);
+  TIFFSetField(t, TIFFTAG_IMAGELENGTH, H);
+  TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, 16);
+  TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, 1);
+  TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+  TIFFSetField(t, TIFFTAG_TILEWIDTH, 16);
+  TIFFSetField(t, TIFFTAG_TILELENGTH, 16);
+  TIFFSetField(t, TIFFTAG_RESOLUTIONUNIT, RESUNIT_CENTIMETER);
+  TIFFSetField(t, TIFFTAG_XRESOLUTION, 1000.f);  // 10 um pixels
+  TIFFSetField(t, TIFFTAG_YRESOLUTION, 1000.f);
+  std::vector<uint16_t> tile(16 * 16);
+  for (uint32_t y0 = 0; y0 < H; y0 += 16)
+    for (uint32_t x0 = 0; x0 < W; x0 += 16) {
+      for (uint32_t y = 0; y < 16; ++y)
+        for (uint32_t x = 0; x < 16; ++x) tile[y * 16 + x] = static_cast<uint16_t>((y0 + y) * 1000 + x0 + x);
+      TIFFWriteTile(t, tile.data(), x0, y0, 0, 0);
+    }
+  TIFFClose(t);
+  const auto v = read_volume_as<uint16_t>(p);
+  ASSERT_EQ(v.shape(), (Shape{1, H, W}));
+  EXPECT_EQ(v(0, 32, 39), 32 * 1000 + 39);
+  EXPECT_EQ(v(0, 17, 5), 17 * 1000 + 5);
+  EXPECT_NEAR(v.geometry().voxel_size_m[2], 10e-6, 1e-12);
+}
+
+}  // namespace tg

@@ -1,0 +1,56 @@
+#include "core/volume.hpp"
+
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+namespace tg {
+
+TEST(Volume, LayoutIsContiguousInX) {
+  Volume<uint16_t> v(Shape{2, 3, 4});
+  for (int64_t i = 0; i < v.size(); ++i) v[i] = static_cast<uint16_t>(i);
+  EXPECT_EQ(v(1, 2, 3), 23);
+  EXPECT_EQ(v(1, 0, 0), 12);
+  EXPECT_EQ(&v(0, 0, 1) - &v(0, 0, 0), 1);
+}
+
+TEST(Volume, SubBoxViewSharesMemoryAndShiftsOrigin) {
+  Volume<float> v = Volume<float>::filled(Shape{4, 5, 6}, 0.f, Geometry{{2e-6, 2e-6, 2e-6}, {1.0, 0.0, 0.0}});
+  auto sub = v.sub(Box{1, 2, 3, Shape{2, 2, 2}});
+  sub(1, 1, 1) = 7.f;
+  EXPECT_EQ(v(2, 3, 4), 7.f);
+  EXPECT_DOUBLE_EQ(sub.geometry().origin_m[0], 1.0 + 2e-6);
+  EXPECT_DOUBLE_EQ(sub.geometry().origin_m[2], 3 * 2e-6);
+  EXPECT_FALSE(sub.contiguous());
+  EXPECT_TRUE(v.slice(2).contiguous());
+  EXPECT_THROW(v.sub(Box{3, 0, 0, Shape{2, 1, 1}}), UsageError);
+  const Volume<float> copy = to_volume(sub);
+  EXPECT_EQ(copy.shape(), (Shape{2, 2, 2}));
+  EXPECT_EQ(copy(1, 1, 1), 7.f);
+}
+
+TEST(Volume, CloneIsDeep) {
+  Volume<uint8_t> a = Volume<uint8_t>::filled(Shape{1, 2, 2}, 3);
+  Volume<uint8_t> b = a.clone();
+  b[0] = 9;
+  EXPECT_EQ(a[0], 3);
+}
+
+TEST(Volume, AllocationBeyondAvailableMemoryFailsClearly) {
+  setenv("TOMOGRAIN_MEMORY_LIMIT", "1M", 1);
+  try {
+    Volume<uint16_t> v(Shape{100, 100, 100});  // 2 MB
+    FAIL() << "expected ResourceError";
+  } catch (const ResourceError& e) {
+    EXPECT_NE(std::string(e.what()).find("100x100x100"), std::string::npos) << e.what();
+  }
+  unsetenv("TOMOGRAIN_MEMORY_LIMIT");
+  EXPECT_THROW(Volume<uint16_t>(Shape{int64_t{1} << 40, 1 << 20, 1 << 20}), ResourceError);
+}
+
+TEST(Volume, EmptyVolumeIsValid) {
+  Volume<uint16_t> v(Shape{0, 10, 10});
+  EXPECT_TRUE(v.empty());
+  EXPECT_EQ(v.size(), 0);
+}
+
+}  // namespace tg

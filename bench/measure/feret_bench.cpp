@@ -1,0 +1,220 @@
+// measure_feret_bench: the speed/accuracy tables of measure/ (issue 5).
+//
+//   measure_feret_bench convention [lambda...]  errors of exact-mode Dmed, FR,
+//       AR and of the mean caliper on digitised spheres and half-spheres vs
+//       radius, for hull point conventions (face_offset lambda)
+//   measure_feret_bench trade        Dmax, Dmin, FR, AR error of the sampled
+//       mode vs the exact mode for N = 15, 30, 60, 120, 500, and time per particle
+//   measure_feret_bench throughput [n] [grains]   particles/s on an n^3 label
+//       volume (default 512, ~1000 grains), 1 and 2 threads
+//
+// Shapes are drawn by voxel-centre inclusion with random sub-voxel centres
+// and rotations (fixed seeds), as in tests/measure/shapes.hpp.
+#include <omp.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "measure/feret.hpp"
+#include "measure/label_stats.hpp"
+#include "measure/particles.hpp"
+#include "tests/measure/shapes.hpp"
+
+using namespace tg;
+using namespace tg::measure;
+using test::V3;
+
+namespace {
+
+double now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+struct One {
+  ConvexHull hull;
+  double volume;
+};
+One hull_of(const Volume<uint32_t>& v, double lambda) {
+  const auto r = label_stats(v.view());
+  return {convex_hull(caliper_points(r.surface_of(0), v.geometry().voxel_size_m, r.labels[0].box_lo, lambda)),
+          r.labels[0].volume_m3};
+}
+
+struct Truth {
+  const char* name;
+  double r;
+  Volume<uint32_t> vol;
+  double fr, ar, dmed;  // analytic
+};
+
+std::vector<Truth> shapes(const std::vector<double>& radii, int reps) {
+  std::vector<Truth> out;
+  for (double r : radii)
+    for (int s = 0; s < reps; ++s) {
+      const unsigned seed = static_cast<unsigned>(1000 * r + s);
+      out.push_back({"sphere", r, test::draw_one(r, [r](V3 c) { return test::sphere(c, r); }, seed, 1.0), 1, 1, 2 * r});
+      const V3 n = test::random_rotation(seed).col(0);
+      out.push_back({"half-sphere", r, test::draw_one(r, [&](V3 c) { return test::half_sphere(c, r, n); }, seed, 1.0),
+                     0.5, 2, 2 * r});
+    }
+  return out;
+}
+
+void convention(std::vector<double> lambdas) {
+  if (lambdas.empty()) lambdas = {0.3, 0.45, 0.6, 0.8, 1.0};
+  const auto all = shapes({10, 15, 20, 24, 30}, 6);
+  const auto dirs = half_sphere_directions(2000);
+  std::printf("# exact mode (tie tolerance 0.5 voxel); mean (max |.|) over 6 random placements\n");
+  std::printf("%-12s %4s %6s | %-17s %-17s %-17s %-17s\n", "shape", "r", "lambda", "mean caliper err", "Dmed err",
+              "FR err", "AR err");
+  for (double lam : lambdas)
+    for (const char* name : {"sphere", "half-sphere"})
+      for (double r : {10.0, 15.0, 20.0, 24.0, 30.0}) {
+        double s[4] = {0, 0, 0, 0}, m[4] = {0, 0, 0, 0};
+        int n = 0;
+        for (const auto& t : all) {
+          if (t.r != r || std::string(t.name) != name) continue;
+          const auto h = hull_of(t.vol, lam);
+          const auto f = feret_exact(h.hull, FeretExactOptions{0.5, 32, 3.0});
+          const double med = 6 * h.volume / (std::numbers::pi * f.d_max * f.d_min);
+          double mc = 0;
+          for (const auto& u : dirs) mc += caliper_width(h.hull, u);
+          mc /= static_cast<double>(dirs.size());
+          // mean caliper of a half-sphere: (2R + R)/2... only the sphere's is simple (2r)
+          const double e[4] = {std::string(name) == "sphere" ? mc / (2 * r) - 1 : 0.0, med / t.dmed - 1,
+                               f.d_min / med - t.fr, f.d_max / f.d_min - t.ar};
+          for (int k = 0; k < 4; ++k) {
+            s[k] += e[k];
+            m[k] = std::max(m[k], std::abs(e[k]));
+          }
+          ++n;
+        }
+        std::printf("%-12s %4.0f %6.2f |", name, r, lam);
+        for (int k = 0; k < 4; ++k) std::printf(" %+8.4f (%6.4f)", s[k] / n, m[k]);
+        std::printf("\n");
+      }
+}
+
+void trade() {
+  // 10 each of spheres, half-spheres, ellipsoids, boxes, r 12-20 voxels.
+  std::vector<Volume<uint32_t>> vols;
+  for (int s = 0; s < 10; ++s) {
+    const unsigned seed = 500u + static_cast<unsigned>(s);
+    const double r = 12 + 8 * test::random_offset(seed)[0];
+    const Eigen::Matrix3d R = test::random_rotation(seed);
+    vols.push_back(test::draw_one(r, [r](V3 c) { return test::sphere(c, r); }, seed, 1.0));
+    vols.push_back(test::draw_one(r, [&](V3 c) { return test::half_sphere(c, r, R.col(0)); }, seed, 1.0));
+    const V3 ax(r, 0.6 * r, 0.35 * r);
+    vols.push_back(test::draw_one(r, [&](V3 c) { return test::ellipsoid(c, ax, R); }, seed, 1.0));
+    const V3 e(1.6 * r, r, 0.6 * r);
+    vols.push_back(test::draw_one(e.norm() / 2, [&](V3 c) { return test::box(c, e, R); }, seed, 1.0));
+  }
+  std::vector<One> hulls;
+  double t0 = now();
+  for (const auto& v : vols) hulls.push_back(hull_of(v, 0.5));
+  const double t_hull = (now() - t0) / static_cast<double>(vols.size());
+  std::vector<FeretResult> ex;
+  t0 = now();
+  for (const auto& h : hulls) ex.push_back(feret_exact(h.hull, FeretExactOptions{0.5, 32, 3.0}));
+  const double t_exact = (now() - t0) / static_cast<double>(vols.size());
+  auto frar = [](const One& h, const FeretResult& f, double& fr, double& ar) {
+    const double med = 6 * h.volume / (std::numbers::pi * f.d_max * f.d_min);
+    fr = f.d_min / med;
+    ar = f.d_max / f.d_min;
+  };
+  std::printf("# %zu particles (spheres, half-spheres, ellipsoids 1:0.6:0.35, boxes 1.6:1:0.6; r 12-20 voxels)\n",
+              vols.size());
+  std::printf("# hull (label stats + points + CGAL hull): %.3f ms/particle; exact sizing: %.3f ms/particle\n",
+              1e3 * t_hull, 1e3 * t_exact);
+  std::printf("# errors vs exact mode: mean |rel| for Dmax, Dmin; mean |abs| for FR, AR; worst in ()\n");
+  std::printf("%5s | %-17s %-17s %-17s %-17s | %s\n", "N", "Dmax", "Dmin", "FR", "AR", "sizing ms/particle");
+  for (int N : {15, 30, 60, 120, 500}) {
+    const auto dirs = half_sphere_directions(N);
+    double s[4] = {0, 0, 0, 0}, m[4] = {0, 0, 0, 0};
+    t0 = now();
+    std::vector<FeretResult> fs;
+    for (const auto& h : hulls) fs.push_back(feret_sampled(h.hull, dirs));
+    const double t = (now() - t0) / static_cast<double>(vols.size());
+    for (size_t p = 0; p < hulls.size(); ++p) {
+      double fr, ar, fre, are;
+      frar(hulls[p], fs[p], fr, ar);
+      frar(hulls[p], ex[p], fre, are);
+      const double e[4] = {std::abs(fs[p].d_max / ex[p].d_max - 1), std::abs(fs[p].d_min / ex[p].d_min - 1),
+                           std::abs(fr - fre), std::abs(ar - are)};
+      for (int k = 0; k < 4; ++k) {
+        s[k] += e[k];
+        m[k] = std::max(m[k], e[k]);
+      }
+    }
+    std::printf("%5d |", N);
+    for (int k = 0; k < 4; ++k) std::printf(" %7.4f (%7.4f)", s[k] / static_cast<double>(hulls.size()), m[k]);
+    std::printf(" | %.4f\n", 1e3 * t);
+  }
+}
+
+void throughput(int64_t n, int grains) {
+  // Random spheres, ellipsoids and half-spheres, radius 12-30 voxels; later
+  // grains overwrite earlier ones (some are cut, as real fragments are).
+  auto v = Volume<uint32_t>::filled(Shape{n, n, n}, 0, Geometry::isotropic_m(1e-5));
+  for (int g = 0; g < grains; ++g) {
+    const unsigned seed = 9000u + static_cast<unsigned>(g);
+    const V3 u = test::random_offset(seed), w = test::random_offset(seed + 77777);
+    const double r = 12 + 18 * w[0];
+    const V3 c = V3::Constant(r) + u * (static_cast<double>(n) - 2 * r);
+    const Eigen::Matrix3d R = test::random_rotation(seed);
+    test::Inside in = g % 3 == 0 ? test::sphere(c, r)
+                      : g % 3 == 1 ? test::ellipsoid(c, V3(r, 0.7 * r, 0.5 * r), R)
+                                   : test::half_sphere(c, r, R.col(0));
+    const int64_t lo[3] = {std::max<int64_t>(0, static_cast<int64_t>(c[0] - r) - 1),
+                           std::max<int64_t>(0, static_cast<int64_t>(c[1] - r) - 1),
+                           std::max<int64_t>(0, static_cast<int64_t>(c[2] - r) - 1)};
+    const int64_t hi[3] = {std::min<int64_t>(n, static_cast<int64_t>(c[0] + r) + 2),
+                           std::min<int64_t>(n, static_cast<int64_t>(c[1] + r) + 2),
+                           std::min<int64_t>(n, static_cast<int64_t>(c[2] + r) + 2)};
+    for (int64_t k = lo[0]; k < hi[0]; ++k)
+      for (int64_t j = lo[1]; j < hi[1]; ++j)
+        for (int64_t i = lo[2]; i < hi[2]; ++i)
+          if (in(V3(k + 0.5, j + 0.5, i + 0.5))) v(k, j, i) = static_cast<uint32_t>(g + 1);
+  }
+  std::printf("# %lld^3 label volume, %d grains drawn\n", static_cast<long long>(n), grains);
+  for (int obb : {0, 1})
+    for (int threads : {1, 2}) {
+      ParticleOptions o;
+      o.threads = threads;
+      o.oriented_box = obb != 0;
+      LabelStatsOptions so;
+      so.threads = threads;
+      double t0 = now();
+      const auto ls = label_stats(v.view(), so);
+      const double t_stats = now() - t0;
+      t0 = now();
+      const auto ps = measure_particles(v.view(), o);
+      const double t = now() - t0;
+      std::printf("threads %d, N=60%s: %zu particles in %.2f s (label_stats alone %.2f s) = %.0f particles/s\n",
+                  threads, obb ? " + CGAL oriented box" : "", ps.size(), t, t_stats, static_cast<double>(ps.size()) / t);
+    }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string what = argc > 1 ? argv[1] : "trade";
+  if (what == "convention") {
+    std::vector<double> l;
+    for (int a = 2; a < argc; ++a) l.push_back(std::atof(argv[a]));
+    convention(l);
+  } else if (what == "trade") {
+    trade();
+  } else if (what == "throughput") {
+    throughput(argc > 2 ? std::atoll(argv[2]) : 512, argc > 3 ? std::atoi(argv[3]) : 1000);
+  } else {
+    std::fprintf(stderr, "usage: measure_feret_bench convention [lambda...] | trade | throughput [n] [grains]\n");
+    return 2;
+  }
+  return 0;
+}

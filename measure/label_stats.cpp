@@ -1,0 +1,205 @@
+#include "measure/label_stats.hpp"
+
+#include <omp.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <unordered_set>
+
+#include "core/errors.hpp"
+
+namespace tg::measure {
+namespace {
+
+// Label -> dense index. A direct table when the largest label is modest
+// (<= 2^24 entries, 64 MB at most), else binary search in the sorted label
+// list; both behind a one-entry cache, since labels come in runs along x.
+class LabelIndex {
+ public:
+  explicit LabelIndex(std::vector<uint32_t> sorted) : labels_(std::move(sorted)) {
+    const uint32_t top = labels_.empty() ? 0 : labels_.back();
+    if (top <= (1u << 24)) {
+      table_.assign(static_cast<size_t>(top) + 1, -1);
+      for (size_t n = 0; n < labels_.size(); ++n) table_[labels_[n]] = static_cast<int32_t>(n);
+    }
+  }
+  int32_t operator()(uint32_t label) const {
+    if (!table_.empty()) return table_[label];
+    auto it = std::lower_bound(labels_.begin(), labels_.end(), label);
+    return static_cast<int32_t>(it - labels_.begin());
+  }
+  const std::vector<uint32_t>& labels() const { return labels_; }
+
+ private:
+  std::vector<uint32_t> labels_;
+  std::vector<int32_t> table_;
+};
+
+// Integer moments of one label in one thread's slab.
+struct Acc {
+  int64_t n = 0, sk = 0, sj = 0, si = 0, skk = 0, sjj = 0, sii = 0, skj = 0, ski = 0, sji = 0;
+  std::array<int64_t, 3> lo{std::numeric_limits<int64_t>::max(), std::numeric_limits<int64_t>::max(),
+                            std::numeric_limits<int64_t>::max()};
+  std::array<int64_t, 3> hi{-1, -1, -1};
+  bool border = false;
+  void merge(const Acc& o) {
+    n += o.n; sk += o.sk; sj += o.sj; si += o.si;
+    skk += o.skk; sjj += o.sjj; sii += o.sii; skj += o.skj; ski += o.ski; sji += o.sji;
+    for (int a = 0; a < 3; ++a) { lo[a] = std::min(lo[a], o.lo[a]); hi[a] = std::max(hi[a], o.hi[a]); }
+    border = border || o.border;
+  }
+};
+
+// Slab [z0, z1) of thread t out of nt: contiguous, in thread order.
+std::pair<int64_t, int64_t> slab(int64_t nz, int t, int nt) {
+  return {nz * t / nt, nz * (t + 1) / nt};
+}
+
+std::vector<uint32_t> distinct_labels(const VolumeView<const uint32_t>& v, int nt) {
+  const Shape s = v.shape();
+  std::vector<std::vector<uint32_t>> found(static_cast<size_t>(nt));
+#pragma omp parallel num_threads(nt)
+  {
+    const int t = omp_get_thread_num();
+    const int n = omp_get_num_threads();
+    std::unordered_set<uint32_t> seen;
+    uint32_t last = 0;
+    auto [z0, z1] = slab(s.nz, t, n);
+    for (int64_t k = z0; k < z1; ++k)
+      for (int64_t j = 0; j < s.ny; ++j)
+        for (uint32_t l : v.row(k, j))
+          if (l != last) {
+            last = l;
+            if (l) seen.insert(l);
+          }
+    found[static_cast<size_t>(t)].assign(seen.begin(), seen.end());
+  }
+  std::vector<uint32_t> all;
+  for (auto& f : found) all.insert(all.end(), f.begin(), f.end());
+  std::sort(all.begin(), all.end());
+  all.erase(std::unique(all.begin(), all.end()), all.end());
+  return all;
+}
+
+}  // namespace
+
+LabelStatsResult label_stats(const VolumeView<const uint32_t>& v, const LabelStatsOptions& opt) {
+  const Geometry& g = v.geometry();
+  if (!g.has_voxel_size()) throw UsageError("label_stats: the label volume has no voxel size (give --voxel-um)");
+  if (opt.threads < 0) throw UsageError("label_stats: threads must be >= 0");
+  const Shape s = v.shape();
+  // Sums of squared indices must fit int64: n * max_index^2 < 2^63.
+  const double big = static_cast<double>(std::max({s.nz, s.ny, s.nx}));
+  if (big * big * static_cast<double>(s.voxels()) > 9.0e18)
+    throw ResourceError("label_stats: volume " + s.str() + " too large for 64-bit moment sums");
+  const int nt = opt.threads > 0 ? opt.threads : omp_get_max_threads();
+
+  const LabelIndex index(distinct_labels(v, nt));
+  const size_t nl = index.labels().size();
+
+  struct Partial {
+    std::vector<Acc> acc;
+    std::vector<std::pair<int32_t, SurfaceVoxel>> surface;
+  };
+  std::vector<Partial> part(static_cast<size_t>(nt));
+
+#pragma omp parallel num_threads(nt)
+  {
+    const int t = omp_get_thread_num();
+    const int n_threads = omp_get_num_threads();
+    Partial& P = part[static_cast<size_t>(t)];
+    P.acc.assign(nl, Acc{});
+    auto [z0, z1] = slab(s.nz, t, n_threads);
+    uint32_t last = 0;
+    int32_t last_idx = -1;
+    for (int64_t k = z0; k < z1; ++k)
+      for (int64_t j = 0; j < s.ny; ++j) {
+        const uint32_t* row = v.row(k, j).data();
+        for (int64_t i = 0; i < s.nx; ++i) {
+          const uint32_t l = row[i];
+          if (!l) continue;
+          if (l != last) { last = l; last_idx = index(l); }
+          Acc& a = P.acc[static_cast<size_t>(last_idx)];
+          ++a.n;
+          a.sk += k; a.sj += j; a.si += i;
+          a.skk += k * k; a.sjj += j * j; a.sii += i * i;
+          a.skj += k * j; a.ski += k * i; a.sji += j * i;
+          a.lo = {std::min(a.lo[0], k), std::min(a.lo[1], j), std::min(a.lo[2], i)};
+          a.hi = {std::max(a.hi[0], k + 1), std::max(a.hi[1], j + 1), std::max(a.hi[2], i + 1)};
+          const bool edge = k == 0 || j == 0 || i == 0 || k == s.nz - 1 || j == s.ny - 1 || i == s.nx - 1;
+          a.border = a.border || edge;
+          if (!opt.collect_surface) continue;
+          // Exposed faces: -z, +z, -y, +y, -x, +x (bits 0..5).
+          uint8_t m = 0;
+          if (k == 0 || v(k - 1, j, i) != l) m |= 1;
+          if (k == s.nz - 1 || v(k + 1, j, i) != l) m |= 2;
+          if (j == 0 || v(k, j - 1, i) != l) m |= 4;
+          if (j == s.ny - 1 || v(k, j + 1, i) != l) m |= 8;
+          if (i == 0 || row[i - 1] != l) m |= 16;
+          if (i == s.nx - 1 || row[i + 1] != l) m |= 32;
+          if (m) P.surface.push_back({last_idx, SurfaceVoxel{static_cast<int32_t>(k), static_cast<int32_t>(j),
+                                                             static_cast<int32_t>(i), m}});
+        }
+      }
+  }
+
+  // Merge in thread order.
+  std::vector<Acc> acc(nl);
+  for (const auto& P : part)
+    for (size_t n = 0; n < nl; ++n) acc[n].merge(P.acc[n]);
+
+  LabelStatsResult r;
+  r.labels.resize(nl);
+  if (opt.collect_surface) {
+    r.surface_offset.assign(nl + 1, 0);
+    for (const auto& P : part)
+      for (const auto& [idx, sv] : P.surface) ++r.surface_offset[static_cast<size_t>(idx) + 1];
+    for (size_t n = 0; n < nl; ++n) r.surface_offset[n + 1] += r.surface_offset[n];
+    r.surface.resize(static_cast<size_t>(r.surface_offset[nl]));
+    std::vector<int64_t> fill(r.surface_offset.begin(), r.surface_offset.end() - 1);
+    for (const auto& P : part)  // thread order = slab order = serial scan order
+      for (const auto& [idx, sv] : P.surface) r.surface[static_cast<size_t>(fill[static_cast<size_t>(idx)]++)] = sv;
+  } else {
+    r.surface_offset.assign(nl + 1, 0);
+  }
+
+  const auto& h = g.voxel_size_m;
+  const double dv = h[0] * h[1] * h[2];
+  for (size_t n = 0; n < nl; ++n) {
+    const Acc& a = acc[n];
+    LabelStats& st = r.labels[n];
+    st.label = index.labels()[n];
+    st.voxels = a.n;
+    st.volume_m3 = static_cast<double>(a.n) * dv;
+    const double inv = 1.0 / static_cast<double>(a.n);
+    const Eigen::Vector3d mean(a.sk * inv, a.sj * inv, a.si * inv);
+    for (int c = 0; c < 3; ++c) st.centroid_m[c] = g.origin_m[c] + (mean[c] + 0.5) * h[c];
+    st.box_lo = a.lo;
+    st.box_hi = a.hi;
+    // Covariance of voxel indices, then scaled to metres; + the cube's own h^2/12.
+    Eigen::Matrix3d cov;
+    cov(0, 0) = a.skk * inv - mean[0] * mean[0];
+    cov(1, 1) = a.sjj * inv - mean[1] * mean[1];
+    cov(2, 2) = a.sii * inv - mean[2] * mean[2];
+    cov(0, 1) = cov(1, 0) = a.skj * inv - mean[0] * mean[1];
+    cov(0, 2) = cov(2, 0) = a.ski * inv - mean[0] * mean[2];
+    cov(1, 2) = cov(2, 1) = a.sji * inv - mean[1] * mean[2];
+    const Eigen::Vector3d hv(h[0], h[1], h[2]);
+    Eigen::Matrix3d C = hv.asDiagonal() * cov * hv.asDiagonal();
+    for (int c = 0; c < 3; ++c) C(c, c) += h[c] * h[c] / 12.0;
+    C *= st.volume_m3;
+    st.inertia_m5 = C.trace() * Eigen::Matrix3d::Identity() - C;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(st.inertia_m5);
+    st.principal_moments_m5 = es.eigenvalues();
+    st.principal_axes = es.eigenvectors();
+    st.d_eq_m = std::cbrt(6.0 * st.volume_m3 / std::numbers::pi);
+    st.touches_border = a.border;
+    st.below_limit = st.d_eq_m < opt.detection_limit_m;
+  }
+  return r;
+}
+
+}  // namespace tg::measure

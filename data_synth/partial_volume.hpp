@@ -10,7 +10,8 @@
 // one of the rectangle's edge lines or corners (A has a (z−zb)^{3/2} or (z−zb)²
 // singularity there). On each piece z = R sin θ (moves the ρ = 0 branch point
 // of A away from the piece) and θ = a + L(3s² − 2s³) (makes the endpoint
-// singularities analytic in s), then 12-point Gauss–Legendre; pieces longer
+// singularities analytic in s), then 10-point Gauss–Legendre along the axis on which the box is nearest the
+// sphere's equator (fewest breakpoints); pieces longer
 // than 0.4 rad are split. Error: measured < 1e-10 per voxel (absolute, voxel
 // volume 1) over random surface voxels; tested: a sphere's voxel sum equals
 // 4πR³/3 within 1e-9 relative for R in [1, 50] at random sub-voxel centres, and

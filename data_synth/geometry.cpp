@@ -105,13 +105,13 @@ Truth particle_truth(const Particle& p) {
     t.ar = t.dmin > 0 ? t.dmax / t.dmin : nan;
     return t;
   }
-  // Wedges and clusters: volume from the partial-volume rules on 16³ cells of the
-  // bounding box, 5 levels of subdivision (exact except near plane/sphere or
+  // Wedges and clusters: volume from the partial-volume rules on 8³ cells of the
+  // bounding box, 4 levels of subdivision (exact except near plane/sphere or
   // sphere/sphere intersection curves); centroid from a chord quadrature.
   Vec3 lo, hi, m;
   bounding_box(p, lo, hi);
-  constexpr int cells = 16;
-  const CoverageOptions opt{8, 5};
+  constexpr int cells = 8;
+  const CoverageOptions opt{8, 4};
   double V = 0;
   for (int a = 0; a < cells; ++a)
     for (int b = 0; b < cells; ++b)
@@ -125,7 +125,7 @@ Truth particle_truth(const Particle& p) {
         V += box_coverage(p, l, h, opt);
       }
   t.volume = V;
-  const double vq = chord_volume(p, lo, hi, 48, 12, &m);
+  const double vq = chord_volume(p, lo, hi, 32, 8, &m);
   for (int a = 0; a < 3; ++a) t.centroid[a] = vq > 0 ? m[a] / vq : 0.5 * (lo[a] + hi[a]);
   t.dmax = t.dmin = t.dmed = t.fr = t.ar = nan;
   return t;

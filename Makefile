@@ -7,7 +7,7 @@ BUILD ?= build/release
 ASAN_BUILD ?= build/asan
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build demo test test-release test-asan bench fuzz clean
+.PHONY: all deps build demo test test-release test-asan test-fuzz fuzz fuzz-build bench clean
 
 all: build
 
@@ -23,7 +23,7 @@ build: deps $(BUILD)/CMakeCache.txt
 demo: build
 	$(BUILD)/apps/tomograin demo
 
-test: test-release test-asan
+test: test-release test-asan test-fuzz
 
 test-release: build
 	ctest --test-dir $(BUILD) -j $(JOBS) --output-on-failure --timeout 600
@@ -35,6 +35,21 @@ test-asan: deps
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --test-dir $(ASAN_BUILD) -j $(JOBS) -L unit -LE slow --output-on-failure --timeout 900
+
+# libFuzzer harnesses for every file reader (clang). make fuzz FUZZ_SECONDS=600 for long runs.
+FUZZ_BUILD ?= build/fuzz
+FUZZ_SECONDS ?= 300
+fuzz-build: deps
+	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" \
+	  -DTOMOGRAIN_FUZZ=ON -DTOMOGRAIN_ONLY=core -DTOMOGRAIN_TESTS=OFF -DTOMOGRAIN_BENCH=OFF -DTOMOGRAIN_APPS=OFF
+	cmake --build $(FUZZ_BUILD) -j $(JOBS)
+
+fuzz: fuzz-build
+	tests/fuzz/run.sh $(FUZZ_BUILD) $(FUZZ_SECONDS)
+
+# Short fuzz runs inside `make test`, so reader regressions surface in CI.
+test-fuzz: fuzz-build
+	tests/fuzz/run.sh $(FUZZ_BUILD) 20
 
 bench: deps
 	scripts/install_deps.sh --bench

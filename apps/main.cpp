@@ -1,8 +1,6 @@
 // tomograin: one program, one subcommand per job. Exit codes:
 //   0 success; 2 bad input or usage (one line naming the file and problem);
 //   1 internal error.
-#include <hdf5.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
@@ -23,7 +21,6 @@ void add_voxel_option(CLI::App* sub, double& voxel_um) {
 
 int main(int argc, char** argv) {
   using namespace tg::app;
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // HDF5 errors become our one-line messages
   CLI::App app{
       "tomograin: XCT scans of crushable granular materials -> grains, sizes, shapes;\n"
       "DEM of the oedometer test with particle breakage; both compared with the same metrics.\n\n"

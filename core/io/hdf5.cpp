@@ -111,6 +111,13 @@ std::string read_attr_string(hid_t obj, const char* name) {
   return std::string(buf.c_str());
 }
 
+// HDF5 prints its error stack to stderr by default; our errors are one line,
+// so switch the printer off once, before the first call into the library.
+void quiet_hdf5() {
+  static const bool once = [] { return H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr) >= 0; }();
+  (void)once;
+}
+
 hid_t lcpl_intermediate() {
   hid_t p = H5Pcreate(H5P_LINK_CREATE);
   H5Pset_create_intermediate_group(p, 1);
@@ -128,6 +135,7 @@ struct H5Writer::Impl {
 };
 
 H5Writer::H5Writer(const std::string& path) : impl_(std::make_unique<Impl>(path)) {
+  quiet_hdf5();
   impl_->file = file_h(H5Fcreate(impl_->out.temp().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
   if (!impl_->file.ok()) throw InputError(path + ": cannot create HDF5 file");
 }
@@ -233,6 +241,7 @@ struct H5Reader::Impl {
 };
 
 H5Reader::H5Reader(const std::string& path) : impl_(std::make_unique<Impl>()) {
+  quiet_hdf5();
   impl_->path = path;
   if (!fs::is_regular_file(path)) throw InputError(path + ": no such file");
   if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(path + ": not an HDF5 file");

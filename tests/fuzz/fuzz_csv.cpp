@@ -1,0 +1,13 @@
+// Particle / packing CSV tables (header x_m,y_m,z_m,r_m and friends).
+#include "core/table.hpp"
+#include "tests/fuzz/fuzz_common.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::string file = tg::fuzz::scratch("in.csv");
+  tg::fuzz::write_file(file, data, size);
+  tg::fuzz::expect_clean([&] {
+    const tg::Table t = tg::read_csv(file, {"x_m", "y_m", "z_m", "r_m"});
+    (void)tg::to_csv(t);
+  });
+  return 0;
+}

@@ -9,6 +9,7 @@ find_package(fmt REQUIRED)
 find_package(tomlplusplus REQUIRED)
 # CGAL first, then Eigen with NO_MODULE: CGAL's own FindEigen3 module would
 # otherwise shadow Eigen's config and no Eigen3::Eigen target would exist.
+set(CGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE TRUE)  # Debug is only for the sanitizer build
 find_package(CGAL QUIET)
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)
 if(TOMOGRAIN_TESTS)

@@ -15,7 +15,7 @@ deps:
 	@scripts/install_deps.sh
 
 $(BUILD)/CMakeCache.txt: | deps
-	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS)
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DTOMOGRAIN_BENCH=OFF $(CMAKE_FLAGS)
 
 build: deps $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j $(JOBS)
@@ -51,11 +51,13 @@ fuzz: fuzz-build
 test-fuzz: fuzz-build
 	tests/fuzz/run.sh $(FUZZ_BUILD) 20
 
+# Benchmarks build in their own folder so `make test` never compiles them.
+BENCH_BUILD ?= build/bench
 bench: deps
 	scripts/install_deps.sh --bench
-	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DTOMOGRAIN_BENCH=ON $(CMAKE_FLAGS)
-	cmake --build $(BUILD) -j $(JOBS)
-	bench/run_all.sh $(BUILD)
+	cmake -S . -B $(BENCH_BUILD) -DCMAKE_BUILD_TYPE=Release -DTOMOGRAIN_BENCH=ON -DTOMOGRAIN_TESTS=OFF $(CMAKE_FLAGS)
+	cmake --build $(BENCH_BUILD) -j $(JOBS)
+	bench/run_all.sh $(BENCH_BUILD)
 
 clean:
 	rm -rf build

@@ -34,7 +34,7 @@ struct MeasureOpts {
   std::string feret = "60";
   std::string sizing = "feret";
   double limit_mm = 0.2;
-  double face_offset = 0.5;
+  double face_offset = 0.3;
   bool no_box = false;
   int threads = 0;
   unsigned seed = 42;
@@ -149,8 +149,8 @@ tg::app::Registrar reg_measure{{"measure", 40, [](CLI::App& app, CLI::App*& sub)
       ->default_str("0.2");
   sub->add_option("--face-offset", o->face_offset,
                   "Hull points: boundary voxel centre + this x half a voxel towards each exposed face, in (0, 1] "
-                  "(measure/feret.hpp explains the 0.5 default)")
-      ->default_str("0.5");
+                  "(measure/feret.hpp explains the 0.3 default)")
+      ->default_str("0.3");
   sub->add_flag("--no-box", o->no_box, "Skip CGAL's oriented box (obb_* columns become 0; faster)");
   sub->add_option("--seed", o->seed, "Random seed of CGAL's oriented-box optimiser")->default_str("42");
   sub->add_option("--threads", o->threads, "OpenMP threads (0 = all); results do not depend on it")

@@ -74,6 +74,9 @@ struct Arc {
 
 }  // namespace
 
+Vec3 tie_averaged_direction(std::span<const Vec3> dirs, std::span<const double> lengths, const Vec3& best,
+                            double d_max, double tolerance, double cone_deg);
+
 std::vector<Vec3> caliper_points(std::span<const SurfaceVoxel> surface, const std::array<double, 3>& h,
                                  const std::array<int64_t, 3>& anchor, double face_offset) {
   if (!(face_offset > 0 && face_offset <= 1))
@@ -117,26 +120,29 @@ double caliper_width(const ConvexHull& hull, const Vec3& u) {
   return hull.vertices.empty() ? 0.0 : hi - lo;
 }
 
-FeretResult feret_sampled(const ConvexHull& hull, std::span<const Vec3> directions, int n_perp) {
+FeretResult feret_sampled(const ConvexHull& hull, std::span<const Vec3> directions, const FeretSampledOptions& opt) {
   FeretResult r;
   if (hull.vertices.empty() || directions.empty()) return r;
+  std::vector<double> w(directions.size());
   r.d_max = -kInf;
   r.d_min_any = kInf;
-  for (const auto& u : directions) {
-    const double w = caliper_width(hull, u);
-    if (w > r.d_max) { r.d_max = w; r.dir_max = u; }
-    if (w < r.d_min_any) { r.d_min_any = w; r.dir_min_any = u; }
+  for (size_t d = 0; d < directions.size(); ++d) {
+    w[d] = caliper_width(hull, directions[d]);
+    if (w[d] > r.d_max) { r.d_max = w[d]; r.dir_max = directions[d]; }
+    if (w[d] < r.d_min_any) { r.d_min_any = w[d]; r.dir_min_any = directions[d]; }
   }
-  const int m = n_perp > 0 ? n_perp
-                           : static_cast<int>(std::ceil(std::sqrt(std::numbers::pi * directions.size() / 2.0)));
+  // The tie rule: the Dmax direction averaged over its near-ties (feret.hpp).
+  const Vec3 axis = tie_averaged_direction(directions, w, r.dir_max, r.d_max, opt.tie_tolerance, opt.tie_cone_deg);
+  const int m = opt.n_perp > 0 ? opt.n_perp
+                               : static_cast<int>(std::ceil(std::sqrt(std::numbers::pi * directions.size() / 2.0)));
   Vec3 e1, e2;
-  plane_basis(r.dir_max, e1, e2);
+  plane_basis(axis, e1, e2);
   r.d_min = kInf;
   for (int t = 0; t < m; ++t) {
     const double th = std::numbers::pi * t / m;
     const Vec3 u = std::cos(th) * e1 + std::sin(th) * e2;
-    const double w = caliper_width(hull, u);
-    if (w < r.d_min) { r.d_min = w; r.dir_min = u; }
+    const double wu = caliper_width(hull, u);
+    if (wu < r.d_min) { r.d_min = wu; r.dir_min = u; }
   }
   return r;
 }
@@ -259,31 +265,36 @@ double min_width(const ConvexHull& hull, Vec3* direction) {
   return best;
 }
 
-std::vector<Vec3> diameter_candidates(const ConvexHull& hull, double d_max, double tolerance, int max_count,
-                                      double min_separation_deg) {
+Vec3 tie_averaged_direction(std::span<const Vec3> dirs, std::span<const double> lengths, const Vec3& best,
+                            double d_max, double tolerance, double cone_deg) {
+  const double cos_cone = std::cos(cone_deg * std::numbers::pi / 180.0);
+  Vec3 sum = Vec3::Zero();
+  for (size_t k = 0; k < dirs.size(); ++k) {
+    if (lengths[k] < d_max - tolerance) continue;
+    const double c = dirs[k].dot(best);
+    if (std::abs(c) < cos_cone) continue;
+    sum += c < 0 ? Vec3(-dirs[k]) : dirs[k];
+  }
+  return sum.squaredNorm() > 0 ? Vec3(sum.normalized()) : best;
+}
+
+Vec3 diameter_direction(const ConvexHull& hull, double d_max, const Vec3& best, double tolerance, double cone_deg) {
+  if (tolerance <= 0) return best;
   const auto& v = hull.vertices;
   const double lim = std::max(0.0, d_max - tolerance);
-  std::vector<std::pair<double, Vec3>> pairs;
+  std::vector<Vec3> dirs;
+  std::vector<double> len;
   for (size_t i = 0; i < v.size(); ++i)
     for (size_t j = i + 1; j < v.size(); ++j) {
       const Vec3 d = v[j] - v[i];
       const double l2 = d.squaredNorm();
-      if (l2 >= lim * lim && l2 > 0) pairs.emplace_back(l2, d / std::sqrt(l2));
+      if (l2 >= lim * lim && l2 > 0) {
+        const double l = std::sqrt(l2);
+        dirs.push_back(d / l);
+        len.push_back(l);
+      }
     }
-  // Longest first; ties broken by the direction's components (deterministic).
-  std::sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) {
-    if (a.first != b.first) return a.first > b.first;
-    return std::lexicographical_compare(a.second.data(), a.second.data() + 3, b.second.data(), b.second.data() + 3);
-  });
-  const double sep = std::cos(min_separation_deg * std::numbers::pi / 180.0);
-  std::vector<Vec3> out;
-  for (const auto& [l2, d] : pairs) {
-    bool near = false;
-    for (const auto& o : out) near = near || std::abs(o.dot(d)) > sep;
-    if (!near) out.push_back(d);
-    if (static_cast<int>(out.size()) >= max_count) break;
-  }
-  return out;
+  return tie_averaged_direction(dirs, len, best, d_max, tolerance, cone_deg);
 }
 
 FeretResult feret_exact(const ConvexHull& hull, const FeretExactOptions& opt) {
@@ -291,12 +302,8 @@ FeretResult feret_exact(const ConvexHull& hull, const FeretExactOptions& opt) {
   if (hull.vertices.empty()) return r;
   r.d_max = hull_diameter(hull, &r.dir_max);
   if (hull.dimension < 3) return r;
-  r.d_min = std::numeric_limits<double>::infinity();
-  for (const auto& c : diameter_candidates(hull, r.d_max, opt.tie_tolerance, opt.max_candidates, opt.min_separation_deg)) {
-    Vec3 dir;
-    const double w = min_width_perpendicular(hull, c, &dir);
-    if (w < r.d_min) { r.d_min = w; r.dir_min = dir; }
-  }
+  r.dir_max = diameter_direction(hull, r.d_max, r.dir_max, opt.tie_tolerance, opt.tie_cone_deg);
+  r.d_min = min_width_perpendicular(hull, r.dir_max, &r.dir_min);
   r.d_min_any = min_width(hull, &r.dir_min_any);
   return r;
 }

@@ -11,7 +11,8 @@
 // 2)) so that the circle is sampled at the same angular step as the sphere
 // (N points on a half-sphere of area 2 pi are ~sqrt(2 pi / N) rad apart: 18
 // deg for N = 60, M = 10); Dmin_any = min W over the N directions.
-// Cost O((N + M) h) for h hull vertices.
+// Cost O((N + M) h) for h hull vertices. The same tie rule as the exact mode
+// (below) is available (tie_tolerance); the particle table uses it.
 //
 // Exact mode (the reference for the sampled mode's bias):
 //  * Dmax = hull diameter, max |p - q| over vertex pairs, O(h^2).
@@ -19,14 +20,18 @@
 //    perpendicular to Dmax: 2-D hull (monotone chain) then, for each of its
 //    edges, the farthest vertex (a minimum-width direction of a convex
 //    polygon is always an edge normal; Toussaint 1983 rotating calipers).
-//    The Dmax *direction* is ill-conditioned on flat, disc-like particles:
-//    tilting a half-sphere's diameter by e out of its flat face shortens it by
-//    only ~Dmax e^2 / 8, so a tenth of a voxel of digitisation noise tilts it
-//    by ~10 deg, and the width perpendicular to it then reads R (1 + sin e)
-//    instead of R. So every vertex pair within tie_tolerance (~half a voxel)
-//    of Dmax is a candidate Dmax direction (up to 32, >= 3 deg apart) and
-//    Dmin is the smallest perpendicular width over the candidates. With
-//    tie_tolerance = 0 this is the textbook definition.
+//    The Dmax *direction* is ill-conditioned: on a flat, disc-like particle
+//    tilting a half-sphere's diameter by e out of its flat face shortens it
+//    by only ~Dmax e^2 / 8, so a tenth of a voxel of digitisation noise tilts
+//    it by ~10 deg and the perpendicular width reads R (1 + sin e), not R; on
+//    a box, the rounded digitised corners tilt the diagonal and the width
+//    perpendicular to it moves fast with the tilt. Taking the smallest
+//    perpendicular width over all near-tie directions fixes the first and
+//    ruins the second (box FR -0.15 to -0.27), so the tie rule *averages*
+//    instead: the Dmax direction is the mean of the directions of all vertex
+//    pairs within tie_tolerance (~half a voxel) of Dmax and within 20 deg of
+//    the diameter, which cancels the tilt noise (a ring of in-plane ties on
+//    a half-sphere averages into the plane). Dmax itself stays the diameter.
 //  * Dmin_any = the 3-D minimum width: attained at a face-vertex or an
 //    edge-edge antipodal pair (Houle & Toussaint 1988, IEEE PAMI 10(5):761,
 //    doi:10.1109/34.6790). Faces: O(F h). Edge pairs: two edges are antipodal
@@ -43,24 +48,26 @@
 // every caliper (FR of a 20-voxel sphere +0.1). tomograin builds the hull on
 // one point per *exposed voxel face*: the centre of a boundary voxel pushed
 // out by lambda/2 voxel towards that face (lambda = face_offset, default
-// 0.5: a quarter voxel). That hull is the Minkowski sum of the centres' hull and an
+// 0.3). That hull is the Minkowski sum of the centres' hull and an
 // octahedron of half-diagonals lambda h_i / 2, so every caliper becomes
 //     W(u) = W_centres(u) + lambda max_i |u_i| h_i
 // (tested), adding the most along the lattice axes, where the centres lose
-// the most. lambda = 0.5 is measured, not derived (measure_feret_bench
-// convention; exact mode, mean over 6 random placements, worst in ()):
-//                        r=10          r=20          r=30 voxels
-//   sphere mean caliper  +0.6 % (0.7)  +0.5 % (0.5)  +0.4 % (0.4)  (vs 2r)
-//   sphere Dmed          +0.8 % (1.0)  +0.2 % (0.2)  -0.1 % (0.4)
-//   sphere FR - 1        -0.036 (.039) -0.014 (.015) -0.005 (.013)
-//   sphere AR - 1        +0.051 (.052) +0.024 (.024) +0.014 (.018)
-//   half-sphere FR - 0.5 +0.024 (.038) +0.020 (.024) +0.014 (.021)
-// Larger lambda helps spheres' FR and hurts flat faces (lambda = 0.8:
-// half-sphere FR +0.036 at r = 20, sphere FR +0.004); smaller does the
-// reverse (0.2: sphere FR -0.031, half-sphere +0.005). The sphere's AR
-// excess, ~1.2 voxels / (2r) whatever lambda, is the lattice's own
-// quantisation of the narrowest direction. Each voxel contributes points on
-// both sides of its centre, so the hull is always 3-D, even for one voxel.
+// the most. lambda = 0.3 is measured, not derived (measure_feret_bench
+// convention; exact mode with the tie rule, mean over 6 random placements,
+// worst in ()):
+//                        r=10           r=20           r=30 voxels
+//   sphere mean caliper  -0.3 % (0.4)   +0.05 % (0.1)  +0.1 % (0.1)  (vs 2r)
+//   sphere Dmed          +1.0 % (1.9)   +0.0 % (0.3)   -0.1 % (0.3)
+//   sphere FR - 1        -0.031 (.046)  -0.006 (.011)  -0.002 (.007)
+//   sphere AR - 1        +0.033 (.040)  +0.012 (.015)  +0.008 (.010)
+//   half-sphere FR - 0.5 +0.025 (.042)  +0.016 (.025)  +0.013 (.021)
+// Larger lambda helps spheres' FR and hurts flat faces (lambda = 0.5:
+// half-sphere FR +0.027 at r = 20, sphere +0.004); the sphere's AR excess,
+// ~0.5 voxel / (2r), is the lattice's own quantisation. Each voxel
+// contributes points on both sides of its centre, so the hull is always
+// 3-D, even for a single voxel. Boxes remain hard: the width perpendicular
+// to a box's diagonal moves fast when the digitised corners tilt the
+// diagonal (FR -0.07 on average, -0.16 worst, for 1.6:1:0.6 boxes at r = 18).
 #pragma once
 #include <array>
 #include <cstdint>
@@ -83,7 +90,7 @@ struct SurfaceVoxel {
 // `anchor` (a voxel index near the particle, so the coordinates stay small):
 // one point per exposed face, centre + lambda/2 * h along the face normal.
 std::vector<Vec3> caliper_points(std::span<const SurfaceVoxel> surface, const std::array<double, 3>& voxel_size_m,
-                                 const std::array<int64_t, 3>& anchor, double face_offset = 0.5);
+                                 const std::array<int64_t, 3>& anchor, double face_offset = 0.3);
 
 // Quasi-uniform unit directions on the upper half-sphere (z >= 0 in the
 // vector's own 3rd component), golden-spiral construction, deterministic.
@@ -99,27 +106,37 @@ struct FeretResult {
   Vec3 dir_max = Vec3::UnitX(), dir_min = Vec3::UnitY(), dir_min_any = Vec3::UnitZ();
 };
 
-// Sampled mode on the given directions (see half_sphere_directions). n_perp:
-// directions on the half-circle perpendicular to Dmax, 0 = ceil(sqrt(pi N/2)).
-FeretResult feret_sampled(const ConvexHull& hull, std::span<const Vec3> directions, int n_perp = 0);
+struct FeretSampledOptions {
+  int n_perp = 0;  // directions on the perpendicular half-circle; 0 = ceil(sqrt(pi N / 2))
+  // The tie rule (see the header): 0 = the study's literal definition, the
+  // perpendicular circle of the single widest direction; > 0 = of the mean
+  // of the sampled directions within tie_tolerance of Dmax and within
+  // tie_cone_deg of the widest one.
+  double tie_tolerance = 0;
+  double tie_cone_deg = 20;
+};
+
+// Sampled mode on the given directions (see half_sphere_directions).
+FeretResult feret_sampled(const ConvexHull& hull, std::span<const Vec3> directions,
+                          const FeretSampledOptions& opt = {});
 
 struct FeretExactOptions {
-  // Directions whose caliper is within tie_tolerance of Dmax count as Dmax
-  // directions (same length unit as the hull; the caller passes ~half a
-  // voxel). Zero = the single diameter pair only.
+  // Vertex pairs within tie_tolerance of the diameter (same length unit as
+  // the hull; the particle table passes half a voxel) and within
+  // tie_cone_deg of its direction are averaged into the Dmax direction.
+  // 0 = the single diameter pair.
   double tie_tolerance = 0;
-  int max_candidates = 32;          // at most this many candidate Dmax directions...
-  double min_separation_deg = 3.0;  // ...at least this far apart
+  double tie_cone_deg = 20;
 };
 
 // Exact mode (see the header comment). Hull must be 3-D; a flat hull gets
 // Dmin = Dmin_any = 0.
 FeretResult feret_exact(const ConvexHull& hull, const FeretExactOptions& opt = {});
 
-// Directions of vertex pairs at least d_max - tolerance apart, longest first,
-// thinned to max_count directions at least min_separation_deg apart.
-std::vector<Vec3> diameter_candidates(const ConvexHull& hull, double d_max, double tolerance, int max_count,
-                                      double min_separation_deg);
+// The Dmax direction under the tie rule: the sign-aligned mean of the
+// directions of vertex pairs at least d_max - tolerance long and within
+// cone_deg of `best` (the diameter's own direction).
+Vec3 diameter_direction(const ConvexHull& hull, double d_max, const Vec3& best, double tolerance, double cone_deg);
 
 // The pieces of the exact mode, exposed for tests and the benchmark.
 double hull_diameter(const ConvexHull& hull, Vec3* direction = nullptr);

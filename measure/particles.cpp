@@ -39,6 +39,8 @@ std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels
   const auto& h = labels.geometry().voxel_size_m;
   FeretExactOptions exact;
   exact.tie_tolerance = opt.tie_tolerance_voxels * std::max({h[0], h[1], h[2]});
+  FeretSampledOptions sampled;
+  sampled.tie_tolerance = exact.tie_tolerance;
 
   std::vector<Particle> out(ls.labels.size());
   const int64_t n = static_cast<int64_t>(out.size());
@@ -52,7 +54,7 @@ std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels
     const auto pts = caliper_points(ls.surface_of(static_cast<size_t>(p)), h, P.stats.box_lo, opt.face_offset);
     const ConvexHull hull = convex_hull(pts);
     P.hull_vertices = static_cast<int>(hull.vertices.size());
-    P.feret = opt.feret_exact ? feret_exact(hull, exact) : feret_sampled(hull, dirs);
+    P.feret = opt.feret_exact ? feret_exact(hull, exact) : feret_sampled(hull, dirs, sampled);
     if (opt.oriented_box) P.box = oriented_box(hull.vertices, opt.obb);
     fill_sizing(P, opt.sizing);
   }

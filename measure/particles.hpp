@@ -28,9 +28,11 @@ struct ParticleOptions {
   LabelStatsOptions stats;
   int feret_directions = 60;  // the reference study's 60 orientations
   bool feret_exact = false;   // exact hull diameter / min widths instead of sampled directions
-  double tie_tolerance_voxels = 0.5;  // exact mode: Dmax candidates within this many voxels (feret.hpp)
+  // Dmax candidates within this many voxels of Dmax (feret.hpp's tie rule,
+  // both modes); 0 = the study's literal single-direction definition.
+  double tie_tolerance_voxels = 0.5;
   Sizing sizing = Sizing::feret;  // which definition fills d_max / d_med / d_min, fr, ar
-  double face_offset = 0.5;   // hull point convention, see feret.hpp
+  double face_offset = 0.3;   // hull point convention, see feret.hpp
   bool oriented_box = true;   // also run CGAL's oriented box (obb_* columns)
   OrientedBoxOptions obb;
   int threads = 0;            // 0 = OpenMP default

@@ -17,7 +17,7 @@ using test::V3;
 
 std::vector<Vec3> points_of(const Volume<uint32_t>& v) {
   const auto r = label_stats(v.view());
-  return caliper_points(r.surface_of(0), v.geometry().voxel_size_m, r.labels[0].box_lo, 0.5);
+  return caliper_points(r.surface_of(0), v.geometry().voxel_size_m, r.labels[0].box_lo, 0.3);
 }
 
 TEST(ConvexHull, ContainsEveryPointAndIsOutwardOriented) {

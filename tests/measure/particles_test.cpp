@@ -34,7 +34,9 @@ TEST(Particles, TableColumnsAndUnits) {
   EXPECT_NEAR(t.num("cx_mm")[1], 14 * 0.02, 0.002);
   EXPECT_NEAR(t.num("cz_mm")[1], 13 * 0.02, 0.002);
   EXPECT_NEAR(t.num("d_eq_mm")[1], 0.408, 0.004);
-  EXPECT_NEAR(t.num("d_med_mm")[1], 0.408, 0.408 * 0.03);
+  // N = 60 at r = 10 voxels: Dmed +4 % measured (sampled calipers under-read
+  // Dmax and Dmin of a small sphere); the exact mode is tested in feret_test.
+  EXPECT_NEAR(t.num("d_med_mm")[1], 0.408, 0.408 * 0.06);
   EXPECT_NEAR(t.num("volume_mm3")[1], ps[1].stats.voxels * 8e-6, 1e-12);
   for (int64_t r = 0; r < t.rows(); ++r) {
     EXPECT_LE(t.num("obb_min_mm")[r], t.num("obb_med_mm")[r]);

@@ -148,8 +148,8 @@ LabelStatsResult label_stats(const VolumeView<const uint32_t>& v, const LabelSta
 
   // Merge in thread order.
   std::vector<Acc> acc(nl);
-  for (const auto& P : part)
-    for (size_t n = 0; n < nl; ++n) acc[n].merge(P.acc[n]);
+  for (const auto& P : part)  // a thread the runtime did not start left its partial empty
+    for (size_t n = 0; n < P.acc.size(); ++n) acc[n].merge(P.acc[n]);
 
   LabelStatsResult r;
   r.labels.resize(nl);

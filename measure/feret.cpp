@@ -1,5 +1,6 @@
 #include "measure/feret.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -82,17 +83,34 @@ std::vector<Vec3> caliper_points(std::span<const SurfaceVoxel> surface, const st
   if (!(face_offset > 0 && face_offset <= 1))
     throw UsageError("face_offset must be in (0, 1], got " + std::to_string(face_offset));
   std::vector<Vec3> pts;
-  pts.reserve(surface.size() * 2);
+  pts.reserve(surface.size());
   const double s = 0.5 * face_offset;
-  for (const auto& v : surface) {
-    const Vec3 c((v.k - anchor[0] + 0.5) * h[0], (v.j - anchor[1] + 0.5) * h[1], (v.i - anchor[2] + 0.5) * h[2]);
+  auto point = [&](const SurfaceVoxel& v, int f) {
+    Vec3 p((v.k - anchor[0] + 0.5) * h[0], (v.j - anchor[1] + 0.5) * h[1], (v.i - anchor[2] + 0.5) * h[2]);
+    const int axis = f / 2;
+    p[axis] += (f % 2 ? s : -s) * h[axis];
+    return p;
+  };
+  // Points of one face kind in one x row are collinear: only the two ends of
+  // the row can be hull vertices, so each row contributes at most 12 points
+  // (the hull is unchanged; CGAL's work drops from the surface area to the
+  // number of rows). Needs `surface` in scan order, as label_stats gives it.
+  size_t a = 0;
+  while (a < surface.size()) {
+    size_t b = a;
+    while (b < surface.size() && surface[b].k == surface[a].k && surface[b].j == surface[a].j) ++b;
     for (int f = 0; f < 6; ++f) {
-      if (!(v.exposed & (1u << f))) continue;
-      const int axis = f / 2;
-      Vec3 p = c;
-      p[axis] += (f % 2 ? s : -s) * h[axis];
-      pts.push_back(p);
+      size_t first = b, last = b;
+      for (size_t q = a; q < b; ++q)
+        if (surface[q].exposed & (1u << f)) {
+          if (first == b || surface[q].i < surface[first].i) first = q;
+          if (last == b || surface[q].i > surface[last].i) last = q;
+        }
+      if (first == b) continue;
+      pts.push_back(point(surface[first], f));
+      if (last != first) pts.push_back(point(surface[last], f));
     }
+    a = b;
   }
   return pts;
 }
@@ -267,6 +285,28 @@ double min_width(const ConvexHull& hull, Vec3* direction) {
 
 Vec3 tie_averaged_direction(std::span<const Vec3> dirs, std::span<const double> lengths, const Vec3& best,
                             double d_max, double tolerance, double cone_deg) {
+  if (tolerance <= 0) return best;
+  // Orientation tensor of all near-tie directions (sign-free).
+  Eigen::Matrix3d T = Eigen::Matrix3d::Zero();
+  int n = 0;
+  for (size_t k = 0; k < dirs.size(); ++k)
+    if (lengths[k] >= d_max - tolerance) {
+      T += dirs[k] * dirs[k].transpose();
+      ++n;
+    }
+  if (n >= 3) {
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(T / n);
+    const Eigen::Vector3d lam = es.eigenvalues();  // ascending
+    // Planar tie set (a ring of equal diameters, as on a disc or half-sphere):
+    // the Dmax direction lies in that plane, whatever the tilt noise.
+    if (lam[1] > 0.1 && lam[0] < 0.1 * lam[1]) {
+      const Vec3 normal = es.eigenvectors().col(0);
+      const Vec3 in_plane = best - best.dot(normal) * normal;
+      if (in_plane.norm() > 1e-6) return in_plane.normalized();
+    }
+  }
+  // Otherwise a cluster around the diameter (a box's diagonal, a needle's
+  // axis): the mean of the near-ties within the cone cancels the tilt noise.
   const double cos_cone = std::cos(cone_deg * std::numbers::pi / 180.0);
   Vec3 sum = Vec3::Zero();
   for (size_t k = 0; k < dirs.size(); ++k) {

@@ -27,11 +27,15 @@
 //    a box, the rounded digitised corners tilt the diagonal and the width
 //    perpendicular to it moves fast with the tilt. Taking the smallest
 //    perpendicular width over all near-tie directions fixes the first and
-//    ruins the second (box FR -0.15 to -0.27), so the tie rule *averages*
-//    instead: the Dmax direction is the mean of the directions of all vertex
-//    pairs within tie_tolerance (~half a voxel) of Dmax and within 20 deg of
-//    the diameter, which cancels the tilt noise (a ring of in-plane ties on
-//    a half-sphere averages into the plane). Dmax itself stays the diameter.
+//    ruins the second (box FR -0.15 to -0.27), so the tie rule *fits*
+//    instead. Near ties are the vertex pairs within tie_tolerance (~half a
+//    voxel) of Dmax. If their directions spread over a plane (orientation
+//    tensor eigenvalues l1 >= l2 > 0.1, l3 < 0.1 l2: a ring of equal
+//    diameters, as on a disc or a half-sphere), the Dmax direction is the
+//    diameter projected into that plane; otherwise (a cluster: a box
+//    diagonal, a needle) it is the mean of the near-tie directions within
+//    20 deg of the diameter. Both cancel tilt noise instead of exploiting
+//    it. Dmax itself stays the diameter's length.
 //  * Dmin_any = the 3-D minimum width: attained at a face-vertex or an
 //    edge-edge antipodal pair (Houle & Toussaint 1988, IEEE PAMI 10(5):761,
 //    doi:10.1109/34.6790). Faces: O(F h). Edge pairs: two edges are antipodal
@@ -57,17 +61,18 @@
 // worst in ()):
 //                        r=10           r=20           r=30 voxels
 //   sphere mean caliper  -0.3 % (0.4)   +0.05 % (0.1)  +0.1 % (0.1)  (vs 2r)
-//   sphere Dmed          +1.0 % (1.9)   +0.0 % (0.3)   -0.1 % (0.3)
-//   sphere FR - 1        -0.031 (.046)  -0.006 (.011)  -0.002 (.007)
-//   sphere AR - 1        +0.033 (.040)  +0.012 (.015)  +0.008 (.010)
-//   half-sphere FR - 0.5 +0.025 (.042)  +0.016 (.025)  +0.013 (.021)
+//   sphere Dmed          +1.0 % (1.9)   +0.2 % (1.4)   -0.1 % (0.3)
+//   sphere FR - 1        -0.031 (.046)  -0.010 (.033)  -0.003 (.007)
+//   sphere AR - 1        +0.033 (.040)  +0.015 (.026)  +0.008 (.010)
+//   half-sphere FR - 0.5 +0.014 (.033)  +0.015 (.022)  +0.012 (.016)
 // Larger lambda helps spheres' FR and hurts flat faces (lambda = 0.5:
 // half-sphere FR +0.027 at r = 20, sphere +0.004); the sphere's AR excess,
 // ~0.5 voxel / (2r), is the lattice's own quantisation. Each voxel
 // contributes points on both sides of its centre, so the hull is always
 // 3-D, even for a single voxel. Boxes remain hard: the width perpendicular
 // to a box's diagonal moves fast when the digitised corners tilt the
-// diagonal (FR -0.07 on average, -0.16 worst, for 1.6:1:0.6 boxes at r = 18).
+// diagonal (FR -0.12 on average, -0.18 worst, for 1.6:1:0.6 boxes of long
+// edge 29 voxels; 1:0.6:0.35 ellipsoids: -0.004, worst 0.013).
 #pragma once
 #include <array>
 #include <cstdint>
@@ -88,7 +93,9 @@ struct SurfaceVoxel {
 
 // Hull input points of one particle, in metres, (z, y, x) order, relative to
 // `anchor` (a voxel index near the particle, so the coordinates stay small):
-// one point per exposed face, centre + lambda/2 * h along the face normal.
+// one point per exposed face, centre + lambda/2 * h along the face normal,
+// keeping only the two ends of each x row per face kind (the others are
+// inside the hull). `surface` must be in scan order (z, y, x).
 std::vector<Vec3> caliper_points(std::span<const SurfaceVoxel> surface, const std::array<double, 3>& voxel_size_m,
                                  const std::array<int64_t, 3>& anchor, double face_offset = 0.3);
 
@@ -109,9 +116,8 @@ struct FeretResult {
 struct FeretSampledOptions {
   int n_perp = 0;  // directions on the perpendicular half-circle; 0 = ceil(sqrt(pi N / 2))
   // The tie rule (see the header): 0 = the study's literal definition, the
-  // perpendicular circle of the single widest direction; > 0 = of the mean
-  // of the sampled directions within tie_tolerance of Dmax and within
-  // tie_cone_deg of the widest one.
+  // perpendicular circle of the single widest direction; > 0 = of the
+  // direction fitted to the sampled directions within tie_tolerance of Dmax.
   double tie_tolerance = 0;
   double tie_cone_deg = 20;
 };
@@ -122,9 +128,8 @@ FeretResult feret_sampled(const ConvexHull& hull, std::span<const Vec3> directio
 
 struct FeretExactOptions {
   // Vertex pairs within tie_tolerance of the diameter (same length unit as
-  // the hull; the particle table passes half a voxel) and within
-  // tie_cone_deg of its direction are averaged into the Dmax direction.
-  // 0 = the single diameter pair.
+  // the hull; the particle table passes half a voxel) are fitted into the
+  // Dmax direction (header; clusters use tie_cone_deg). 0 = the diameter pair.
   double tie_tolerance = 0;
   double tie_cone_deg = 20;
 };
@@ -133,9 +138,8 @@ struct FeretExactOptions {
 // Dmin = Dmin_any = 0.
 FeretResult feret_exact(const ConvexHull& hull, const FeretExactOptions& opt = {});
 
-// The Dmax direction under the tie rule: the sign-aligned mean of the
-// directions of vertex pairs at least d_max - tolerance long and within
-// cone_deg of `best` (the diameter's own direction).
+// The Dmax direction under the tie rule (header) from the vertex pairs at
+// least d_max - tolerance long; `best` is the diameter's own direction.
 Vec3 diameter_direction(const ConvexHull& hull, double d_max, const Vec3& best, double tolerance, double cone_deg);
 
 // The pieces of the exact mode, exposed for tests and the benchmark.

@@ -91,27 +91,44 @@ std::vector<Vec3> caliper_points(std::span<const SurfaceVoxel> surface, const st
     p[axis] += (f % 2 ? s : -s) * h[axis];
     return p;
   };
-  // Points of one face kind in one x row are collinear: only the two ends of
-  // the row can be hull vertices, so each row contributes at most 12 points
-  // (the hull is unchanged; CGAL's work drops from the surface area to the
-  // number of rows). Needs `surface` in scan order, as label_stats gives it.
-  size_t a = 0;
-  while (a < surface.size()) {
-    size_t b = a;
-    while (b < surface.size() && surface[b].k == surface[a].k && surface[b].j == surface[a].j) ++b;
-    for (int f = 0; f < 6; ++f) {
-      size_t first = b, last = b;
-      for (size_t q = a; q < b; ++q)
-        if (surface[q].exposed & (1u << f)) {
-          if (first == b || surface[q].i < surface[first].i) first = q;
-          if (last == b || surface[q].i > surface[last].i) last = q;
-        }
-      if (first == b) continue;
-      pts.push_back(point(surface[first], f));
-      if (last != first) pts.push_back(point(surface[last], f));
-    }
-    a = b;
+  // Points of one face kind on one grid line (along x, y or z) are
+  // collinear: only the two ends of the line can be hull vertices. Every
+  // dropped point lies between two points of the original set, so the hull
+  // is unchanged, while CGAL's work drops from the surface area to a few
+  // points per line. Extents per line are kept in small dense arrays over
+  // the particle's bounding box.
+  if (surface.empty()) return pts;
+  std::array<int32_t, 3> lo{surface[0].k, surface[0].j, surface[0].i}, hi = lo;
+  for (const auto& v : surface) {
+    lo = {std::min(lo[0], v.k), std::min(lo[1], v.j), std::min(lo[2], v.i)};
+    hi = {std::max(hi[0], v.k), std::max(hi[1], v.j), std::max(hi[2], v.i)};
   }
+  const int64_t nz = hi[0] - lo[0] + 1, ny = hi[1] - lo[1] + 1, nx = hi[2] - lo[2] + 1;
+  constexpr int32_t kNone = std::numeric_limits<int32_t>::max();
+  // [face][line] -> (min, max) of the coordinate along the line.
+  struct Span { int32_t a = kNone, b = std::numeric_limits<int32_t>::min(); };
+  std::vector<Span> along_x(static_cast<size_t>(6 * nz * ny)), along_y(static_cast<size_t>(6 * nz * nx)),
+      along_z(static_cast<size_t>(6 * ny * nx));
+  auto grow = [](Span& sp, int32_t c) { sp.a = std::min(sp.a, c); sp.b = std::max(sp.b, c); };
+  auto ix = [&](int f, const SurfaceVoxel& v) { return static_cast<size_t>((f * nz + (v.k - lo[0])) * ny + (v.j - lo[1])); };
+  auto iy = [&](int f, const SurfaceVoxel& v) { return static_cast<size_t>((f * nz + (v.k - lo[0])) * nx + (v.i - lo[2])); };
+  auto iz = [&](int f, const SurfaceVoxel& v) { return static_cast<size_t>((f * ny + (v.j - lo[1])) * nx + (v.i - lo[2])); };
+  for (const auto& v : surface)
+    for (int f = 0; f < 6; ++f)
+      if (v.exposed & (1u << f)) {
+        grow(along_x[ix(f, v)], v.i);
+        grow(along_y[iy(f, v)], v.j);
+        grow(along_z[iz(f, v)], v.k);
+      }
+  for (const auto& v : surface)
+    for (int f = 0; f < 6; ++f) {
+      if (!(v.exposed & (1u << f))) continue;
+      const Span& sx = along_x[ix(f, v)];
+      const Span& sy = along_y[iy(f, v)];
+      const Span& sz = along_z[iz(f, v)];
+      const bool end = (v.i == sx.a || v.i == sx.b) && (v.j == sy.a || v.j == sy.b) && (v.k == sz.a || v.k == sz.b);
+      if (end) pts.push_back(point(v, f));
+    }
   return pts;
 }
 

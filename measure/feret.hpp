@@ -94,8 +94,8 @@ struct SurfaceVoxel {
 // Hull input points of one particle, in metres, (z, y, x) order, relative to
 // `anchor` (a voxel index near the particle, so the coordinates stay small):
 // one point per exposed face, centre + lambda/2 * h along the face normal,
-// keeping only the two ends of each x row per face kind (the others are
-// inside the hull). `surface` must be in scan order (z, y, x).
+// keeping only points that end their grid line (along x, y and z) among
+// points of the same face kind: the others lie inside the hull.
 std::vector<Vec3> caliper_points(std::span<const SurfaceVoxel> surface, const std::array<double, 3>& voxel_size_m,
                                  const std::array<int64_t, 3>& anchor, double face_offset = 0.3);
 

@@ -133,7 +133,7 @@ void trade() {
               1e3 * t_hull, 1e3 * t_exact);
   std::printf("# errors vs exact mode: mean |rel| for Dmax, Dmin; mean |abs| for FR, AR; worst in ()\n");
   std::printf("# lit = the study's literal Dmin (perpendicular to the one sampled Dmax direction);\n"
-              "# tie = perpendicular to the mean of the sampled directions within 0.5 voxel of Dmax (the table's default)\n");
+              "# tie = perpendicular to the direction fitted to the sampled directions within 0.5 voxel of Dmax (the table's default; feret.hpp)\n");
   std::printf("%10s | %-17s %-17s %-17s %-17s | %-27s | %s\n", "N", "Dmax", "Dmin", "FR", "AR",
               "mean FR bias: sph half ell box", "sizing ms/particle");
   for (double tie : {0.0, 0.5})

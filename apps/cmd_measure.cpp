@@ -141,8 +141,9 @@ tg::app::Registrar reg_measure{{"measure", 40, [](CLI::App& app, CLI::App*& sub)
   sub->add_option("labels", o->in, "Label volume (u32): .h5[:/dataset], .tif, folder of slices, raw .json")->required();
   sub->add_option("-o,--output", o->out,
                   "Output table(s): .csv, or .h5 (/labels + /particles table; naming the input .h5 adds the "
-                  "table to it). Repeatable")
-      ->required();
+                  "table to it). Repeatable: -o a.csv -o a.h5")
+      ->required()
+      ->allow_extra_args(false);  // one file per -o, so a positional after it stays the input
   sub->add_option("--feret", o->feret, "Feret orientations N (>= 3) or 'exact'")->default_str("60");
   sub->add_option("--sizing", o->sizing, "Definition behind d_max/d_med/d_min: feret or obb")
       ->check(CLI::IsMember({"feret", "obb"}))

@@ -1,0 +1,91 @@
+#include "segmentation/markers.hpp"
+
+#include <cmath>
+#include <vector>
+
+#include "core/errors.hpp"
+#include "segmentation/neighbourhood.hpp"
+
+namespace tg {
+namespace {
+
+constexpr uint32_t kDecided = 1u << 31;  // a flood from this height already settled this voxel
+constexpr uint32_t kVisited = 1u << 30;  // in the current flood
+constexpr uint32_t kLabelMask = kVisited - 1;
+
+}  // namespace
+
+uint32_t find_markers(const Volume<float>& dist, const Volume<uint8_t>& solid, Volume<uint32_t>& markers,
+                      const MarkerOptions& opt) {
+  if (dist.shape() != solid.shape())
+    throw UsageError("markers: distance map " + dist.shape().str() + " and mask " + solid.shape().str() +
+                     " differ in shape");
+  if (!(opt.h >= 0) || !std::isfinite(opt.h)) throw UsageError("markers: h must be finite and >= 0");
+  const Shape s = solid.shape();
+  if (markers.shape() != s) markers = Volume<uint32_t>(s, solid.geometry());
+  markers.set_geometry(solid.geometry());
+  markers.fill(0);
+  const seg::Neighbourhood nb(s, opt.connectivity);
+  const float* d = dist.data();
+  const uint8_t* m = solid.data();
+  uint32_t* M = markers.data();
+  uint32_t count = 0;
+  std::vector<int64_t> queue;
+
+  // Calls f(n) for each neighbour n of idx inside the volume.
+  auto for_neighbours = [&](int64_t idx, auto&& f) {
+    const auto [k, j, i] = s.coords(idx);
+    const bool in = seg::interior(s, k, j, i);
+    for (int q = 0; q < nb.count; ++q) {
+      if (!in) {
+        const seg::Step st = nb.step[size_t(q)];
+        if (!s.contains(k + st.dz, j + st.dy, i + st.dx)) continue;
+      }
+      if (!f(idx + nb.offset[size_t(q)])) return;
+    }
+  };
+
+  const int64_t n = solid.size();
+  for (int64_t start = 0; start < n; ++start) {
+    if (!m[start] || (M[start] & kDecided)) continue;
+    const float top = d[start];
+    bool higher = false;
+    for_neighbours(start, [&](int64_t q) {
+      if (m[q] && d[q] > top) higher = true;
+      return !higher;
+    });
+    if (higher) continue;
+
+    // Flood the cap {d >= top - h} from `start`, stopping at a higher voxel.
+    const double floor_level = double(top) - opt.h;
+    queue.clear();
+    queue.push_back(start);
+    M[start] |= kVisited;
+    for (size_t head = 0; head < queue.size() && !higher; ++head)
+      for_neighbours(queue[head], [&](int64_t q) {
+        if (!m[q] || (M[q] & kVisited) || double(d[q]) < floor_level) return true;
+        if (d[q] > top) {
+          higher = true;
+          return false;
+        }
+        M[q] |= kVisited;
+        queue.push_back(q);
+        return true;
+      });
+    const uint32_t label = higher ? 0 : ++count;
+    if (count > kLabelMask) throw ResourceError("markers: more than 2^30 markers");
+    for (int64_t q : queue) {
+      uint32_t v = M[q] & ~kVisited;
+      if (d[q] == top) v |= kDecided;  // same height, same cap: same outcome
+      // A kept cap cannot overlap another kept cap (its dynamic would be < h),
+      // so a voxel is labelled at most once.
+      if (label) v = (v & kDecided) | label;
+      M[q] = v;
+    }
+  }
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < n; ++i) M[i] &= kLabelMask;
+  return count;
+}
+
+}  // namespace tg

@@ -64,7 +64,6 @@ static tg::app::Registrar reg{{"synth", 25, [](CLI::App& app, CLI::App*& sub) ->
     if (o->seed >= 0) scene.seed = static_cast<uint64_t>(o->seed);
     if (o->voxel_um > 0) scene.voxel_um = o->voxel_um;
     if (o->size > 0) scene.size = o->size;
-    if (scene.preset == "zeolite" && o->voxel_um == 0 && o->size > 0) scene.voxel_um = 0;
     return tg::synth::run_synth(std::move(scene), o->out, o->write_float);
   };
 }}};

@@ -1,0 +1,112 @@
+#include "segmentation/merge_labels.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <unordered_map>
+#include <vector>
+
+#include "core/errors.hpp"
+#include "segmentation/neighbourhood.hpp"
+
+namespace tg {
+namespace {
+
+uint64_t pair_key(uint32_t a, uint32_t b) {
+  if (a > b) std::swap(a, b);
+  return (uint64_t(a) << 32) | b;
+}
+
+// Distinct nonzero labels among the 26 neighbours of idx (up to 3 kept:
+// enough to tell "one", "two" and "more").
+int neighbour_labels(const Volume<uint32_t>& lab, const seg::Neighbourhood& nb, int64_t idx, uint32_t out[3]) {
+  const Shape s = lab.shape();
+  const auto [k, j, i] = s.coords(idx);
+  const bool in = seg::interior(s, k, j, i);
+  int n = 0;
+  for (int t = 0; t < nb.count; ++t) {
+    if (!in) {
+      const seg::Step st = nb.step[size_t(t)];
+      if (!s.contains(k + st.dz, j + st.dy, i + st.dx)) continue;
+    }
+    const uint32_t l = lab[idx + nb.offset[size_t(t)]];
+    if (l == 0 || std::find(out, out + n, l) != out + n) continue;
+    out[n++] = l;
+    if (n == 3) break;
+  }
+  return n;
+}
+
+}  // namespace
+
+MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>& solid, const MergeOptions& opt) {
+  if (labels.shape() != solid.shape()) throw UsageError("merge: labels and mask differ in shape");
+  if (!(opt.ratio >= 0) || !std::isfinite(opt.ratio)) throw UsageError("merge: ratio must be finite and >= 0");
+  const Shape s = labels.shape();
+  const int64_t n = labels.size();
+  uint32_t* L = labels.data();
+  const uint8_t* m = solid.data();
+  uint32_t maxl = 0;
+  for (int64_t i = 0; i < n; ++i) maxl = std::max(maxl, L[i]);
+  std::vector<int64_t> vol(size_t(maxl) + 1, 0);
+  for (int64_t i = 0; i < n; ++i) ++vol[L[i]];
+
+  // Interfaces: line voxels between exactly two labels, and direct faces.
+  const seg::Neighbourhood nb(s, 26);
+  std::unordered_map<uint64_t, int64_t> iface;
+  for (int64_t k = 0; k < s.nz; ++k)
+    for (int64_t j = 0; j < s.ny; ++j)
+      for (int64_t i = 0; i < s.nx; ++i) {
+        const int64_t idx = s.index(k, j, i);
+        const uint32_t a = L[idx];
+        if (a == 0) {
+          if (!m[idx]) continue;
+          uint32_t ls[3];
+          if (neighbour_labels(labels, nb, idx, ls) == 2) ++iface[pair_key(ls[0], ls[1])];
+          continue;
+        }
+        const uint32_t fw[3] = {i + 1 < s.nx ? L[idx + 1] : 0, j + 1 < s.ny ? L[idx + s.nx] : 0,
+                                k + 1 < s.nz ? L[idx + s.slice_voxels()] : 0};
+        for (uint32_t b : fw)
+          if (b != 0 && b != a) ++iface[pair_key(a, b)];
+      }
+
+  MergeResult res;
+  res.touching_pairs = int64_t(iface.size());
+  std::vector<uint32_t> parent(size_t(maxl) + 1);
+  for (uint32_t l = 0; l <= maxl; ++l) parent[l] = l;
+  auto find = [&](uint32_t a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  };
+  const std::map<uint64_t, int64_t> ordered(iface.begin(), iface.end());  // deterministic order
+  for (const auto& [key, area] : ordered) {
+    const uint32_t a = uint32_t(key >> 32), b = uint32_t(key & 0xffffffffu);
+    const double vmin = double(std::min(vol[a], vol[b]));
+    const double r = std::cbrt(3.0 * vmin / (4.0 * std::numbers::pi));
+    if (double(area) < opt.ratio * std::numbers::pi * r * r) continue;
+    const uint32_t ra = find(a), rb = find(b);
+    if (ra == rb) continue;
+    parent[std::max(ra, rb)] = std::min(ra, rb);
+    ++res.merges;
+  }
+  if (res.merges == 0) return res;
+
+  // Line voxels whose neighbours all belong to one merged label join it.
+  // Reading a voxel already filled in this pass is harmless: it holds a root.
+  for (int64_t idx = 0; idx < n; ++idx) {
+    if (L[idx] != 0 || !m[idx]) continue;
+    uint32_t ls[3];
+    const int c = neighbour_labels(labels, nb, idx, ls);
+    if (c < 2) continue;
+    const uint32_t r = find(ls[0]);
+    bool same = true;
+    for (int t = 1; t < c; ++t) same = same && find(ls[t]) == r;
+    if (same && c < 3) L[idx] = r;
+  }
+  for (int64_t i = 0; i < n; ++i) L[i] = find(L[i]);
+  return res;
+}
+
+}  // namespace tg

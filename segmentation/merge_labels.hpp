@@ -1,0 +1,46 @@
+// Over-segmentation repair: merge two labels whose shared interface is
+// large compared with the cross-section of the smaller one.
+//
+// A grain cut in two by the watershed (a residual pore, an elongated or
+// flattened shape) meets its other piece across a wide interface, about the
+// grain's own cross-section; two distinct grains in contact meet across a
+// small contact disc. Criterion, for labels a, b with voxel counts Va <= Vb:
+//   interface(a, b) >= ratio * pi * r^2,   r = (3 Va / (4 pi))^(1/3),
+// i.e. the interface exceeds `ratio` times the central cross-section of the
+// equivalent sphere of the smaller label. Default ratio 0.5: a contact disc
+// of radius 0.7 r. Two equal balls of radius R joined by a neck of radius
+// rn give interface/pi R^2 = (rn/R)^2, so touching grains (rn < 0.5 R in a
+// granular packing) are not merged. Split fragments have no interface at
+// all (a void gap lies between them) and are never merged.
+//
+// Interface area in voxel faces: with watershed lines, a line voxel whose
+// 26-neighbours carry exactly two labels counts one unit for that pair
+// (the line is one voxel thick); without lines, each face between voxels
+// of two labels counts one. Pairs are decided from the labels as the
+// watershed left them (one pass, no cascade of re-evaluations), merged with
+// union-find in increasing (a, b) order, and the line voxels between merged
+// labels join them. Merged labels keep the smallest number of the group;
+// segment() renumbers them 1..count afterwards (relabel_consecutive).
+//
+// Cost: O(N) plus a hash map over touching pairs. Serial, deterministic.
+#pragma once
+#include <cstdint>
+
+#include "core/volume.hpp"
+
+namespace tg {
+
+struct MergeOptions {
+  double ratio = 0.5;  // merge when interface >= ratio * pi r^2 (r: smaller label's equivalent radius)
+};
+
+struct MergeResult {
+  int64_t touching_pairs = 0;  // label pairs sharing an interface
+  int64_t merges = 0;          // unions made
+};
+
+// `labels`: watershed output (0 on void and lines); `solid`: the mask it was
+// computed on (solid voxels with label 0 are line voxels).
+MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>& solid, const MergeOptions& opt = {});
+
+}  // namespace tg

@@ -1,0 +1,193 @@
+#include "segmentation/segment.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "core/errors.hpp"
+#include "core/memory.hpp"
+#include "segmentation/connected_components.hpp"
+#include "segmentation/distance_transform.hpp"
+#include "segmentation/markers.hpp"
+#include "segmentation/neighbourhood.hpp"
+
+namespace tg {
+namespace {
+
+class StageClock {
+ public:
+  explicit StageClock(SegmentResult& r) : r_(r), t0_(std::chrono::steady_clock::now()) {}
+  void lap(const std::string& name) {
+    const auto t = std::chrono::steady_clock::now();
+    r_.stage_seconds.emplace_back(name, std::chrono::duration<double>(t - t0_).count());
+    t0_ = t;
+  }
+
+ private:
+  SegmentResult& r_;
+  std::chrono::steady_clock::time_point t0_;
+};
+
+void validate(const SegmentOptions& o) {
+  if (!(o.grain_radius_vox > 0) || !std::isfinite(o.grain_radius_vox))
+    throw UsageError("segment: the expected grain radius must be a positive number of voxels");
+  if (o.threshold == ThresholdMethod::manual && (o.manual_threshold < 0 || o.manual_threshold > 65535))
+    throw UsageError("segment: a manual threshold must be a grey level in 0..65535");
+  if (o.min_size_vox < 1) throw UsageError("segment: the minimum label size must be >= 1 voxel");
+  seg::check_connectivity(o.connectivity);
+}
+
+ThresholdResult choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o) {
+  if (o.threshold == ThresholdMethod::manual) {
+    ThresholdResult t;
+    t.method = ThresholdMethod::manual;
+    t.value = static_cast<uint16_t>(o.manual_threshold);
+    return t;
+  }
+  const auto hist = histogram_u16(grey);
+  return o.threshold == ThresholdMethod::otsu ? otsu_threshold(hist) : moments_threshold(hist);
+}
+
+SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owned, const SegmentOptions& opt) {
+  validate(opt);
+  SegmentResult r0;
+  StageClock clock(r0);
+  const ThresholdResult t = choose_threshold(grey, opt);
+  auto mask = binarise(grey, t.value);
+  if (owned) *owned = Volume<uint16_t>();  // grey no longer needed
+  clock.lap("threshold");
+  SegmentResult r = segment_mask(std::move(mask), opt);
+  r.threshold = t;
+  if (!t.note.empty()) r.notes.insert(r.notes.begin(), t.note);
+  r.stage_seconds.insert(r.stage_seconds.begin(), r0.stage_seconds.begin(), r0.stage_seconds.end());
+  return r;
+}
+
+}  // namespace
+
+SegmentOptions SegmentOptions::resolved() const {
+  SegmentOptions o = *this;
+  validate(o);
+  if (o.pore_max_volume_vox < 0) o.pore_max_volume_vox = PoreFilterOptions::from_grain_radius(grain_radius_vox).max_volume_vox;
+  if (o.h < 0) o.h = std::max(1.0, 0.1 * grain_radius_vox);
+  return o;
+}
+
+SegmentResult segment(const Volume<uint16_t>& grey, const SegmentOptions& opt) {
+  return run_from_grey(grey, nullptr, opt);
+}
+
+SegmentResult segment(Volume<uint16_t>&& grey, const SegmentOptions& opt) {
+  Volume<uint16_t> g = std::move(grey);
+  return run_from_grey(g, &g, opt);
+}
+
+SegmentResult segment_mask(Volume<uint8_t> solid, const SegmentOptions& opt_in) {
+  const SegmentOptions opt = opt_in.resolved();
+  SegmentResult r;
+  StageClock clock(r);
+  const Shape s = solid.shape();
+  const int64_t n = solid.size();
+  int64_t nsolid = 0;
+  for (auto v : solid.span()) nsolid += v != 0;
+  r.solid_fraction = n ? double(nsolid) / double(n) : 0.0;
+  r.h = opt.h;
+
+  // Pores (the u32 volume holds the void labels, then markers, then labels).
+  Volume<uint32_t> lab(s, solid.geometry());
+  r.pore_criteria = {opt.pore_max_volume_vox, opt.pore_min_sphericity};
+  if (opt.fill_pores) r.pores = fill_pores(solid, lab, r.pore_criteria);
+  clock.lap("pores");
+
+  nsolid = 0;
+  for (auto v : solid.span()) nsolid += v != 0;
+  if (nsolid == 0 || nsolid == n) {
+    // Nothing to separate: no solid, or no void at all (the distance map
+    // would be infinite). One label for an all-solid volume.
+    r.notes.push_back(nsolid == 0 ? "no solid voxel: no particles" : "no void voxel: the whole volume is one particle");
+    lab.fill(nsolid == 0 ? 0u : 1u);
+    r.markers = nsolid ? 1 : 0;
+    const auto rl = relabel_consecutive(lab, opt.min_size_vox);
+    r.count = rl.count;
+    r.dropped = rl.dropped;
+    r.labels = std::move(lab);
+    clock.lap("watershed");
+    r.peak_rss_bytes = peak_rss_bytes();
+    return r;
+  }
+
+  // Distance map in units of the finest voxel edge.
+  EdtOptions eo;
+  const auto& vs = solid.geometry().voxel_size_m;
+  if (solid.geometry().has_voxel_size()) {
+    const double w = std::min({vs[0], vs[1], vs[2]});
+    eo.spacing = {vs[0] / w, vs[1] / w, vs[2] / w};
+  }
+  Volume<float> dist;
+  distance_transform(solid, dist, eo);
+  clock.lap("edt");
+
+  r.markers = find_markers(dist, solid, lab, {opt.h, opt.connectivity});
+  clock.lap("markers");
+  watershed(dist, solid, lab, {opt.watershed_lines, opt.connectivity, opt.buckets_per_unit});
+  dist = Volume<float>();
+  clock.lap("watershed");
+
+  if (opt.merge) r.merge = merge_oversegmented(lab, solid, {opt.merge_ratio});
+  clock.lap("merge");
+  solid = Volume<uint8_t>();
+  const auto rl = relabel_consecutive(lab, opt.min_size_vox);
+  r.count = rl.count;
+  r.dropped = rl.dropped;
+  r.labels = std::move(lab);
+  clock.lap("relabel");
+  r.peak_rss_bytes = peak_rss_bytes();
+  return r;
+}
+
+std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
+  const SegmentOptions o = opt_in.resolved();
+  using nlohmann::json;
+  json j;
+  j["shape_zyx"] = {r.labels.shape().nz, r.labels.shape().ny, r.labels.shape().nx};
+  j["voxel_size_m_zyx"] = r.labels.geometry().voxel_size_m;
+  j["grain_radius_vox"] = o.grain_radius_vox;
+  j["threshold"] = {{"method", threshold_method_name(r.threshold.method)},
+                    {"value", r.threshold.value},
+                    {"rule", "voxels with grey value > value are solid"},
+                    {"p0", r.threshold.p0},
+                    {"z0", r.threshold.z0},
+                    {"z1", r.threshold.z1}};
+  j["solid_fraction"] = r.solid_fraction;
+  j["pores"] = {{"enabled", o.fill_pores},
+                {"criteria", r.pore_criteria.describe()},
+                {"max_volume_vox", r.pore_criteria.max_volume_vox},
+                {"min_sphericity", r.pore_criteria.min_sphericity},
+                {"void_components", r.pores.void_components},
+                {"enclosed", r.pores.enclosed},
+                {"filled", r.pores.filled},
+                {"filled_voxels", r.pores.filled_voxels}};
+  j["markers"] = {{"h", r.h}, {"connectivity", o.connectivity}, {"count", r.markers}};
+  j["watershed"] = {{"lines", o.watershed_lines}, {"buckets_per_unit", o.buckets_per_unit}};
+  j["merge"] = {{"enabled", o.merge},
+                {"ratio", o.merge_ratio},
+                {"touching_pairs", r.merge.touching_pairs},
+                {"merges", r.merge.merges}};
+  j["labels"] = {{"count", r.count}, {"min_size_vox", o.min_size_vox}, {"dropped", r.dropped}};
+  json st = json::object();
+  double total = 0;
+  for (const auto& [name, sec] : r.stage_seconds) {
+    st[name] = sec;
+    total += sec;
+  }
+  j["seconds"] = st;
+  j["seconds_total"] = total;
+  j["peak_rss_bytes"] = r.peak_rss_bytes;
+  const int64_t nvox = r.labels.size();
+  j["peak_rss_bytes_per_voxel"] = nvox ? double(r.peak_rss_bytes) / double(nvox) : 0.0;
+  j["notes"] = r.notes;
+  return j.dump(2);
+}
+
+}  // namespace tg

@@ -1,0 +1,92 @@
+// The whole image pipeline, one function for both worlds (scans and
+// voxelised DEM snapshots, ../shared/DESIGN.md "Data flow"):
+//
+//   grey u16 -> threshold -> solid mask -> pore filter -> distance map
+//            -> h-maxima markers -> watershed (lines) -> merge repair
+//            -> consecutive labels with a size filter -> labels u32
+//
+// Each stage is its own header (threshold, pore_filter, distance_transform,
+// markers, watershed, merge_labels, connected_components), with the method
+// and its reference there; this file only chains them and records what was
+// chosen, how long each stage took and the peak memory.
+//
+// Memory (why the stages are ordered and buffers reused this way): the grey
+// volume (2 B/voxel) is needed only for the histogram and the mask; the
+// rvalue overload frees it right after. Then one u8 mask (1 B), one u32
+// volume (4 B: void labels for the pore filter, then markers, then the
+// watershed labels, in place) and one float distance map (4 B) are live:
+// 9 B/voxel plus the watershed frontier queue (8 B per queued voxel, a
+// small fraction of the volume). A 1220^3 scan (1.8e9 voxels) thus needs
+// about 17 GB. No 64-bit label or index volumes.
+//
+// Distances are in units of the smallest voxel edge (anisotropic voxels
+// use the ratios of Geometry::voxel_size_m; unknown size = isotropic).
+#pragma once
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/volume.hpp"
+#include "segmentation/merge_labels.hpp"
+#include "segmentation/pore_filter.hpp"
+#include "segmentation/threshold.hpp"
+#include "segmentation/watershed.hpp"
+
+namespace tg {
+
+struct SegmentOptions {
+  // Expected grain radius in voxels: the scale the defaults below derive from.
+  double grain_radius_vox = 20.0;
+
+  ThresholdMethod threshold = ThresholdMethod::moments;
+  int manual_threshold = -1;  // grey level for ThresholdMethod::manual (voxels above are solid)
+
+  bool fill_pores = true;
+  int64_t pore_max_volume_vox = -1;  // < 0: 2 % of the expected grain volume (PoreFilterOptions::from_grain_radius)
+  double pore_min_sphericity = 0.5;
+
+  double h = -1;  // marker depth, distance units; < 0: max(1, 0.1 * grain radius)
+  int connectivity = 26;
+  bool watershed_lines = true;
+  double buckets_per_unit = 4.0;
+
+  bool merge = true;
+  double merge_ratio = 0.5;  // MergeOptions::ratio
+
+  int64_t min_size_vox = 8;  // labels smaller than this become void (after merging)
+
+  // Resolved values (derived defaults filled in), as the pipeline will use them.
+  SegmentOptions resolved() const;
+};
+
+struct SegmentResult {
+  Volume<uint32_t> labels;  // 0 void, 1..count particles, geometry of the input
+  ThresholdResult threshold;
+  double solid_fraction = 0;  // after thresholding, before pore filling
+  PoreFilterOptions pore_criteria;
+  PoreFilterResult pores;
+  double h = 0;
+  uint32_t markers = 0;
+  MergeResult merge;
+  uint32_t count = 0;       // final labels
+  int64_t dropped = 0;      // labels removed by min_size_vox
+  std::vector<std::pair<std::string, double>> stage_seconds;
+  int64_t peak_rss_bytes = 0;
+  std::vector<std::string> notes;  // special cases met (two grey levels, no void, ...)
+};
+
+// Runs the chain; the rvalue overload frees the grey volume after the mask
+// is made (2 B/voxel less at peak). Throws InputError for degenerate input
+// (e.g. a constant volume) and UsageError for invalid options.
+SegmentResult segment(const Volume<uint16_t>& grey, const SegmentOptions& opt);
+SegmentResult segment(Volume<uint16_t>&& grey, const SegmentOptions& opt);
+
+// From a solid mask on (threshold already applied; the mask is consumed).
+SegmentResult segment_mask(Volume<uint8_t> solid, const SegmentOptions& opt);
+
+// The summary as JSON text (options, threshold, pores, markers, merges,
+// labels, time per stage, peak memory).
+std::string summary_json(const SegmentResult& r, const SegmentOptions& opt);
+
+}  // namespace tg

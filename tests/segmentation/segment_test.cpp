@@ -1,0 +1,137 @@
+#include "segmentation/segment.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <set>
+
+#include "core/errors.hpp"
+#include "fixtures.hpp"
+
+namespace tg {
+namespace {
+
+using test::draw_ball;
+
+// Grey scan of a binary scene: void ~10000, solid ~40000, uniform noise +-3000.
+Volume<uint16_t> grey_of(const Volume<uint8_t>& m, unsigned seed = 5) {
+  Volume<uint16_t> g(m.shape(), m.geometry());
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> noise(-3000, 3000);
+  for (int64_t i = 0; i < m.size(); ++i) g[i] = uint16_t((m[i] ? 40000 : 10000) + noise(rng));
+  return g;
+}
+
+std::set<uint32_t> labels_in(const Volume<uint32_t>& lab) {
+  std::set<uint32_t> s;
+  for (auto l : lab.span())
+    if (l) s.insert(l);
+  return s;
+}
+
+SegmentOptions opts(double radius) {
+  SegmentOptions o;
+  o.grain_radius_vox = radius;
+  return o;
+}
+
+TEST(Segment, TouchingPairGivesTwoGrains) {
+  auto m = Volume<uint8_t>::filled(Shape{28, 28, 46}, 0);
+  draw_ball(m, 13.5, 13.5, 13.5, 10);
+  draw_ball(m, 13.5, 13.5, 31.5, 10);
+  const auto r = segment(grey_of(m), opts(10));
+  EXPECT_EQ(r.count, 2u);
+  EXPECT_EQ(r.merge.merges, 0);
+  // p0 is the void fraction, so the p0-tile sits at the top of the void block (7000..13000).
+  EXPECT_GT(r.threshold.value, 12500);
+  EXPECT_LT(r.threshold.value, 37000);
+  EXPECT_NE(r.labels(13, 13, 13), r.labels(13, 13, 31));
+}
+
+TEST(Segment, SplitHalvesWithAOneVoxelGapAreTwoParticles) {
+  auto m = Volume<uint8_t>::filled(Shape{32, 32, 33}, 0);
+  draw_ball(m, 16, 16, 16, 13);
+  test::cut_slab_x(m, 16, 1);
+  const auto r = segment(grey_of(m), opts(13));
+  EXPECT_EQ(r.count, 2u);
+  EXPECT_EQ(r.pores.filled, 0);
+  EXPECT_NE(r.labels(16, 16, 10), r.labels(16, 16, 22));
+}
+
+TEST(Segment, SphereWithInternalPoresIsOneParticle) {
+  auto m = Volume<uint8_t>::filled(Shape{40, 40, 40}, 0);
+  draw_ball(m, 20, 20, 20, 16);
+  draw_ball(m, 20, 20, 20, 3, 0);  // pores where they hurt most: the centre
+  draw_ball(m, 20, 20, 11, 2.5, 0);
+  draw_ball(m, 20, 11, 20, 2.5, 0);
+  draw_ball(m, 27, 24, 22, 2, 0);
+  const auto r = segment(grey_of(m), opts(16));
+  EXPECT_EQ(r.pores.filled, 4);
+  EXPECT_EQ(r.count, 1u);
+  // Without the pore filter, the central pore drives the distance map apart;
+  // the label count may rise, the filter is what guarantees one label.
+  EXPECT_EQ(r.labels(20, 20, 20), 1u);
+}
+
+TEST(Segment, ConstantVolumeIsAnInputError) {
+  EXPECT_THROW(segment(Volume<uint16_t>::filled(Shape{8, 8, 8}, 1234), opts(5)), InputError);
+}
+
+TEST(Segment, EmptyAndAllSolidMasks) {
+  auto e = segment_mask(Volume<uint8_t>::filled(Shape{8, 8, 8}, 0), opts(5));
+  EXPECT_EQ(e.count, 0u);
+  EXPECT_TRUE(labels_in(e.labels).empty());
+  auto f = segment_mask(Volume<uint8_t>::filled(Shape{8, 8, 8}, 1), opts(5));
+  EXPECT_EQ(f.count, 1u);
+  for (auto l : f.labels.span()) EXPECT_EQ(l, 1u);
+  EXPECT_FALSE(f.notes.empty());
+}
+
+TEST(Segment, SingleVoxelGrainsKeptWithMinSizeOne) {
+  auto m = Volume<uint8_t>::filled(Shape{10, 10, 10}, 0);
+  m(0, 0, 0) = m(5, 5, 5) = m(9, 2, 7) = 1;
+  auto o = opts(3);
+  o.min_size_vox = 1;
+  auto r = segment_mask(m.clone(), o);
+  EXPECT_EQ(r.count, 3u);
+  o.min_size_vox = 2;
+  EXPECT_EQ(segment_mask(m.clone(), o).count, 0u);
+}
+
+TEST(Segment, GrainsTouchingTheBorderStayWhole) {
+  auto m = Volume<uint8_t>::filled(Shape{30, 30, 30}, 0);
+  draw_ball(m, 0, 15, 15, 10);
+  draw_ball(m, 22, 29, 8, 7);
+  const auto r = segment(grey_of(m), opts(9));
+  EXPECT_EQ(r.count, 2u);
+}
+
+TEST(Segment, AnisotropicVoxelsAndSummary) {
+  auto m = Volume<uint8_t>::filled(Shape{20, 40, 40}, 0, Geometry{{20e-6, 10e-6, 10e-6}, {0, 0, 0}});
+  // In physical units a ball of radius 12 fine voxels: 6 slices in z.
+  for (int64_t k = 0; k < 20; ++k)
+    for (int64_t j = 0; j < 40; ++j)
+      for (int64_t i = 0; i < 40; ++i) {
+        const double z = 2.0 * (double(k) - 9.5), y = double(j) - 19.5, x = double(i) - 19.5;
+        m(k, j, i) = z * z + y * y + x * x <= 144 ? 1 : 0;
+      }
+  const auto r = segment(grey_of(m), opts(12));
+  EXPECT_EQ(r.count, 1u);
+  EXPECT_EQ(r.labels.geometry(), m.geometry());
+  const auto js = summary_json(r, opts(12));
+  EXPECT_NE(js.find("\"merges\""), std::string::npos);
+  EXPECT_NE(js.find("\"peak_rss_bytes\""), std::string::npos);
+}
+
+TEST(Segment, ResolvedDefaultsFollowTheGrainRadius) {
+  const auto o = opts(30).resolved();
+  EXPECT_DOUBLE_EQ(o.h, 3.0);
+  EXPECT_EQ(o.pore_max_volume_vox, PoreFilterOptions::from_grain_radius(30).max_volume_vox);
+  EXPECT_DOUBLE_EQ(opts(5).resolved().h, 1.0);
+  auto bad = opts(5);
+  bad.connectivity = 7;
+  EXPECT_THROW(bad.resolved(), UsageError);
+}
+
+}  // namespace
+}  // namespace tg

@@ -92,6 +92,9 @@ Truth particle_truth(const Particle& p) {
       t.dmax = h <= R ? 2 * std::sqrt(h * (2 * R - h)) : 2 * R;
       t.dmin = std::min(h, t.dmax);
     }
+    // Dmed (and FR) use the pore-free volume: the pipeline fills intra-granular
+    // pores before measuring, and a porous sphere is still FR = AR = 1.
+    t.dmed = (t.dmax > 0 && t.dmin > 0) ? 6 * V / (std::numbers::pi * t.dmax * t.dmin) : 0;
     Vec3 m{V * c[0], V * c[1], V * c[2]};
     for (const Sphere& s : p.pores) {
       const double vp = sphere_volume(s.r);
@@ -100,7 +103,6 @@ Truth particle_truth(const Particle& p) {
     }
     t.volume = V;
     for (int a = 0; a < 3; ++a) t.centroid[a] = V > 0 ? m[a] / V : c[a];
-    t.dmed = (t.dmax > 0 && t.dmin > 0) ? 6 * V / (std::numbers::pi * t.dmax * t.dmin) : 0;
     t.fr = t.dmed > 0 ? t.dmin / t.dmed : nan;
     t.ar = t.dmin > 0 ? t.dmax / t.dmin : nan;
     return t;

@@ -77,9 +77,9 @@ void bounding_box(const Particle& p, Vec3& lo, Vec3& hi);
 // perpendicular to Dmax, Dmed = 6V/(π Dmax Dmin), FR = Dmin/Dmed,
 // AR = Dmax/Dmin. They are exact for grains (Dmax = Dmin = Dmed = 2R) and caps of
 // height h: h <= R: Dmax = 2√(h(2R−h)), Dmin = h; h > R: Dmax = 2R, Dmin = h.
-// For multi and cluster they are NaN (no closed form). Pores are ignored
-// by Feret (they do not change the hull) but subtracted from V (so Dmed, FR
-// use the porous volume, as a measurement on the image would).
+// For multi and cluster they are NaN (no closed form). Pores are subtracted
+// from `volume` but not from the V in Dmed (the pipeline fills intra-granular
+// pores before measuring; a porous sphere keeps FR = AR = 1).
 struct Truth {
   double volume = 0;         // voxel^3
   Vec3 centroid{0, 0, 0};    // voxel units

@@ -62,6 +62,7 @@ TEST(Granule, PoresStayInsideAndFollowFragments) {
   }
   const double vg = particle_truth(g).volume;
   EXPECT_NEAR(vg, sphere_volume(12) - 5 * sphere_volume(1.2), 1e-9);
+  EXPECT_NEAR(particle_truth(g).fr, 1.0, 1e-12);  // pores do not change the shape metrics
   BreakageOptions o;
   o.gap = 0;
   size_t kept = 0;

@@ -127,7 +127,20 @@ std::vector<Vec3> caliper_points(std::span<const SurfaceVoxel> surface, const st
       const Span& sy = along_y[iy(f, v)];
       const Span& sz = along_z[iz(f, v)];
       const bool end = (v.i == sx.a || v.i == sx.b) && (v.j == sy.a || v.j == sy.b) && (v.k == sz.a || v.k == sz.b);
-      if (end) pts.push_back(point(v, f));
+      if (end) {
+        // A deterministic offset of < 1e-7 voxel (hash of the point's
+        // voxel and face): lattice points are massively coplanar, which sends
+        // most of CGAL's hull predicates to exact GMP arithmetic; the offset
+        // breaks those exact ties and changes calipers by < 2e-7 voxel.
+        uint64_t x = (static_cast<uint64_t>(v.k) * 73856093u) ^ (static_cast<uint64_t>(v.j) * 19349663u) ^
+                     (static_cast<uint64_t>(v.i) * 83492791u) ^ (static_cast<uint64_t>(f) * 2654435761u);
+        Vec3 p = point(v, f);
+        for (int c = 0; c < 3; ++c) {
+          x ^= x >> 33; x *= 0xff51afd7ed558ccdULL; x ^= x >> 33;
+          p[c] += (static_cast<double>(x >> 11) * 0x1.0p-53 - 0.5) * 1e-7 * h[c];
+        }
+        pts.push_back(p);
+      }
     }
   return pts;
 }

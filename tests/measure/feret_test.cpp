@@ -144,7 +144,7 @@ TEST(FeretPoints, FaceOffsetAddsOctahedronWidth) {
   const auto ch = convex_hull(centres);
   for (const auto& u : half_sphere_directions(500)) {
     const double oct = 0.6 * std::max({std::abs(u[0]) * 2.0, std::abs(u[1]) * 1.0, std::abs(u[2]) * 1.5});
-    EXPECT_NEAR(caliper_width(faces, u), caliper_width(ch, u) + oct, 1e-9);
+    EXPECT_NEAR(caliper_width(faces, u), caliper_width(ch, u) + oct, 1e-6);  // points carry a < 1e-7 voxel tie-breaking offset
   }
 }
 
@@ -251,7 +251,7 @@ TEST(FeretPoints, RejectsBadOffsetAndCounts) {
   const auto h = convex_hull(caliper_points(s, {1, 1, 1}, {0, 0, 0}, 0.6));
   EXPECT_EQ(h.dimension, 3);
   EXPECT_EQ(h.vertices.size(), 6u);
-  EXPECT_NEAR(hull_diameter(h), 0.6, 1e-12);
+  EXPECT_NEAR(hull_diameter(h), 0.6, 1e-6);
 }
 
 }  // namespace

@@ -61,10 +61,10 @@
 // worst in ()):
 //                        r=10           r=20           r=30 voxels
 //   sphere mean caliper  -0.3 % (0.4)   +0.05 % (0.1)  +0.1 % (0.1)  (vs 2r)
-//   sphere Dmed          +1.0 % (1.9)   +0.2 % (1.4)   -0.1 % (0.3)
-//   sphere FR - 1        -0.031 (.046)  -0.010 (.033)  -0.003 (.007)
-//   sphere AR - 1        +0.033 (.040)  +0.015 (.026)  +0.008 (.010)
-//   half-sphere FR - 0.5 +0.014 (.033)  +0.015 (.022)  +0.012 (.016)
+//   sphere Dmed          +1.0 % (1.9)   +0.3 % (1.5)   -0.1 % (0.3)
+//   sphere FR - 1        -0.030 (.046)  -0.012 (.034)  -0.003 (.010)
+//   sphere AR - 1        +0.033 (.040)  +0.015 (.026)  +0.008 (.012)
+//   half-sphere FR - 0.5 +0.013 (.046)  +0.013 (.018)  +0.012 (.019)
 // Larger lambda helps spheres' FR and hurts flat faces (lambda = 0.5:
 // half-sphere FR +0.027 at r = 20, sphere +0.004); the sphere's AR excess,
 // ~0.5 voxel / (2r), is the lattice's own quantisation. Each voxel

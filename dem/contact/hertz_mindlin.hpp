@@ -1,0 +1,116 @@
+// Hertz–Mindlin contact between elastic spheres (and sphere–rigid wall), with
+// tangential displacement history and a Coulomb cap, as a small value type.
+//
+// Normal (Hertz 1882):      Fn = 4/3 E* sqrt(R*) δ^{3/2},  tangent stiffness
+//                           kn = dFn/dδ = 2 E* sqrt(R* δ),  stored energy
+//                           U  = 8/15 E* sqrt(R*) δ^{5/2}.
+// Tangential (Mindlin 1949, no-slip stiffness, as in PFC "hertz" and
+// LIGGGHTS "tangential history"): kt = 8 G* sqrt(R* δ); the tangential
+// displacement ξ is accumulated from the relative tangential velocity of the
+// contact points (ξ += vt dt), rotated each step into the current tangent
+// plane (its normal component removed, length kept); Ft = -kt ξ. Coulomb:
+// |Ft| <= μ Fn, and when capped ξ is shrunk so that -kt ξ equals the capped
+// force (the LAMMPS gran/hertz/history convention), so unloading is elastic.
+// Effective moduli: 1/E* = (1-ν1²)/E1 + (1-ν2²)/E2, 1/G* = (2-ν1)/G1 + (2-ν2)/G2,
+// 1/R* = 1/R1 + 1/R2 (R* = R for a flat wall), m* = m1 m2/(m1+m2) (m for a wall).
+// A wall is treated as a body of the grains' own material (as LIGGGHTS does
+// with a wall of the same atom type), so sphere-wall E* equals sphere-sphere E*.
+//
+// Damping (optional, recorded in the run): viscous dashpots in the normal and
+// tangential directions with the coefficient of Tsuji et al. (1992,
+// doi:10.1016/0032-5910(92)88030-L) in the form LIGGGHTS uses,
+//   c = 2 sqrt(5/6) |β| sqrt(S m*),  β = ln e / sqrt(ln² e + π²),
+// with S = kn (normal) or kt (tangential); e = 1 turns damping off. The total
+// normal force is clamped at zero (no cohesion). Local non-viscous damping
+// (PFC) acts on whole particles and lives in the engine, not here.
+//
+// Cost: O(1) per contact, one sqrt for the stiffness. Validation happens once
+// in make_hertz_mindlin(); force() assumes δ > 0 and valid parameters.
+#pragma once
+#include <cmath>
+#include <numbers>
+
+#include "dem/vec3.hpp"
+
+namespace tg::dem {
+
+struct Material {
+  double shear_modulus_Pa = 2.2e9;  // G, reference study Table 1
+  double poisson_ratio = 0.25;      // ν, Table 1
+  double density_kg_m3 = 2180;      // ρ, Table 1
+  double youngs_modulus() const { return 2 * shear_modulus_Pa * (1 + poisson_ratio); }
+};
+
+// Parameters of one contact family (sphere–sphere, or sphere–a given wall).
+struct HertzMindlin {
+  double e_star = 0;     // effective Young's modulus E*, Pa
+  double g_star = 0;     // effective shear modulus G*, Pa
+  double friction = 0;   // Coulomb μ
+  double damp_beta = 0;  // |β| of the restitution coefficient (0 = no viscous damping)
+
+  double normal_force(double delta, double r_eff) const {
+    return 4.0 / 3.0 * e_star * std::sqrt(r_eff) * delta * std::sqrt(delta);
+  }
+  double normal_stiffness(double delta, double r_eff) const { return 2 * e_star * std::sqrt(r_eff * delta); }
+  double tangential_stiffness(double delta, double r_eff) const { return 8 * g_star * std::sqrt(r_eff * delta); }
+  double elastic_energy(double delta, double r_eff) const {
+    return 8.0 / 15.0 * e_star * std::sqrt(r_eff) * delta * delta * std::sqrt(delta);
+  }
+};
+
+// Throws tg::InputError naming the offending parameter (ν outside (-1, 0.5],
+// G <= 0, μ < 0, e outside (0, 1]).
+HertzMindlin make_hertz_mindlin(const Material& a, const Material& b, double friction, double restitution);
+
+// The geometry of one touching contact, seen from body i towards body j.
+struct ContactGeometry {
+  Vec3 n;            // unit normal from i to j
+  double delta;      // overlap > 0, m
+  double r_eff;      // R*, m
+  double m_eff;      // m*, kg
+  Vec3 v_rel;        // velocity of j's contact point minus i's, m/s
+};
+
+struct ContactForce {
+  Vec3 force_on_j;  // force on j (on i: the opposite), N
+  double fn;        // normal force magnitude (>= 0), N
+  bool sliding;     // the Coulomb cap was active
+};
+
+// Updates the tangential history `xi` (m, in place) and returns the force.
+// Precondition: g.delta > 0, g.n unit, law from make_hertz_mindlin().
+inline ContactForce hertz_mindlin_force(const HertzMindlin& law, const ContactGeometry& g, double dt, Vec3& xi) {
+  const double sq = std::sqrt(g.r_eff * g.delta);
+  const double kn = 2 * law.e_star * sq;
+  const double kt = 8 * law.g_star * sq;
+  const double vn = dot(g.v_rel, g.n);  // < 0 while approaching
+  // Tsuji dashpot: c = 2 sqrt(5/6) |β| sqrt(k m*); 2 sqrt(5/6) = 1.8257...
+  const double cn = law.damp_beta > 0 ? 1.8257418583505538 * law.damp_beta * std::sqrt(kn * g.m_eff) : 0.0;
+  const double ct = law.damp_beta > 0 ? 1.8257418583505538 * law.damp_beta * std::sqrt(kt * g.m_eff) : 0.0;
+  double fn = 2.0 / 3.0 * kn * g.delta - cn * vn;  // 4/3 E* sqrt(R*) δ^{3/2} = 2/3 kn δ
+  if (fn < 0) fn = 0;
+
+  // Keep ξ in the current tangent plane: drop its normal part, keep its length.
+  const double xi_len2 = dot(xi, xi);
+  if (xi_len2 > 0) {
+    Vec3 p = xi - dot(xi, g.n) * g.n;
+    const double p_len2 = dot(p, p);
+    xi = p_len2 > 0 ? std::sqrt(xi_len2 / p_len2) * p : Vec3{};
+  }
+  const Vec3 vt = g.v_rel - vn * g.n;
+  xi = xi + dt * vt;
+  Vec3 ft = -1.0 * (kt * xi + ct * vt);
+  const double ft_len2 = dot(ft, ft);
+  const double cap = law.friction * fn;
+  bool sliding = false;
+  if (ft_len2 > cap * cap) {
+    sliding = true;
+    const double s = ft_len2 > 0 ? cap / std::sqrt(ft_len2) : 0.0;
+    ft = s * ft;
+    // ξ consistent with the capped force: -kt ξ - ct vt = ft.
+    xi = kt > 0 ? (-1.0 / kt) * (ft + ct * vt) : Vec3{};
+  }
+  return {fn * g.n + ft, fn, sliding};
+}
+
+}  // namespace tg::dem

@@ -1,0 +1,379 @@
+#include "dem/engine.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "dem/time_step.hpp"
+
+namespace tg::dem {
+
+namespace {
+void check_options(const EngineOptions& o) {
+  auto need = [](bool ok, const std::string& what) {
+    if (!ok) throw InputError("DEM options: " + what);
+  };
+  need(o.time_step > 0 && std::isfinite(o.time_step), "time step must be positive");
+  need(o.skin >= 0 && std::isfinite(o.skin), "neighbour skin must be >= 0");
+  need(o.local_damping >= 0 && o.local_damping < 1, "local damping must be in [0, 1)");
+  need(o.overlap_limit > 0 && o.overlap_limit <= 1, "overlap limit must be in (0, 1]");
+  need(std::isfinite(o.gravity_z), "gravity must be finite");
+  need(o.walls.cylinder_radius > 0, "cylinder radius must be positive");
+  need(o.walls.platen_friction >= 0 && o.walls.cylinder_friction >= 0, "wall friction must be >= 0");
+}
+}  // namespace
+
+Engine::Engine(Particles p, const EngineOptions& opt) : p_(std::move(p)), opt_(opt) {
+  check_options(opt_);
+  law_pp_ = make_hertz_mindlin(opt_.material, opt_.material, opt_.friction, opt_.restitution);
+  law_platen_ = make_hertz_mindlin(opt_.material, opt_.material, opt_.walls.platen_friction, opt_.restitution);
+  law_cyl_ = make_hertz_mindlin(opt_.material, opt_.material, opt_.walls.cylinder_friction, opt_.restitution);
+  for (int64_t i = 0; i < p_.size(); ++i)
+    if (!(p_.r[i] > 0) || !(p_.m[i] > 0) || !(p_.inertia[i] > 0))
+      throw InputError("DEM: sphere " + std::to_string(i) + " has a non-positive radius, mass or inertia");
+  rebuild();
+}
+
+void Engine::rebuild() {
+  const int64_t n = p_.size();
+  PairListCSR fresh = build_pairs_grid(p_, opt_.skin);
+  const int64_t np = fresh.pairs();
+  std::vector<double> xi(3 * np, 0.0);
+  std::vector<int64_t> pi(np);
+  const int64_t old_n = static_cast<int64_t>(list_.offsets.size()) - 1;
+  // Carry tangential histories over: both lists are sorted (i, then j).
+#pragma omp parallel for schedule(static) if (n >= opt_.parallel_min_items)
+  for (int64_t i = 0; i < n; ++i) {
+    for (int64_t k = fresh.offsets[i]; k < fresh.offsets[i + 1]; ++k) {
+      pi[k] = i;
+      if (i >= old_n) continue;
+      const auto b = list_.j.begin() + list_.offsets[i], e = list_.j.begin() + list_.offsets[i + 1];
+      const auto it = std::lower_bound(b, e, fresh.j[k]);
+      if (it != e && *it == fresh.j[k]) {
+        const int64_t o = it - list_.j.begin();
+        for (int c = 0; c < 3; ++c) xi[3 * k + c] = xi_[3 * o + c];
+      }
+    }
+  }
+  list_ = std::move(fresh);
+  xi_ = std::move(xi);
+  pi_ = std::move(pi);
+  slot_.assign(np, PairData{});
+  touching_.assign(np, 0);
+  bad_.assign(std::max(np, n), 0);
+  wall_f_.assign(3 * n, 0.0);
+  // Incidence lists in ascending pair order: the fixed gather order.
+  inc_off_.assign(n + 1, 0);
+  for (int64_t k = 0; k < np; ++k) {
+    ++inc_off_[pi_[k] + 1];
+    ++inc_off_[list_.j[k] + 1];
+  }
+  for (int64_t s = 0; s < n; ++s) inc_off_[s + 1] += inc_off_[s];
+  inc_.assign(inc_off_[n], 0);
+  std::vector<int64_t> fill(inc_off_.begin(), inc_off_.end() - 1);
+  for (int64_t k = 0; k < np; ++k) {
+    inc_[fill[pi_[k]]++] = k << 1;
+    inc_[fill[list_.j[k]]++] = (k << 1) | 1;
+  }
+  x0_ = p_.x;
+  y0_ = p_.y;
+  z0_ = p_.z;
+  force_rebuild_ = false;
+  ++rebuilds_;
+}
+
+void Engine::reset_pair_history() { std::fill(xi_.begin(), xi_.end(), 0.0); }
+
+void Engine::step() {
+  const int64_t n = p_.size();
+  const double dt = opt_.time_step, half = 0.5 * dt;
+  Particles& p = p_;
+#pragma omp parallel for schedule(static) if (n >= opt_.parallel_min_items)
+  for (int64_t s = 0; s < n; ++s) {
+    if (p.flags[s] & kFlagFixed) continue;
+    const double im = half / p.m[s], ii = half / p.inertia[s];
+    p.vx[s] += im * p.fx[s];
+    p.vy[s] += im * p.fy[s];
+    p.vz[s] += im * p.fz[s];
+    p.wx[s] += ii * p.tx[s];
+    p.wy[s] += ii * p.ty[s];
+    p.wz[s] += ii * p.tz[s];
+    p.x[s] += dt * p.vx[s];
+    p.y[s] += dt * p.vy[s];
+    p.z[s] += dt * p.vz[s];
+  }
+  opt_.walls.top_z += dt * opt_.walls.top_vz;
+
+  // Skin criterion: max displacement since the last build > skin/2.
+  double d2max = 0;
+#pragma omp parallel for schedule(static) reduction(max : d2max) if (n >= opt_.parallel_min_items)
+  for (int64_t s = 0; s < n; ++s) {
+    const double dx = p.x[s] - x0_[s], dy = p.y[s] - y0_[s], dz = p.z[s] - z0_[s];
+    d2max = std::max(d2max, dx * dx + dy * dy + dz * dz);
+  }
+  if (force_rebuild_ || n != static_cast<int64_t>(x0_.size()) || !(4 * d2max <= opt_.skin * opt_.skin)) {
+    if (!std::isfinite(d2max)) explode("a sphere position became non-finite");
+    rebuild();
+  }
+
+  compute_forces();
+
+#pragma omp parallel for schedule(static) if (n >= opt_.parallel_min_items)
+  for (int64_t s = 0; s < n; ++s) {
+    if (p.flags[s] & kFlagFixed) continue;
+    const double im = half / p.m[s], ii = half / p.inertia[s];
+    p.vx[s] += im * p.fx[s];
+    p.vy[s] += im * p.fy[s];
+    p.vz[s] += im * p.fz[s];
+    p.wx[s] += ii * p.tx[s];
+    p.wy[s] += ii * p.ty[s];
+    p.wz[s] += ii * p.tz[s];
+  }
+  time_ += dt;
+  ++steps_;
+}
+
+void Engine::compute_forces() {
+  compute_pair_forces();
+  gather_forces();
+}
+
+// The contact loop: one pair, one slot. A bond law (issue 7) adds its force
+// and torques into the same slot here.
+void Engine::compute_pair_forces() {
+  const int64_t np = list_.pairs();
+  const Particles& p = p_;
+  const double dt = opt_.time_step, lim = opt_.overlap_limit;
+  int bad = 0;
+#pragma omp parallel for schedule(static) reduction(| : bad) if (np >= opt_.parallel_min_items)
+  for (int64_t k = 0; k < np; ++k) {
+    const int64_t i = pi_[k], j = list_.j[k];
+    const Vec3 d{p.x[j] - p.x[i], p.y[j] - p.y[i], p.z[j] - p.z[i]};
+    const double rs = p.r[i] + p.r[j];
+    const double d2 = dot(d, d);
+    if (d2 >= rs * rs) {
+      touching_[k] = 0;
+      xi_[3 * k] = xi_[3 * k + 1] = xi_[3 * k + 2] = 0;
+      slot_[k] = PairData{};
+      continue;
+    }
+    const double dist = std::sqrt(d2);
+    const double delta = rs - dist;
+    if (!(dist > 0) || delta > lim * std::min(p.r[i], p.r[j])) {
+      bad_[k] = 1;
+      bad = 1;
+      touching_[k] = 0;
+      slot_[k] = PairData{};
+      continue;
+    }
+    const Vec3 nrm = (1.0 / dist) * d;
+    const double ai = p.r[i] - 0.5 * delta, aj = p.r[j] - 0.5 * delta;
+    const Vec3 wi{p.wx[i], p.wy[i], p.wz[i]}, wj{p.wx[j], p.wy[j], p.wz[j]};
+    const Vec3 vci = Vec3{p.vx[i], p.vy[i], p.vz[i]} + cross(wi, ai * nrm);
+    const Vec3 vcj = Vec3{p.vx[j], p.vy[j], p.vz[j]} + cross(wj, -aj * nrm);
+    ContactGeometry g{nrm, delta, p.r[i] * p.r[j] / rs, p.m[i] * p.m[j] / (p.m[i] + p.m[j]), vcj - vci};
+    Vec3 h{xi_[3 * k], xi_[3 * k + 1], xi_[3 * k + 2]};
+    const ContactForce cf = hertz_mindlin_force(law_pp_, g, dt, h);
+    xi_[3 * k] = h.x;
+    xi_[3 * k + 1] = h.y;
+    xi_[3 * k + 2] = h.z;
+    const Vec3 nf = cross(nrm, cf.force_on_j);
+    const Vec3 ti = -ai * nf, tj = -aj * nf;
+    slot_[k] = PairData{cf.force_on_j.x, cf.force_on_j.y, cf.force_on_j.z, ti.x, ti.y, ti.z, tj.x, tj.y, tj.z};
+    touching_[k] = 1;
+  }
+  if (bad) {
+    for (int64_t k = 0; k < np; ++k)
+      if (bad_[k]) {
+        const int64_t i = pi_[k], j = list_.j[k];
+        const double dist = std::sqrt(std::pow(p.x[j] - p.x[i], 2) + std::pow(p.y[j] - p.y[i], 2) + std::pow(p.z[j] - p.z[i], 2));
+        std::ostringstream os;
+        os << "spheres " << i << " and " << j << " overlap by " << (p.r[i] + p.r[j] - dist) / std::min(p.r[i], p.r[j])
+           << " of the smaller radius (limit " << lim << ")";
+        explode(os.str());
+      }
+  }
+}
+
+namespace {
+// One sphere–wall contact; n points from the sphere into the wall. Returns
+// the force on the wall; updates the sphere's force/torque and history.
+inline Vec3 wall_contact(const HertzMindlin& law, const Particles& p, int64_t s, Vec3 n, double delta, Vec3 v_wall,
+                         double dt, double* hx, double* hy, double* hz, Vec3& f, Vec3& t) {
+  const double a = p.r[s] - 0.5 * delta;
+  const Vec3 vc = Vec3{p.vx[s], p.vy[s], p.vz[s]} + cross(Vec3{p.wx[s], p.wy[s], p.wz[s]}, a * n);
+  ContactGeometry g{n, delta, p.r[s], p.m[s], v_wall - vc};
+  Vec3 h{*hx, *hy, *hz};
+  const ContactForce cf = hertz_mindlin_force(law, g, dt, h);
+  *hx = h.x;
+  *hy = h.y;
+  *hz = h.z;
+  f = f - cf.force_on_j;
+  t = t + cross(a * n, -cf.force_on_j);
+  return cf.force_on_j;
+}
+}  // namespace
+
+void Engine::gather_forces() {
+  const int64_t n = p_.size();
+  Particles& p = p_;
+  const Walls& w = opt_.walls;
+  const double dt = opt_.time_step, g = opt_.gravity_z, alpha = opt_.local_damping;
+  const double lim = opt_.overlap_limit;
+  int bad = 0;
+#pragma omp parallel for schedule(static) reduction(| : bad) if (n >= opt_.parallel_min_items)
+  for (int64_t s = 0; s < n; ++s) {
+    Vec3 f{0, 0, p.m[s] * g}, t{};
+    for (int64_t e = inc_off_[s]; e < inc_off_[s + 1]; ++e) {
+      const PairData& d = slot_[inc_[e] >> 1];
+      if (inc_[e] & 1) {
+        f = f + Vec3{d.fx, d.fy, d.fz};
+        t = t + Vec3{d.tjx, d.tjy, d.tjz};
+      } else {
+        f = f - Vec3{d.fx, d.fy, d.fz};
+        t = t + Vec3{d.tix, d.tiy, d.tiz};
+      }
+    }
+    double fb = 0, ft = 0, fc = 0;
+    const double r = p.r[s];
+    const double db = r - p.z[s];
+    if (w.bottom && db > 0) {
+      if (db > lim * r) bad_[s] = 1;
+      fb = wall_contact(law_platen_, p, s, {0, 0, -1}, db, {}, dt, &p.hbx[s], &p.hby[s], &p.hbz[s], f, t).z;
+    } else {
+      p.hbx[s] = p.hby[s] = p.hbz[s] = 0;
+    }
+    const double dtp = p.z[s] + r - w.top_z;
+    if (w.top && dtp > 0) {
+      if (dtp > lim * r) bad_[s] = 1;
+      ft = wall_contact(law_platen_, p, s, {0, 0, 1}, dtp, {0, 0, w.top_vz}, dt, &p.htx[s], &p.hty[s], &p.htz[s], f, t).z;
+    } else {
+      p.htx[s] = p.hty[s] = p.htz[s] = 0;
+    }
+    const double rho = std::sqrt(p.x[s] * p.x[s] + p.y[s] * p.y[s]);
+    const double dc = rho + r - w.cylinder_radius;
+    if (w.cylinder && dc > 0 && rho > 0) {
+      if (dc > lim * r) bad_[s] = 1;
+      const Vec3 nc{p.x[s] / rho, p.y[s] / rho, 0};
+      fc = dot(wall_contact(law_cyl_, p, s, nc, dc, {}, dt, &p.hcx[s], &p.hcy[s], &p.hcz[s], f, t), nc);
+    } else {
+      p.hcx[s] = p.hcy[s] = p.hcz[s] = 0;
+    }
+    wall_f_[3 * s] = fb;
+    wall_f_[3 * s + 1] = ft;
+    wall_f_[3 * s + 2] = fc;
+    if (alpha > 0) {  // PFC local damping: oppose the velocity with α|F|
+      auto damp = [alpha](double fv, double v) { return v > 0 ? fv - alpha * std::abs(fv) : v < 0 ? fv + alpha * std::abs(fv) : fv; };
+      f = {damp(f.x, p.vx[s]), damp(f.y, p.vy[s]), damp(f.z, p.vz[s])};
+      t = {damp(t.x, p.wx[s]), damp(t.y, p.wy[s]), damp(t.z, p.wz[s])};
+    }
+    p.fx[s] = f.x;
+    p.fy[s] = f.y;
+    p.fz[s] = f.z;
+    p.tx[s] = t.x;
+    p.ty[s] = t.y;
+    p.tz[s] = t.z;
+    if (!std::isfinite(f.x + f.y + f.z + t.x + t.y + t.z)) bad_[s] = 2;
+    if (bad_[s]) bad = 1;
+  }
+  if (bad) {
+    for (int64_t s = 0; s < n; ++s)
+      if (bad_[s])
+        explode("sphere " + std::to_string(s) +
+                (bad_[s] == 2 ? " has a non-finite force" : " overlaps a wall by more than the limit"));
+  }
+  // Serial, fixed order: the wall reactions do not depend on threads.
+  WallForces sum;
+  for (int64_t s = 0; s < n; ++s) {
+    sum.bottom_z += wall_f_[3 * s];
+    sum.top_z += wall_f_[3 * s + 1];
+    sum.cylinder_radial += wall_f_[3 * s + 2];
+  }
+  wf_ = sum;
+}
+
+void Engine::explode(const std::string& what) const {
+  std::ostringstream os;
+  os << "DEM simulation became unstable at step " << steps_ << " (t = " << time_ << " s): " << what
+     << "; time step " << opt_.time_step << " s";
+  try {
+    const CriticalTimeStep c = critical_time_step(p_, opt_.material, {});
+    os << " vs critical " << c.dt_critical << " s (" << opt_.time_step / c.dt_critical << "x)";
+  } catch (const std::exception&) {
+  }
+  os << " — reduce the time step or check the packing for overlaps";
+  throw SimulationError(os.str());
+}
+
+double Engine::kinetic_energy() const {
+  double e = 0;
+  for (int64_t s = 0; s < p_.size(); ++s)
+    e += 0.5 * p_.m[s] * (p_.vx[s] * p_.vx[s] + p_.vy[s] * p_.vy[s] + p_.vz[s] * p_.vz[s]) +
+         0.5 * p_.inertia[s] * (p_.wx[s] * p_.wx[s] + p_.wy[s] * p_.wy[s] + p_.wz[s] * p_.wz[s]);
+  return e;
+}
+
+double Engine::potential_energy() const {
+  double e = 0;
+  for (int64_t s = 0; s < p_.size(); ++s) e -= p_.m[s] * opt_.gravity_z * p_.z[s];
+  return e;
+}
+
+double Engine::elastic_energy() const {
+  const Particles& p = p_;
+  double e = 0;
+  for (int64_t k = 0; k < list_.pairs(); ++k) {
+    const int64_t i = pi_[k], j = list_.j[k];
+    const double dist = std::sqrt(std::pow(p.x[j] - p.x[i], 2) + std::pow(p.y[j] - p.y[i], 2) + std::pow(p.z[j] - p.z[i], 2));
+    const double delta = p.r[i] + p.r[j] - dist;
+    if (delta > 0) e += law_pp_.elastic_energy(delta, p.r[i] * p.r[j] / (p.r[i] + p.r[j]));
+  }
+  const Walls& w = opt_.walls;
+  for (int64_t s = 0; s < p.size(); ++s) {
+    const double r = p.r[s];
+    if (w.bottom && r - p.z[s] > 0) e += law_platen_.elastic_energy(r - p.z[s], r);
+    if (w.top && p.z[s] + r - w.top_z > 0) e += law_platen_.elastic_energy(p.z[s] + r - w.top_z, r);
+    const double dc = std::hypot(p.x[s], p.y[s]) + r - w.cylinder_radius;
+    if (w.cylinder && dc > 0) e += law_cyl_.elastic_energy(dc, r);
+  }
+  return e;
+}
+
+int64_t Engine::contact_count() const {
+  int64_t c = 0;
+  for (uint8_t t : touching_) c += t;
+  return c;
+}
+
+double Engine::coordination_number() const {
+  return p_.size() > 0 ? 2.0 * static_cast<double>(contact_count()) / static_cast<double>(p_.size()) : 0.0;
+}
+
+Engine::PairHistory Engine::pair_history() const {
+  PairHistory h;
+  for (int64_t k = 0; k < list_.pairs(); ++k) {
+    if (xi_[3 * k] == 0 && xi_[3 * k + 1] == 0 && xi_[3 * k + 2] == 0) continue;
+    h.i.push_back(pi_[k]);
+    h.j.push_back(list_.j[k]);
+    for (int c = 0; c < 3; ++c) h.xi.push_back(xi_[3 * k + c]);
+  }
+  return h;
+}
+
+void Engine::restore(double time, int64_t steps, const PairHistory& h) {
+  time_ = time;
+  steps_ = steps;
+  reset_pair_history();
+  for (size_t q = 0; q < h.i.size(); ++q) {
+    const int64_t i = h.i[q];
+    if (i < 0 || i >= p_.size()) throw InputError("checkpoint: contact history names sphere " + std::to_string(i) + " out of range");
+    const auto b = list_.j.begin() + list_.offsets[i], e = list_.j.begin() + list_.offsets[i + 1];
+    const auto it = std::lower_bound(b, e, h.j[q]);
+    if (it == e || *it != h.j[q])
+      throw InputError("checkpoint: contact " + std::to_string(i) + "-" + std::to_string(h.j[q]) + " is not a neighbour pair");
+    const int64_t k = it - list_.j.begin();
+    for (int c = 0; c < 3; ++c) xi_[3 * k + c] = h.xi[3 * q + c];
+  }
+}
+
+}  // namespace tg::dem

@@ -1,0 +1,180 @@
+// The DEM engine: spheres (Particles), Hertz–Mindlin contacts between them
+// and with three rigid walls, velocity-Verlet integration, a Verlet
+// neighbour list with skin, and OpenMP parallelism whose result is bit for
+// bit independent of the number of threads.
+//
+// One step (velocity Verlet, Allen & Tildesley §3.2):
+//   v += dt/2 F/m, ω += dt/2 T/I, x += dt v, walls move      (kick-drift)
+//   rebuild the pair list if some sphere moved > skin/2 since the last build
+//   F, T = contacts(x, v½, ω½) + gravity, then local damping  (forces)
+//   v += dt/2 F/m, ω += dt/2 T/I                              (kick)
+// Velocity-dependent forces (dashpots, friction) use the half-step velocity,
+// as LAMMPS/LIGGGHTS do.
+//
+// Determinism with threads: forces are never scattered. (1) A parallel loop
+// over the pair list computes each pair's force and both torques into that
+// pair's own slot (and updates that pair's tangential history). (2) A
+// parallel loop over spheres gathers, for each sphere, the slots of its
+// pairs in a fixed order (ascending pair index), then adds its wall contacts
+// and gravity. (3) Wall reaction forces are summed serially over spheres.
+// Every sum therefore has the same operands in the same order for any thread
+// count.
+//
+// Walls: bottom platen z = 0 (fixed), top platen z = top_z moving at top_vz
+// (velocity-controlled; its reaction force is recorded), inner surface of a
+// cylinder of radius R about the z axis. Sphere–wall contacts use the same
+// Hertz–Mindlin law with R* = r (flat wall; the cylinder's concave curvature
+// is neglected, as LIGGGHTS does) and their own friction coefficients.
+//
+// Extension points (breakage, issue 7):
+//  * contact loop: Engine::compute_pair_forces() is the single place where
+//    a pair's force is made; a bond law slots in there (a bonded pair gets
+//    its bond force added in the same slot, so the gather stays as is). The
+//    per-pair slot layout (PairData) is where per-pair state lives.
+//  * per-sphere contact statistics (max contact force, average stress tensor
+//    σ_ij = 1/V Σ (x^c - x^p)_i F_j) are computed in the gather loop, which
+//    sees every contact of a sphere with its branch vector: add them there.
+//  * sphere replacement: edit particles() (append_sphere/copy_sphere/resize),
+//    then call request_rebuild(); pair histories are carried over for pairs
+//    whose (i, j) indices survive and dropped otherwise — when indices are
+//    renumbered, clear them with reset_pair_history().
+#pragma once
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/errors.hpp"
+#include "dem/contact/hertz_mindlin.hpp"
+#include "dem/neighbor_grid.hpp"
+#include "dem/particles.hpp"
+
+namespace tg::dem {
+
+// Thrown when the integration blows up (overlap beyond the limit, non-finite
+// force): the message names the step, the spheres and the time step versus
+// the critical one. An InputError, so the CLI reports it in one line (exit 2).
+struct SimulationError : InputError {
+  using InputError::InputError;
+};
+
+struct Walls {
+  bool bottom = true;            // platen at z = 0
+  bool top = true;               // platen at z = top_z
+  double top_z = 0.03;           // m
+  double top_vz = 0;             // m/s (negative = moving down)
+  bool cylinder = true;          // inner wall of radius cylinder_radius about z
+  double cylinder_radius = 7.5e-3;  // m (Ø15 mm cell of the study)
+  double platen_friction = 0.5;     // μ sphere–platen
+  double cylinder_friction = 0.5;   // μ sphere–cylinder
+};
+
+struct EngineOptions {
+  Material material;              // Table 1 of the study
+  double friction = 0.5;          // μ sphere–sphere (Table 1)
+  // Viscous normal+tangential damping from a restitution coefficient; 1 = off.
+  // Default 0.5: the value of the LIGGGHTS peer runs, so that the two engines
+  // dissipate alike; quasi-static loading needs some dissipation.
+  double restitution = 0.5;
+  // PFC local non-viscous damping α (F -= α |F| sign v per component); 0 = off.
+  double local_damping = 0.0;
+  double gravity_z = -9.81;       // m/s²
+  double time_step = 1e-7;        // s (the study: 1e-8 .. 1e-7)
+  double skin = 2e-4;             // neighbour skin, m (LIGGGHTS peer: 0.2 mm)
+  // Overlap (fraction of the smaller radius) beyond which the run is
+  // declared exploded; real oedometer contacts stay far below.
+  double overlap_limit = 0.5;
+  // Loops shorter than this run on one thread: below a few thousand items
+  // the OpenMP fork/barrier costs more than the work (and results do not
+  // depend on it either way).
+  int64_t parallel_min_items = 2048;
+  Walls walls;
+};
+
+// Sums over the wall contacts of the last force evaluation (force on the
+// wall by the spheres, N).
+struct WallForces {
+  double bottom_z = 0;     // force on the bottom platen, z component (< 0 when loaded)
+  double top_z = 0;        // force on the top platen, z component (> 0 when loaded)
+  double cylinder_radial = 0;  // outward radial force on the cylinder, N
+};
+
+// One pair slot: force on j (on i: the opposite) and the two torques.
+struct PairData {
+  double fx, fy, fz;     // force on j
+  double tix, tiy, tiz;  // torque on i
+  double tjx, tjy, tjz;  // torque on j
+};
+
+class Engine {
+ public:
+  // Validates the options (throws InputError) and builds the first pair list.
+  Engine(Particles p, const EngineOptions& opt);
+
+  void step();
+  void run(int64_t steps) {
+    for (int64_t s = 0; s < steps; ++s) step();
+  }
+
+  Particles& particles() { return p_; }
+  const Particles& particles() const { return p_; }
+  const EngineOptions& options() const { return opt_; }
+  Walls& walls() { return opt_.walls; }
+  const WallForces& wall_forces() const { return wf_; }
+  double time() const { return time_; }
+  int64_t step_count() const { return steps_; }
+  int64_t rebuild_count() const { return rebuilds_; }
+
+  // Diagnostics (serial sums in sphere order: thread-independent).
+  double kinetic_energy() const;     // translational + rotational, J
+  double elastic_energy() const;     // Hertz normal energy of pair + wall contacts, J
+  double potential_energy() const;   // gravity, J (zero at z = 0)
+  int64_t contact_count() const;     // touching sphere pairs
+  // 2 (pair contacts) / spheres with at least one contact.
+  double coordination_number() const;
+
+  void request_rebuild() { force_rebuild_ = true; }
+  void reset_pair_history();
+
+  // Full state for checkpoints: pair list with histories and time.
+  struct PairHistory {
+    std::vector<int64_t> i, j;
+    std::vector<double> xi;  // 3 per pair
+  };
+  PairHistory pair_history() const;
+  // Restores time/steps and pair histories after constructing from restored
+  // particles (whose forces are restored too): the next step() continues
+  // exactly as the saved run would have.
+  void restore(double time, int64_t steps, const PairHistory& h);
+
+ private:
+  void rebuild();
+  void compute_forces();
+  void compute_pair_forces();
+  void gather_forces();
+  [[noreturn]] void explode(const std::string& what) const;
+
+  Particles p_;
+  EngineOptions opt_;
+  HertzMindlin law_pp_, law_platen_, law_cyl_;
+  WallForces wf_;
+  double time_ = 0;
+  int64_t steps_ = 0, rebuilds_ = 0;
+  bool force_rebuild_ = false;
+
+  // Pair list (CSR by i, ascending j) with per-pair history and force slot.
+  PairListCSR list_;
+  std::vector<int64_t> pi_;        // i of each pair
+  std::vector<double> xi_;         // tangential history, 3 per pair
+  std::vector<PairData> slot_;     // this step's force
+  std::vector<uint8_t> touching_;  // pair in contact this step
+  // Incidence CSR: for sphere s, entries (pair << 1 | is_j), ascending pair.
+  std::vector<int64_t> inc_off_, inc_;
+  // Positions at the last rebuild (skin criterion).
+  std::vector<double> x0_, y0_, z0_;
+  // Per-sphere wall reaction this step (bottom z, top z, cylinder radial).
+  std::vector<double> wall_f_;
+  std::vector<uint8_t> bad_;  // per-pair / per-sphere failure flags
+};
+
+}  // namespace tg::dem

@@ -68,6 +68,7 @@ bool path_exists(hid_t file, const std::string& path) {
 }
 
 void write_attr_doubles(hid_t obj, const char* name, const double* v, hsize_t n) {
+  if (H5Aexists(obj, name) > 0) H5Adelete(obj, name);  // the root copy is rewritten by every volume
   Handle sp = space_h(H5Screate_simple(1, &n, nullptr));
   Handle a = attr_h(H5Acreate2(obj, name, H5T_NATIVE_DOUBLE, sp.get(), H5P_DEFAULT, H5P_DEFAULT));
   H5Awrite(a.get(), H5T_NATIVE_DOUBLE, v);

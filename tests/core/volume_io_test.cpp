@@ -98,6 +98,15 @@ TEST(VolumeIO, HDF5CompressedAndTables) {
     w.write_table("/particles", t);
     w.commit();
   }
+  {
+    // A second volume in the same file rewrites the root geometry attributes.
+    H5Writer w(d / "g.h5");
+    w.write_volume("/volume", v);
+    w.write_volume("/labels", Volume<uint32_t>::filled(Shape{2, 2, 2}, 1, Geometry::isotropic_m(5e-6)));
+    w.commit();
+    EXPECT_EQ(read_volume_as<uint32_t>(d / "g.h5:/labels").geometry().voxel_size_m[0], 5e-6);
+    EXPECT_EQ(read_volume_as<uint16_t>(d / "g.h5:/volume").geometry().voxel_size_m[0], 12.3e-6);
+  }
   H5Reader r(d / "f.h5");
   expect_same(v, r.read_volume("/volume"));
   const Table rt = r.read_table("/particles");

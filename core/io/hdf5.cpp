@@ -52,7 +52,13 @@ template <> hid_t native_type<uint16_t>() { return H5T_NATIVE_UINT16; }
 template <> hid_t native_type<uint32_t>() { return H5T_NATIVE_UINT32; }
 template <> hid_t native_type<float>() { return H5T_NATIVE_FLOAT; }
 
-std::string norm(const std::string& ds) { return ds.empty() || ds[0] != '/' ? "/" + ds : ds; }
+// Absolute dataset path. Built by append: GCC 12 warns falsely (-Wrestrict) on "/" + string.
+std::string norm(const std::string& ds) {
+  if (!ds.empty() && ds[0] == '/') return ds;
+  std::string out(1, '/');
+  out += ds;
+  return out;
+}
 
 bool path_exists(hid_t file, const std::string& path) {
   // H5Lexists needs every parent to exist: walk the components.
@@ -257,7 +263,7 @@ bool H5Reader::has(const std::string& dataset) const { return path_exists(impl_-
 std::vector<std::string> H5Reader::datasets() const {
   std::vector<std::string> out;
   auto cb = [](hid_t, const char* name, const H5O_info_t* info, void* data) -> herr_t {
-    if (info->type == H5O_TYPE_DATASET) static_cast<std::vector<std::string>*>(data)->push_back("/" + std::string(name));
+    if (info->type == H5O_TYPE_DATASET) static_cast<std::vector<std::string>*>(data)->push_back(norm(name));
     return 0;
   };
   H5Ovisit2(impl_->file.get(), H5_INDEX_NAME, H5_ITER_NATIVE, cb, &out, H5O_INFO_BASIC);  // HDF5 1.10 API

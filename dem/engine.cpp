@@ -136,6 +136,12 @@ void Engine::step() {
 void Engine::compute_forces() {
   compute_pair_forces();
   gather_forces();
+  if (force_hook_) force_hook_(*this);
+}
+
+void Engine::set_time_step(double dt) {
+  if (!(dt > 0) || !std::isfinite(dt)) throw InputError("DEM options: time step must be positive");
+  opt_.time_step = dt;
 }
 
 // The contact loop: one pair, one slot. A bond law (issue 7) adds its force

@@ -40,6 +40,7 @@
 //    renumbered, clear them with reset_pair_history().
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -134,6 +135,22 @@ class Engine {
   double coordination_number() const;
 
   void request_rebuild() { force_rebuild_ = true; }
+
+  // Breakage hooks (issue 7, dem/breakage/). The force hook runs after the
+  // contact forces are gathered into particles().f*/t* and before the
+  // closing kick: the bond law adds its forces there. No hook: one branch.
+  void set_force_hook(std::function<void(Engine&)> hook) { force_hook_ = std::move(hook); }
+  // Replaces the time step (> 0): breakage creates smaller spheres.
+  void set_time_step(double dt);
+  // Read-only view of the last force evaluation (per-sphere contact statistics).
+  int64_t pair_count() const { return list_.pairs(); }
+  int64_t pair_i(int64_t k) const { return pi_[k]; }
+  int64_t pair_j(int64_t k) const { return list_.j[k]; }
+  bool pair_touching(int64_t k) const { return touching_[k] != 0; }
+  const PairData& pair_force(int64_t k) const { return slot_[k]; }
+  // Sphere s's wall reactions: force on the bottom platen (z), on the top
+  // platen (z) and outward radial force on the cylinder, N.
+  const double* sphere_wall_forces(int64_t s) const { return &wall_f_[3 * s]; }
   void reset_pair_history();
 
   // Full state for checkpoints: pair list with histories and time.
@@ -161,6 +178,7 @@ class Engine {
   double time_ = 0;
   int64_t steps_ = 0, rebuilds_ = 0;
   bool force_rebuild_ = false;
+  std::function<void(Engine&)> force_hook_;
 
   // Pair list (CSR by i, ascending j) with per-pair history and force slot.
   PairListCSR list_;

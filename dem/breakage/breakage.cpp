@@ -1,0 +1,320 @@
+#include "dem/breakage/breakage.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <numeric>
+#include <string>
+
+#include "core/errors.hpp"
+#include "dem/breakage/replacement.hpp"
+#include "dem/time_step.hpp"
+
+namespace tg::dem::breakage {
+namespace {
+Vec3 pos(const Particles& p, int64_t s) { return {p.x[s], p.y[s], p.z[s]}; }
+Vec3 vel(const Particles& p, int64_t s) { return {p.vx[s], p.vy[s], p.vz[s]}; }
+Vec3 spin(const Particles& p, int64_t s) { return {p.wx[s], p.wy[s], p.wz[s]}; }
+}  // namespace
+
+BreakageModel::BreakageModel(Engine& engine, const BreakageOptions& opt) : eng_(engine), opt_(opt) {
+  validate(opt_.strength);
+  validate(opt_.bond);
+  if (opt_.check_interval < 1) throw InputError("breakage: check interval must be >= 1 step");
+  if (!(opt_.min_split_diameter_m >= 0)) throw InputError("breakage: minimum split diameter must be >= 0");
+  if (!(opt_.time_step_safety > 0 && opt_.time_step_safety <= 1)) throw InputError("breakage: time step safety must be in (0, 1]");
+  const Particles& p = eng_.particles();
+  const int64_t n = p.size();
+  strength_.resize(n);
+  key_.resize(n);
+  generation_.assign(n, 0);
+  for (int64_t s = 0; s < n; ++s) {
+    key_[s] = static_cast<uint64_t>(s);
+    strength_[s] = sphere_strength(opt_.strength, key_[s], 2 * p.r[s]);
+  }
+  rec_.spheres = n;
+  rec_.particles = n;
+  eng_.set_force_hook([this](Engine& e) { add_bond_forces(e); });
+}
+
+void BreakageModel::add_bond_forces(Engine& e) {
+  const int64_t nb = static_cast<int64_t>(ba_.size());
+  if (nb == 0) return;
+  Particles& p = e.particles();
+  const double dt = e.options().time_step;
+  loads_.resize(nb);
+  int any_broken = 0;
+  // Each bond writes only its own slots: thread-independent.
+#pragma omp parallel for schedule(static) reduction(| : any_broken) if (nb >= 4096)
+  for (int64_t b = 0; b < nb; ++b) {
+    const int64_t i = ba_[b], j = bb_[b];
+    const Vec3 xa = pos(p, i), xb = pos(p, j);
+    const Vec3 d = xb - xa;
+    const Vec3 n = (1 / norm(d)) * d;
+    const Vec3 c = bond_point(xa, p.r[i], xb, p.r[j]);
+    const Vec3 wa = spin(p, i), wb = spin(p, j);
+    const Vec3 v_rel = (vel(p, j) + cross(wb, c - xb)) - (vel(p, i) + cross(wa, c - xa));
+    update_bond(section_[b], {n, v_rel, wb - wa}, dt, state_[b]);
+    if (bond_breaks(opt_.bond, section_[b], state_[b])) {
+      broken_[b] = 1;
+      any_broken = 1;
+      loads_[b] = BondLoads{};
+    } else {
+      loads_[b] = bond_loads(state_[b], n, xa, xb, c);
+    }
+  }
+  // Serial scatter in bond order: the sums do not depend on threads.
+  for (int64_t b = 0; b < nb; ++b) {
+    const int64_t i = ba_[b], j = bb_[b];
+    const BondLoads& l = loads_[b];
+    p.fx[i] -= l.force_on_b.x;
+    p.fy[i] -= l.force_on_b.y;
+    p.fz[i] -= l.force_on_b.z;
+    p.fx[j] += l.force_on_b.x;
+    p.fy[j] += l.force_on_b.y;
+    p.fz[j] += l.force_on_b.z;
+    p.tx[i] += l.torque_on_a.x;
+    p.ty[i] += l.torque_on_a.y;
+    p.tz[i] += l.torque_on_a.z;
+    p.tx[j] += l.torque_on_b.x;
+    p.ty[j] += l.torque_on_b.y;
+    p.tz[j] += l.torque_on_b.z;
+  }
+  if (any_broken) compact_bonds();
+}
+
+void BreakageModel::compact_bonds() {
+  int64_t w = 0;
+  const int64_t nb = static_cast<int64_t>(ba_.size());
+  for (int64_t b = 0; b < nb; ++b) {
+    if (broken_[b]) {
+      ++rec_.bonds_broken;
+      continue;
+    }
+    ba_[w] = ba_[b];
+    bb_[w] = bb_[b];
+    section_[w] = section_[b];
+    state_[w] = state_[b];
+    broken_[w] = 0;
+    ++w;
+  }
+  ba_.resize(w);
+  bb_.resize(w);
+  section_.resize(w);
+  state_.resize(w);
+  broken_.resize(w);
+  bonds_changed_ = true;
+}
+
+std::vector<double> BreakageModel::max_normal_forces() const {
+  const Particles& p = eng_.particles();
+  std::vector<double> f(p.size(), 0.0);
+  for (int64_t k = 0; k < eng_.pair_count(); ++k) {
+    if (!eng_.pair_touching(k)) continue;
+    const int64_t i = eng_.pair_i(k), j = eng_.pair_j(k);
+    const Vec3 d = pos(p, j) - pos(p, i);
+    const PairData& pd = eng_.pair_force(k);
+    const double fn = dot(Vec3{pd.fx, pd.fy, pd.fz}, d) / norm(d);  // > 0: pushes apart
+    f[i] = std::max(f[i], fn);
+    f[j] = std::max(f[j], fn);
+  }
+  for (int64_t s = 0; s < p.size(); ++s) {
+    const double* w = eng_.sphere_wall_forces(s);
+    f[s] = std::max({f[s], -w[0], w[1], w[2]});
+  }
+  return f;
+}
+
+std::vector<ContactLoad> BreakageModel::contacts_of(int64_t s) const {
+  const Particles& p = eng_.particles();
+  std::vector<ContactLoad> c;
+  const Vec3 xs = pos(p, s);
+  for (int64_t k = 0; k < eng_.pair_count(); ++k) {
+    if (!eng_.pair_touching(k)) continue;
+    const int64_t i = eng_.pair_i(k), j = eng_.pair_j(k);
+    if (i != s && j != s) continue;
+    const Vec3 d = pos(p, j) - pos(p, i);
+    const double dist = norm(d);
+    const Vec3 n = (1 / dist) * d;
+    const double delta = p.r[i] + p.r[j] - dist;
+    const Vec3 point = pos(p, i) + (p.r[i] - 0.5 * delta) * n;
+    const PairData& pd = eng_.pair_force(k);
+    const Vec3 f{pd.fx, pd.fy, pd.fz};
+    c.push_back({point, i == s ? -f : f});
+  }
+  const double* w = eng_.sphere_wall_forces(s);
+  const double r = p.r[s];
+  if (w[0] != 0) c.push_back({xs - Vec3{0, 0, r}, {0, 0, -w[0]}});
+  if (w[1] != 0) c.push_back({xs + Vec3{0, 0, r}, {0, 0, -w[1]}});
+  if (w[2] != 0) {
+    const double rho = std::hypot(xs.x, xs.y);
+    const Vec3 nc{xs.x / rho, xs.y / rho, 0};
+    c.push_back({xs + r * nc, -w[2] * nc});
+  }
+  return c;
+}
+
+int BreakageModel::check() {
+  Particles& p = eng_.particles();
+  const int64_t n = p.size();
+  const std::vector<double> fmax = max_normal_forces();
+  // Collect every split first: planes are computed from the state of the
+  // check, before any sphere is replaced.
+  std::vector<SplitEvent> todo;
+  for (int64_t s = 0; s < n; ++s) {
+    const double d = 2 * p.r[s];
+    if (d < opt_.min_split_diameter_m || !(p.flags[s] & kFlagBreakable) || fmax[s] <= 0) continue;
+    const double sigma = fmax[s] / (d * d);
+    if (!(sigma > strength_[s])) continue;
+    const std::vector<ContactLoad> c = contacts_of(s);
+    const double volume = std::numbers::pi / 6 * d * d * d;
+    const auto plane = splitting_plane(pos(p, s), volume, c);
+    if (!plane) continue;
+    SplitEvent ev;
+    ev.step = eng_.step_count();
+    ev.sphere = s;
+    ev.generation = generation_[s];
+    ev.diameter_m = d;
+    ev.f_max_N = fmax[s];
+    ev.stress_Pa = sigma;
+    ev.strength_Pa = strength_[s];
+    ev.plane = *plane;
+    todo.push_back(ev);
+  }
+  for (auto& ev : todo) {
+    const Replacement rep = split(ev.sphere, ev.plane);
+    ev.volume_mother_m3 = rep.volume_mother;
+    ev.volume_retained_m3 = rep.volume_retained;
+    events_.push_back(ev);
+  }
+  if (!todo.empty()) {
+    eng_.request_rebuild();
+    update_time_step();
+  }
+  if (!todo.empty() || bonds_changed_) relabel_particles();
+  rec_.spheres = p.size();
+  rec_.bonds_intact = bond_count();
+  return static_cast<int>(todo.size());
+}
+
+Replacement BreakageModel::split(int64_t s, const SplittingPlane& plane) {
+  Particles& p = eng_.particles();
+  const Mother mother{pos(p, s), p.r[s], vel(p, s), spin(p, s)};
+  const Replacement rep = replace_sphere(mother, plane.normal, plane.n_f);
+  const int g = generation_[s];
+  if (g == 0) ++rec_.grains_broken;
+  if (static_cast<int>(rec_.splits_by_generation.size()) <= g) rec_.splits_by_generation.resize(g + 1, 0);
+  ++rec_.splits_by_generation[g];
+  rec_.volume_lost_m3 += rep.volume_lost;
+
+  // The mother's bonds go with it.
+  bool dropped = false;
+  for (size_t b = 0; b < ba_.size(); ++b)
+    if (ba_[b] == s || bb_[b] == s) {
+      broken_[b] = 1;
+      dropped = true;
+    }
+  if (dropped) compact_bonds();
+
+  const int64_t n0 = p.size();
+  const int64_t count = static_cast<int64_t>(rep.spheres.size());
+  std::vector<int64_t> idx(count);
+  idx[0] = s;
+  for (int64_t k = 1; k < count; ++k) idx[k] = n0 + k - 1;
+  p.resize(n0 + count - 1);  // every field of the declared list grows
+  for (int64_t k = 1; k < count; ++k) p.copy_sphere(s, idx[k]);  // inherit material, flags, ...
+  const double m_mother = p.m[s], r_mother = p.r[s];
+  const uint64_t mother_key = key_[s];
+  strength_.resize(n0 + count - 1);
+  key_.resize(n0 + count - 1);
+  generation_.resize(n0 + count - 1);
+  for (int64_t k = 0; k < count; ++k) {
+    const NewSphere& ns = rep.spheres[k];
+    const int64_t t = idx[k];
+    p.x[t] = ns.x.x, p.y[t] = ns.x.y, p.z[t] = ns.x.z;
+    p.vx[t] = ns.v.x, p.vy[t] = ns.v.y, p.vz[t] = ns.v.z;
+    p.wx[t] = ns.w.x, p.wy[t] = ns.w.y, p.wz[t] = ns.w.z;
+    p.fx[t] = p.fy[t] = p.fz[t] = 0;  // forces of the next evaluation start afresh
+    p.tx[t] = p.ty[t] = p.tz[t] = 0;
+    p.r[t] = ns.r;
+    const double q = ns.r / r_mother;
+    p.m[t] = m_mother * q * q * q;  // keeps any mass scaling of the mother
+    p.inertia[t] = 0.4 * p.m[t] * ns.r * ns.r;
+    p.flags[t] |= kFlagClusterElement;
+    p.hbx[t] = p.hby[t] = p.hbz[t] = 0;
+    p.htx[t] = p.hty[t] = p.htz[t] = 0;
+    p.hcx[t] = p.hcy[t] = p.hcz[t] = 0;
+    key_[t] = fragment_key(mother_key, ns.slot);
+    generation_[t] = g + 1;
+    strength_[t] = sphere_strength(opt_.strength, key_[t], 2 * ns.r);
+  }
+  for (auto b : rep.bonds) {
+    const int64_t i = idx[b[0]], j = idx[b[1]];
+    ba_.push_back(std::min(i, j));
+    bb_.push_back(std::max(i, j));
+    section_.push_back(bond_section(opt_.bond, p.r[i], p.r[j]));
+    state_.push_back(BondState{});
+    broken_.push_back(0);
+  }
+  bonds_changed_ = true;
+  return rep;
+}
+
+void BreakageModel::relabel_particles() {
+  Particles& p = eng_.particles();
+  const int64_t n = p.size();
+  std::vector<int64_t> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int64_t a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  };
+  for (size_t b = 0; b < ba_.size(); ++b) {
+    const int64_t a = find(ba_[b]), c = find(bb_[b]);
+    if (a != c) parent[std::max(a, c)] = std::min(a, c);  // root = smallest index
+  }
+  int64_t roots = 0;
+  for (int64_t s = 0; s < n; ++s) {
+    p.particle[s] = find(s);
+    if (p.particle[s] == s) ++roots;
+  }
+  rec_.particles = roots;
+  bonds_changed_ = false;
+}
+
+void BreakageModel::update_time_step() {
+  const Particles& p = eng_.particles();
+  const int64_t n = p.size();
+  // Sum of bond spring constants per sphere.
+  std::vector<double> kt(n, 0.0), kr(n, 0.0);
+  for (size_t b = 0; b < ba_.size(); ++b) {
+    for (int64_t s : {ba_[b], bb_[b]}) {
+      kt[s] += bond_axial_stiffness(section_[b]);
+      kr[s] += bond_bending_stiffness(section_[b]);
+    }
+  }
+  // Hertz, per sphere: the stiffest partner of a sphere of radius r has
+  // R* ≤ r (a wall or a larger sphere); stiffness at an overlap of 5 % of r
+  // (the engine's reference overlap). Pairing each sphere's own mass with its
+  // own stiffness avoids the m_min / k(r_max) mismatch of a global estimate
+  // once fragments are two orders of magnitude lighter than grains.
+  const HertzMindlin law = make_hertz_mindlin(eng_.options().material, eng_.options().material, 0.0, 1.0);
+  const double ref = TimeStepOptions{}.reference_overlap;
+  double dt = std::numeric_limits<double>::infinity();
+  for (int64_t s = 0; s < n; ++s) {
+    dt = std::min(dt, std::sqrt(p.m[s] / law.normal_stiffness(ref * p.r[s], p.r[s])));
+    if (kt[s] > 0) dt = std::min({dt, std::sqrt(p.m[s] / kt[s]), std::sqrt(p.inertia[s] / kr[s])});
+  }
+  const double want = opt_.time_step_safety * dt;
+  if (want < eng_.options().time_step) eng_.set_time_step(want);
+}
+
+void BreakageModel::run(int64_t steps) {
+  for (int64_t k = 0; k < steps; ++k) {
+    eng_.step();
+    if (eng_.step_count() % opt_.check_interval == 0) check();
+  }
+}
+
+}  // namespace tg::dem::breakage

@@ -1,0 +1,32 @@
+// Checkpoint: the complete engine state in one binary file, so that a run
+// restarts and continues bit for bit. Contents: every Particles field (by
+// the declared field list, so none can be forgotten), time, step count, the
+// walls (top platen position and speed), the pair tangential histories, and
+// an opaque text blob for the scene (strain reference, next snapshot...).
+// Layout: magic "TGDEMCK1", then length-prefixed records; doubles are
+// stored raw (little-endian machines only; the magic check rejects others
+// only by the field-size check). Written atomically.
+#pragma once
+#include <filesystem>
+#include <string>
+
+#include "dem/engine.hpp"
+
+namespace tg::dem {
+
+struct CheckpointState {
+  Particles particles;
+  double time = 0;
+  int64_t steps = 0;
+  Walls walls;
+  Engine::PairHistory history;
+  std::string scene;  // scene-defined text
+};
+
+void save_checkpoint(const Engine& e, const std::string& scene, const std::filesystem::path& path);
+// Throws InputError naming the file when it is not a tomograin checkpoint.
+CheckpointState load_checkpoint(const std::filesystem::path& path);
+// An engine that continues the saved run (options as given, walls restored).
+Engine resume_engine(CheckpointState& s, EngineOptions opt);
+
+}  // namespace tg::dem

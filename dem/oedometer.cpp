@@ -1,0 +1,257 @@
+#include "dem/oedometer.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <optional>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+#include "core/atomic_file.hpp"
+#include "core/errors.hpp"
+#include "core/progress.hpp"
+#include "core/table.hpp"
+#include "dem/checkpoint.hpp"
+#include "dem/packing_io.hpp"
+#include "dem/snapshot.hpp"
+#include "dem/time_step.hpp"
+
+namespace tg::dem {
+
+OedometerSetup read_oedometer_config(Config& cfg, const std::filesystem::path& base_dir) {
+  OedometerSetup s;
+  EngineOptions& e = s.engine;
+  e.material.shear_modulus_Pa = cfg.get("material.shear_modulus_Pa", e.material.shear_modulus_Pa);
+  e.material.poisson_ratio = cfg.get("material.poisson_ratio", e.material.poisson_ratio);
+  e.material.density_kg_m3 = cfg.get("material.density_kg_m3", e.material.density_kg_m3);
+  e.friction = cfg.get("contact.friction", e.friction);
+  e.restitution = cfg.get("contact.restitution", e.restitution);
+  e.local_damping = cfg.get("contact.local_damping", e.local_damping);
+  e.walls.cylinder_radius = cfg.get("walls.cylinder_radius_m", e.walls.cylinder_radius);
+  e.walls.platen_friction = cfg.get("walls.platen_friction", e.walls.platen_friction);
+  e.walls.cylinder_friction = cfg.get("walls.cylinder_friction", e.walls.cylinder_friction);
+  e.gravity_z = -cfg.get("run.gravity_m_s2", -e.gravity_z);
+  e.time_step = cfg.get("run.time_step_s", e.time_step);
+  s.time_step_safety = cfg.get("run.time_step_safety", s.time_step_safety);
+  s.reference_overlap = cfg.get("run.reference_overlap", s.reference_overlap);
+  s.mass_scaling = cfg.get("run.mass_scaling", s.mass_scaling);
+  e.skin = cfg.get("run.neighbour_skin_m", e.skin);
+  e.overlap_limit = cfg.get("run.overlap_limit", e.overlap_limit);
+  e.parallel_min_items = cfg.get("run.parallel_min_items", e.parallel_min_items);
+  s.threads = cfg.get("run.threads", s.threads);
+  s.packing_csv = cfg.get("specimen.packing_csv", std::string());
+  if (!s.packing_csv.empty() && std::filesystem::path(s.packing_csv).is_relative())
+    s.packing_csv = (base_dir / s.packing_csv).string();
+  PluviationOptions& p = s.pluviation;
+  p.d50_m = cfg.get("pluviation.d50_m", p.d50_m);
+  p.cu = cfg.get("pluviation.cu", p.cu);
+  p.generation_height_m = cfg.get("pluviation.generation_height_m", p.generation_height_m);
+  p.target_height_m = cfg.get("pluviation.target_height_m", p.target_height_m);
+  p.target_porosity = cfg.get("pluviation.target_porosity", p.target_porosity);
+  p.seed = static_cast<uint64_t>(cfg.get("pluviation.seed", static_cast<int64_t>(p.seed)));
+  p.time_step_safety = cfg.get("pluviation.time_step_safety", p.time_step_safety);
+  p.kinetic_energy_tol_J = cfg.get("pluviation.kinetic_energy_tol_J", p.kinetic_energy_tol_J);
+  p.max_time_s = cfg.get("pluviation.max_time_s", p.max_time_s);
+  p.cylinder_radius_m = e.walls.cylinder_radius;
+  s.platen_speed = cfg.get("oedometer.platen_speed_m_s", s.platen_speed);
+  s.target_strain = cfg.get("oedometer.target_strain", s.target_strain);
+  s.snapshot_strains = cfg.get("oedometer.snapshot_strains", s.snapshot_strains);
+  s.history_every = cfg.get("oedometer.history_every_steps", s.history_every);
+  s.checkpoint_every = cfg.get("oedometer.checkpoint_every_steps", s.checkpoint_every);
+
+  cfg.require(e.time_step >= 0, "run.time_step_s", "must be >= 0 (0 = automatic)");
+  cfg.require(s.time_step_safety > 0 && s.time_step_safety <= 1, "run.time_step_safety", "must be in (0, 1]");
+  cfg.require(s.reference_overlap > 0 && s.reference_overlap < 1, "run.reference_overlap", "must be in (0, 1)");
+  cfg.require(s.mass_scaling >= 1, "run.mass_scaling", "must be >= 1 (1 = none)");
+  cfg.require(s.threads >= 0, "run.threads", "must be >= 0 (0 = all)");
+  cfg.require(s.platen_speed > 0, "oedometer.platen_speed_m_s", "must be positive");
+  cfg.require(s.target_strain > 0 && s.target_strain < 0.9, "oedometer.target_strain", "must be in (0, 0.9)");
+  cfg.require(s.history_every > 0, "oedometer.history_every_steps", "must be positive");
+  cfg.require(s.checkpoint_every > 0, "oedometer.checkpoint_every_steps", "must be positive");
+  for (double x : s.snapshot_strains)
+    cfg.require(x >= 0 && x <= s.target_strain, "oedometer.snapshot_strains", "must lie in [0, target_strain]");
+  std::sort(s.snapshot_strains.begin(), s.snapshot_strains.end());
+  cfg.finish();
+  return s;
+}
+
+namespace {
+
+std::string fmt17(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
+struct Scene {
+  double h0 = 0;
+  int64_t next_snapshot = 0;
+  std::string encode() const { return fmt17(h0) + " " + std::to_string(next_snapshot); }
+  static Scene decode(const std::string& s) {
+    Scene c;
+    std::istringstream is(s);
+    if (!(is >> c.h0 >> c.next_snapshot)) throw InputError("checkpoint: scene state unreadable");
+    return c;
+  }
+};
+
+struct History {
+  std::vector<std::string> names{"step", "time_s", "strain", "top_stress_Pa", "bottom_stress_Pa", "lateral_stress_Pa",
+                                 "K0", "kinetic_energy_J", "coordination", "contacts", "porosity", "platen_z_m"};
+  std::vector<std::vector<double>> cols = std::vector<std::vector<double>>(12);
+  void add(const std::vector<double>& row) {
+    for (size_t c = 0; c < cols.size(); ++c) cols[c].push_back(row[c]);
+  }
+  void write(const std::filesystem::path& path) const {
+    Table t;
+    for (size_t c = 0; c < cols.size(); ++c) t.add(names[c], cols[c]);
+    write_csv(t, path);
+  }
+  void read_until(const std::filesystem::path& path, int64_t step) {
+    if (!std::filesystem::exists(path)) return;
+    const Table t = read_csv(path, names);
+    for (int64_t r = 0; r < t.rows(); ++r) {
+      if (t.num("step")[r] > static_cast<double>(step)) break;
+      std::vector<double> row;
+      for (const auto& n : names) row.push_back(t.num(n)[r]);
+      add(row);
+    }
+  }
+};
+
+}  // namespace
+
+OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::path& rundir, const RunControl& c) {
+  namespace fs = std::filesystem;
+  fs::create_directories(rundir / "snapshots");
+  if (s.threads > 0) omp_set_num_threads(s.threads);
+  const double R = s.engine.walls.cylinder_radius, area = std::numbers::pi * R * R;
+  const fs::path ckpt = rundir / "checkpoint.bin";
+  OedometerSummary sum;
+  EngineOptions eo = s.engine;
+  Scene scene;
+  History hist;
+  std::optional<Engine> eng;
+  double vsolid = 0;
+  if (c.restart) {
+    CheckpointState st = load_checkpoint(ckpt);
+    scene = Scene::decode(st.scene);
+    const CriticalTimeStep ct = critical_time_step(st.particles, eo.material, {s.reference_overlap});
+    if (eo.time_step == 0) eo.time_step = s.time_step_safety * ct.dt_critical;
+    sum.critical_time_step = ct.dt_critical;
+    eng.emplace(resume_engine(st, eo));
+    hist.read_until(rundir / "history.csv", eng->step_count());
+  } else {
+    Particles p;
+    if (!s.packing_csv.empty()) {
+      p = read_packing_csv(s.packing_csv, eo.material.density_kg_m3);
+    } else {
+      p = pluviate(s.pluviation, eo).particles;
+    }
+    for (int64_t i = 0; i < p.size(); ++i) {  // explicit, recorded mass scaling
+      p.m[i] *= s.mass_scaling;
+      p.inertia[i] *= s.mass_scaling;
+      const double rho = std::hypot(p.x[i], p.y[i]);
+      // Settled grains press slightly into the walls: allow 1 % of a radius.
+      if (rho + p.r[i] > R + 0.01 * p.r[i] || p.z[i] < 0.99 * p.r[i])
+        throw InputError((s.packing_csv.empty() ? std::string("pluviated packing") : s.packing_csv) + ": sphere " +
+                         std::to_string(i) + " crosses the cylinder (radius " + fmt17(R) + " m) or the bottom platen");
+    }
+    write_packing_csv(p, rundir / "packing_initial.csv");
+    double por = 0;
+    packing_height_porosity(p, R, scene.h0, por);
+    const CriticalTimeStep ct = critical_time_step(p, eo.material, {s.reference_overlap});
+    sum.critical_time_step = ct.dt_critical * std::sqrt(s.mass_scaling);
+    if (eo.time_step == 0) eo.time_step = s.time_step_safety * sum.critical_time_step;
+    if (eo.time_step > sum.critical_time_step)
+      throw InputError("run.time_step_s = " + fmt17(eo.time_step) + " s exceeds the critical step " +
+                       fmt17(sum.critical_time_step) + " s of this packing");
+    eo.walls.top_z = scene.h0;
+    eo.walls.top_vz = -s.platen_speed;
+    eng.emplace(std::move(p), eo);
+    // The run record: every choice that changes the physics.
+    std::ostringstream js;
+    js << "{\n  \"spheres\": " << eng->particles().size() << ",\n  \"initial_height_m\": " << fmt17(scene.h0)
+       << ",\n  \"initial_porosity\": " << fmt17(por) << ",\n  \"time_step_s\": " << fmt17(eo.time_step)
+       << ",\n  \"critical_time_step_s\": " << fmt17(sum.critical_time_step)
+       << ",\n  \"critical_step_reference_overlap\": " << fmt17(s.reference_overlap)
+       << ",\n  \"mass_scaling\": " << fmt17(s.mass_scaling) << ",\n  \"damping\": {\"viscous_restitution\": "
+       << fmt17(eo.restitution) << ", \"local\": " << fmt17(eo.local_damping)
+       << "},\n  \"contact\": \"hertz_mindlin\",\n  \"threads\": " << omp_get_max_threads()
+       << ",\n  \"specimen\": \"" << (s.packing_csv.empty() ? std::string("pluviation") : s.packing_csv) << "\"\n}\n";
+    AtomicPath rec(rundir / "run.json");
+    {
+      std::ofstream os(rec.temp());
+      os << js.str();
+    }
+    rec.commit();
+  }
+  Engine& e = *eng;
+  for (int64_t i = 0; i < e.particles().size(); ++i) vsolid += 4.0 / 3.0 * std::numbers::pi * std::pow(e.particles().r[i], 3);
+  sum.time_step = eo.time_step;
+  sum.spheres = e.particles().size();
+  sum.initial_height_m = scene.h0;
+  sum.initial_porosity = 1 - vsolid / (area * scene.h0);
+
+  auto strain = [&] { return (scene.h0 - e.walls().top_z) / scene.h0; };
+  auto record = [&] {
+    const WallForces& w = e.wall_forces();
+    const double h = e.walls().top_z;
+    const double st = w.top_z / area + 0.0, sb = 0.0 - w.bottom_z / area, sl = w.cylinder_radial / (2 * std::numbers::pi * R * h);
+    const double sv = 0.5 * (st + sb);
+    hist.add({static_cast<double>(e.step_count()), e.time(), strain(), st, sb, sl, sv > 0 ? sl / sv : 0.0,
+              e.kinetic_energy(), e.coordination_number(), static_cast<double>(e.contact_count()),
+              1 - vsolid / (area * h), h});
+  };
+  auto snapshot = [&] {
+    const double target = s.snapshot_strains[static_cast<size_t>(scene.next_snapshot)];
+    char name[64];
+    std::snprintf(name, sizeof name, "strain_%05.2fpct.h5", 100 * target);
+    write_snapshot(e.particles(), rundir / "snapshots" / name,
+                   "{\"requested_strain\": " + fmt17(target) + ", \"strain\": " + fmt17(strain()) +
+                       ", \"time_s\": " + fmt17(e.time()) + ", \"step\": " + std::to_string(e.step_count()) + "}");
+    ++scene.next_snapshot;
+  };
+  auto checkpoint = [&] {
+    hist.write(rundir / "history.csv");
+    save_checkpoint(e, scene.encode(), ckpt);
+  };
+
+  const auto t0 = std::chrono::steady_clock::now();
+  const int64_t step0 = e.step_count();
+  Progress bar("oedometer strain", 100 * s.target_strain, "%");
+  if (!c.restart) record();
+  const int64_t nsnap = static_cast<int64_t>(s.snapshot_strains.size());
+  while (true) {
+    while (scene.next_snapshot < nsnap && strain() >= s.snapshot_strains[static_cast<size_t>(scene.next_snapshot)] - 1e-12)
+      snapshot();
+    if (strain() >= s.target_strain) {
+      sum.finished = true;
+      break;
+    }
+    if (c.stop_after_steps >= 0 && e.step_count() >= c.stop_after_steps) break;
+    e.step();
+    if (e.step_count() % s.history_every == 0) {
+      record();
+      if (!c.quiet) bar.update(100 * strain());
+    }
+    if (e.step_count() % s.checkpoint_every == 0) checkpoint();
+  }
+  if (sum.finished && e.step_count() % s.history_every != 0) record();  // last row at the target
+  bar.finish();
+  checkpoint();
+  sum.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  sum.steps = e.step_count();
+  sum.particle_steps_per_second =
+      sum.wall_seconds > 0 ? static_cast<double>(sum.steps - step0) * static_cast<double>(sum.spheres) / sum.wall_seconds : 0;
+  sum.strain = strain();
+  sum.top_stress_Pa = e.wall_forces().top_z / area;
+  sum.final_state = e.particles();
+  return sum;
+}
+
+}  // namespace tg::dem

@@ -1,0 +1,99 @@
+#include "dem/pluviation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "core/errors.hpp"
+#include "core/progress.hpp"
+#include "dem/time_step.hpp"
+
+namespace tg::dem {
+
+double sigma_from_cu(double d50, double cu) { return (cu - 1) * d50 / (0.2533 + 1.2816 * cu); }
+
+Particles insert_grains(const PluviationOptions& o, double density) {
+  if (!(o.d50_m > 0) || !(o.cu >= 1) || !(o.cylinder_radius_m > o.d50_m) || !(o.generation_height_m > o.d50_m) ||
+      !(o.target_porosity > 0 && o.target_porosity < 1) || !(o.target_height_m > 0))
+    throw InputError("pluviation: need d50 > 0, cu >= 1, cylinder and heights larger than d50, porosity in (0, 1)");
+  const double sigma = sigma_from_cu(o.d50_m, o.cu);
+  std::mt19937_64 rng(o.seed);
+  std::normal_distribution<double> nd(o.d50_m, sigma);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double pi = std::numbers::pi, R = o.cylinder_radius_m;
+  const double v_target = (1 - o.target_porosity) * pi * R * R * o.target_height_m;
+  Particles p;
+  double v = 0;
+  int64_t tries = 0;
+  while (v < v_target) {
+    double d = nd(rng);
+    while (std::abs(d - o.d50_m) > 3 * sigma) d = nd(rng);  // truncate at ±3σ
+    const double r = d / 2;
+    for (;;) {
+      if (++tries > o.max_insert_tries)
+        throw InputError("pluviation: could not place grain " + std::to_string(p.size()) +
+                         " without overlap; the generation cylinder is too small for the target volume");
+      const double x = u(rng) * (R - r), y = u(rng) * (R - r);
+      if (x * x + y * y > (R - r) * (R - r)) continue;
+      const double z = r + 0.5 * (u(rng) + 1) * (o.generation_height_m - 2 * r);
+      bool ok = true;
+      for (int64_t k = 0; k < p.size() && ok; ++k) {
+        const double dx = p.x[k] - x, dy = p.y[k] - y, dz = p.z[k] - z, c = p.r[k] + r;
+        ok = dx * dx + dy * dy + dz * dz >= c * c;
+      }
+      if (!ok) continue;
+      p.append_sphere(x, y, z, r, density, p.size());
+      v += 4.0 / 3.0 * pi * r * r * r;
+      break;
+    }
+  }
+  return p;
+}
+
+void packing_height_porosity(const Particles& p, double cylinder_radius, double& height, double& porosity) {
+  height = 0;
+  double vs = 0;
+  for (int64_t i = 0; i < p.size(); ++i) {
+    height = std::max(height, p.z[i] + p.r[i]);
+    vs += 4.0 / 3.0 * std::numbers::pi * p.r[i] * p.r[i] * p.r[i];
+  }
+  porosity = height > 0 ? 1 - vs / (std::numbers::pi * cylinder_radius * cylinder_radius * height) : 1;
+}
+
+PluviationResult pluviate(const PluviationOptions& o, EngineOptions eo) {
+  Particles p = insert_grains(o, eo.material.density_kg_m3);
+  const CriticalTimeStep c = critical_time_step(p, eo.material, {});
+  eo.time_step = o.time_step_safety * c.dt_critical;
+  eo.walls.bottom = eo.walls.top = eo.walls.cylinder = true;
+  eo.walls.cylinder_radius = o.cylinder_radius_m;
+  eo.walls.top_z = o.generation_height_m;
+  eo.walls.top_vz = 0;
+  Engine e(std::move(p), eo);
+  Progress bar("pluviation (simulated s)", o.max_time_s, "s");
+  PluviationResult res;
+  const int64_t chunk = std::max<int64_t>(1, static_cast<int64_t>(1e-3 / eo.time_step));  // check every 1 ms
+  // Let the grains fall first: free fall from the top takes sqrt(2H/g).
+  const double t_fall = eo.gravity_z < 0 ? std::sqrt(2 * o.generation_height_m / -eo.gravity_z) : 0;
+  while (e.time() < o.max_time_s) {
+    e.run(chunk);
+    bar.update(e.time());
+    res.kinetic_energy_J = e.kinetic_energy();
+    if (e.time() > t_fall && res.kinetic_energy_J < o.kinetic_energy_tol_J) {
+      res.settled = true;
+      break;
+    }
+  }
+  bar.finish();
+  res.settle_time_s = e.time();
+  res.particles = e.particles();
+  // The packing is the geometry at rest: zero the motion and the loads.
+  Particles& q = res.particles;
+  for (auto* v : {&q.vx, &q.vy, &q.vz, &q.wx, &q.wy, &q.wz, &q.fx, &q.fy, &q.fz, &q.tx, &q.ty, &q.tz,
+                  &q.hbx, &q.hby, &q.hbz, &q.htx, &q.hty, &q.htz, &q.hcx, &q.hcy, &q.hcz})
+    std::fill(v->begin(), v->end(), 0.0);
+  packing_height_porosity(q, o.cylinder_radius_m, res.height_m, res.porosity);
+  return res;
+}
+
+}  // namespace tg::dem

@@ -1,0 +1,119 @@
+// The validation comparison: experiment (XCT stages) beside simulation (DEM
+// snapshots) at matched axial strains, measured by the same code, and the
+// report folder that shows it (../shared/DESIGN.md "Data flow";
+// reference study §4.3, Figs. 9–14).
+//
+// Per XCT stage:
+//   experiment   a scan (grey u16: segment() + measure, exactly the imaged
+//                path below) or a particle table CSV (tomograin measure)
+//   DEM snapshot the one whose axial strain is nearest (by order when strains
+//                are unknown), voxelised at the scan's voxel size
+//                (compare/voxelise.hpp) with grey levels and noise estimated
+//                from that scan's histogram (compare/imaging_estimate.hpp)
+//   dem_ideal    measure the voxelised TRUTH labels: the DEM particles as
+//                they are, no segmentation
+//   dem_imaged   segment() the voxelised grey scan and measure it, with the
+//                same SegmentOptions and ParticleOptions as the experiment
+//   distances    KS and W1 of PSD (Dmed by mass), FR, AR for
+//                experiment–dem_imaged, experiment–dem_ideal and
+//                dem_ideal–dem_imaged (= the segmentation bias)
+// Plus the stress–strain curve (DEM history.csv, optional experimental CSV)
+// and broken grains versus strain.
+//
+// Report folder (every number behind every plot is a CSV/JSON file there):
+//   report.json         metadata, stages, options, imaging estimates, timings
+//   summary.csv         stage, series, strain, particles, D10/D50/D60/Cu, Br, broken fraction
+//   psd.csv             stage, series, sieve_mm, passing_pct
+//   shape_classes.csv   stage, series, metric (fr|ar), class, percent
+//   distances.csv       stage, pair, psd_ks, psd_w1_mm, fr_ks, fr_w1, ar_ks, ar_w1
+//   stress_strain.csv   series, strain, stress_mpa
+//   broken.csv          series, strain, broken_fraction
+//   particles/          one particle table per stage and series
+//   slices/             orthogonal mid-slices (grey u16, labels u32) as .npy
+//   *.png, index.html   made by compare/report/make_report.py (matplotlib),
+//                       images embedded as base64: index.html opens offline.
+//
+// Usage (e.g. from the demo):
+//   tg::compare::CompareInputs in;
+//   in.xct = {"stage0.h5", "stage1.h5"};          // scans or particle CSVs
+//   in.dem_run = "dem_run";                       // history.csv + snapshots
+//   in.report_dir = "out/report";
+//   tg::compare::CompareOptions opt;              // defaults: see below
+//   tg::compare::Report r = tg::compare::run_comparison(in, opt);
+//   // r.index_html is the page; r.stages[i].ideal_vs_imaged the segmentation bias
+#pragma once
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "compare/imaging_estimate.hpp"
+#include "compare/stage_metrics.hpp"
+#include "compare/voxelise.hpp"
+#include "measure/particles.hpp"
+#include "segmentation/segment.hpp"
+
+namespace tg::compare {
+
+struct CompareInputs {
+  // XCT stages in loading order: .h5 scans (/volume u16 is segmented; a file
+  // with only /labels is measured as is), other volume files (TIFF, raw+JSON)
+  // or particle tables (.csv, columns of tomograin measure).
+  std::vector<std::string> xct;
+  std::vector<double> xct_strains;   // optional, one per stage; else the file's synth
+                                     // provenance (axial_strain), else matched by order
+  std::vector<std::string> stage_names;  // optional; default "stage N (ε = …)"
+  // DEM run folder: history.csv (axial strain, axial stress, optional
+  // broken_grains) and the snapshots: RUNDIR/snapshots/*.{csv,h5}, else
+  // RUNDIR/*.{csv,h5} other than history.csv and snapshots.csv.
+  std::string dem_run;
+  std::vector<std::string> dem_snapshots;  // optional explicit list (overrides the search)
+  // Snapshot strains: this list, else RUNDIR/snapshots.csv (file, axial_strain),
+  // else a column axial_strain/strain or an HDF5 attribute axial_strain in the snapshot.
+  std::vector<double> dem_strains;
+  std::string experimental_curve;  // optional CSV: axial strain + axial stress columns
+  std::string report_dir;          // output folder (created; files inside are replaced)
+  std::string title = "tomograin: experiment vs DEM";
+  std::string notes;               // free text shown at the top of the page (e.g. what the demo ran)
+};
+
+struct CompareOptions {
+  double voxel_um = 0;        // voxelising voxel size; 0 = each XCT scan's own (needed for CSV inputs)
+  bool like_scan = true;      // estimate grey levels/noise from each XCT scan (else data_synth defaults)
+  bool imaged_path = true;    // run the imaged DEM path (segment + measure)
+  bool synthetic_xct = false; // mark the XCT inputs synthetic even without synth provenance
+  double grain_radius_vox = 0;  // segmentation scale; 0 = median particle of the first DEM snapshot
+  SegmentOptions segment;     // shared by the experiment and dem_imaged (grain_radius_vox set as above)
+  measure::ParticleOptions measure = default_measure();  // shared by all three series
+  VoxeliseOptions voxelise;   // voxel_m and imaging are filled per stage
+  bool plots = true;          // run the plotting script (index.html + PNGs)
+  std::string python = "/usr/bin/python3";  // Debian's, with python3-matplotlib
+  std::string script;         // default: $TOMOGRAIN_REPORT_SCRIPT, else the source tree's
+                              // compare/report/make_report.py
+  static measure::ParticleOptions default_measure() {
+    measure::ParticleOptions p;
+    p.oriented_box = false;   // Feret sizing is what is compared; the CGAL box is not needed
+    return p;
+  }
+};
+
+struct StageReport {
+  std::string name;
+  double xct_strain = 0, dem_strain = 0;
+  std::string xct_source, dem_snapshot;
+  bool synthetic = false;
+  int64_t n_experiment = 0, n_ideal = 0, n_imaged = 0;
+  StageMetrics experiment, ideal, imaged;
+  Distances exp_vs_imaged, exp_vs_ideal, ideal_vs_imaged;
+  double seconds = 0;
+};
+
+struct Report {
+  std::filesystem::path dir, index_html;  // index_html empty when plots are off
+  std::vector<StageReport> stages;
+  std::vector<double> sieves_mm;
+  double seconds = 0;
+};
+
+Report run_comparison(const CompareInputs& in, const CompareOptions& opt);
+
+}  // namespace tg::compare

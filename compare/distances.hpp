@@ -1,0 +1,31 @@
+// Distances between two weighted one-dimensional samples: the
+// Kolmogorov–Smirnov statistic and the Wasserstein-1 (earth mover's)
+// distance. Used to compare experiment and simulation per loading stage:
+// the PSD by mass (sample = Dmed, weight = particle volume) and the FR and AR
+// distributions (weight 1 per particle).
+//
+// With the weighted empirical CDFs F_a(x) = Σ_{a_i <= x} w_i / Σ w_i (right
+// continuous, a step at every sample value):
+//   KS = sup_x |F_a(x) − F_b(x)|            (in [0, 1])
+//   W1 = ∫ |F_a(x) − F_b(x)| dx               (units of x)
+// Both are evaluated exactly by one merge of the two sorted samples: between
+// consecutive distinct values both CDFs are constant, so the sup is taken at
+// the values and the integral is a sum of rectangles. W1 equals
+// scipy.stats.wasserstein_distance(a, b, wa, wb) and KS equals the statistic
+// of scipy.stats.ks_2samp for unit weights (tested against both).
+// Reference: Villani, Optimal Transport (2009), Remark 2.19 (W1 on the line
+// as the L1 distance between CDFs). Cost O((n+m) log(n+m)) for the sort.
+#pragma once
+#include <span>
+
+namespace tg::compare {
+
+// Throws UsageError when a sample is empty, sizes differ, a value is not
+// finite, a weight is negative or not finite, or all weights are zero.
+// Empty weight spans mean unit weights.
+double ks_distance(std::span<const double> a, std::span<const double> b, std::span<const double> wa = {},
+                   std::span<const double> wb = {});
+double wasserstein1(std::span<const double> a, std::span<const double> b, std::span<const double> wa = {},
+                    std::span<const double> wb = {});
+
+}  // namespace tg::compare

@@ -1,0 +1,304 @@
+#!/usr/bin/python3
+"""Plots and the HTML page of a tomograin comparison report.
+
+Usage: /usr/bin/python3 make_report.py REPORT_DIR
+
+Reads what `tomograin compare` (compare/comparison.cpp) wrote into REPORT_DIR
+(report.json, summary.csv, psd.csv, shape_classes.csv, distances.csv,
+stress_strain.csv, broken.csv, slices/*.npy) and writes one PNG per plot plus
+index.html, which embeds every PNG as base64 so it opens offline on its own.
+Needs Debian's python3-numpy and python3-matplotlib (Agg backend, no display).
+"""
+import base64
+import csv
+import html
+import json
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+SERIES_STYLE = {
+    "experiment": dict(color="black", ls="-", marker="o", label="experiment (XCT)"),
+    "dem_ideal": dict(color="tab:blue", ls="--", marker="s", label="DEM ideal (truth labels)"),
+    "dem_imaged": dict(color="tab:red", ls="-.", marker="^", label="DEM imaged (segmented)"),
+}
+FR_CLASSES = ["<0.4", "0.4-0.8", "0.8-0.9", ">=0.9"]
+AR_CLASSES = ["<2", "2-3", ">=3"]
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def fnum(v):
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return float("nan")
+
+
+def fmt(v, digits=3):
+    if v is None:
+        return "–"
+    v = fnum(v)
+    return "–" if v != v else f"{v:.{digits}g}"
+
+
+def save(fig, out, name):
+    path = os.path.join(out, name)
+    fig.savefig(path, dpi=90, bbox_inches="tight")
+    plt.close(fig)
+    return name
+
+
+def plot_psd(out, stages, psd):
+    n = len(stages)
+    cols = min(n, 3)
+    rows = (n + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.4 * rows), squeeze=False)
+    for ax, st in zip(axes.flat, stages):
+        for series, style in SERIES_STYLE.items():
+            pts = [(fnum(r["sieve_mm"]), fnum(r["passing_pct"])) for r in psd
+                   if r["stage"] == st["name"] and r["series"] == series]
+            if pts:
+                x, y = zip(*pts)
+                ax.semilogx(x, y, ms=3, **style)
+        ax.set_title(st["name"], fontsize=9)
+        ax.set_xlabel("Dmed (mm)")
+        ax.set_ylabel("passing by mass (%)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.set_ylim(-2, 102)
+    for ax in list(axes.flat)[n:]:
+        ax.axis("off")
+    axes.flat[0].legend(fontsize=7)
+    fig.suptitle("Particle size distribution by mass (Dmed)")
+    return save(fig, out, "psd.png")
+
+
+def plot_classes(out, stages, rows_, metric, classes, title):
+    fig, ax = plt.subplots(figsize=(max(6, 2.4 * len(stages)), 3.6))
+    series = [s for s in SERIES_STYLE if any(r["series"] == s for r in rows_)]
+    width = 0.8 / (len(series) * len(classes))
+    x0 = np.arange(len(stages))
+    for si, s in enumerate(series):
+        for ci, c in enumerate(classes):
+            vals = []
+            for st in stages:
+                v = [fnum(r["percent"]) for r in rows_ if r["stage"] == st["name"] and r["series"] == s
+                     and r["metric"] == metric and r["class"] == c]
+                vals.append(v[0] if v else np.nan)
+            off = (si * len(classes) + ci) * width - 0.4 + width / 2
+            ax.bar(x0 + off, vals, width, color=SERIES_STYLE[s]["color"], alpha=0.35 + 0.65 * (ci + 1) / len(classes),
+                   label=f"{SERIES_STYLE[s]['label']}: {metric.upper()} {c}" if True else None)
+    ax.set_xticks(x0)
+    ax.set_xticklabels([st["name"] for st in stages], fontsize=8)
+    ax.set_ylabel("particles (%)")
+    ax.set_title(title)
+    ax.legend(fontsize=6, ncol=len(series), loc="upper center", bbox_to_anchor=(0.5, -0.15))
+    return save(fig, out, f"{metric}.png")
+
+
+def plot_stress(out, ss):
+    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    any_ = False
+    for series, style in [("dem", dict(color="tab:red", label="DEM (history.csv)")),
+                          ("experiment", dict(color="black", label="experiment"))]:
+        pts = [(fnum(r["axial_strain"]), fnum(r["stress_mpa"])) for r in ss if r["series"] == series]
+        if pts:
+            any_ = True
+            x, y = zip(*pts)
+            ax.plot(100 * np.array(x), y, **style)
+    if not any_:
+        ax.text(0.5, 0.5, "no stress–strain data given", ha="center", va="center", transform=ax.transAxes)
+    ax.set_xlabel("axial strain (%)")
+    ax.set_ylabel("axial stress (MPa)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title("Stress–strain")
+    return save(fig, out, "stress_strain.png")
+
+
+def plot_broken(out, br):
+    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    for series, style in [("dem_history", dict(color="tab:red", ls="-", label="DEM history")),
+                          ("dem", dict(color="tab:red", ls="none", marker="^", label="DEM at compared stages")),
+                          ("experiment", dict(color="black", ls="none", marker="o", label="experiment stages"))]:
+        pts = [(fnum(r["axial_strain"]), fnum(r["broken_fraction"])) for r in br if r["series"] == series]
+        pts = [p for p in pts if p[0] == p[0] and p[1] == p[1]]
+        if pts:
+            x, y = zip(*pts)
+            ax.plot(100 * np.array(x), 100 * np.array(y), **style)
+    ax.set_xlabel("axial strain (%)")
+    ax.set_ylabel("grains broken (%)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title("Broken grains vs strain")
+    return save(fig, out, "broken.png")
+
+
+def plot_distances(out, stages, dist):
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.4))
+    pairs = [("experiment_vs_dem_imaged", "tab:red"), ("experiment_vs_dem_ideal", "tab:blue"),
+             ("dem_ideal_vs_dem_imaged", "tab:gray")]
+    x0 = np.arange(len(stages))
+    for ax, (col, lab) in zip(axes, [("psd_ks", "PSD (Dmed by mass)"), ("fr_ks", "FR"), ("ar_ks", "AR")]):
+        for pi, (p, c) in enumerate(pairs):
+            vals = []
+            for st in stages:
+                v = [fnum(r[col]) for r in dist if r["stage"] == st["name"] and r["pair"] == p]
+                vals.append(v[0] if v else np.nan)
+            ax.bar(x0 + (pi - 1) * 0.27, vals, 0.27, color=c, label=p.replace("_", " "))
+        ax.set_xticks(x0)
+        ax.set_xticklabels([f"stage {st['index']}" for st in stages], fontsize=8)
+        ax.set_title(f"KS distance, {lab}", fontsize=9)
+        ax.set_ylim(0, 1)
+    axes[0].legend(fontsize=7)
+    return save(fig, out, "distances.png")
+
+
+def overlay(ax, grey, labels, title):
+    if grey is not None:
+        ax.imshow(grey, cmap="gray", interpolation="nearest")
+    else:
+        ax.imshow(np.zeros(labels.shape), cmap="gray", vmin=0, vmax=1)
+    if labels is not None:
+        rng = np.random.default_rng(7)
+        lut = rng.uniform(0.2, 1.0, size=(int(labels.max()) + 1, 3))
+        rgba = np.zeros(labels.shape + (4,))
+        rgba[..., :3] = lut[labels]
+        rgba[..., 3] = np.where(labels > 0, 0.45, 0.0)
+        ax.imshow(rgba, interpolation="nearest")
+    ax.set_title(title, fontsize=8)
+    ax.set_xticks([])
+    ax.set_yticks([])
+
+
+def load(out, stem):
+    p = os.path.join(out, "slices", stem + ".npy")
+    return np.load(p) if os.path.exists(p) else None
+
+
+def plot_slices(out, st):
+    stem = st["slices"]
+    cols = [("experiment", "_experiment_grey", "_experiment_labels"),
+            ("DEM imaged (segmented)", "_dem_grey", "_dem_imaged_labels"),
+            ("DEM ideal (truth labels)", "_dem_grey", "_dem_ideal_labels")]
+    cols = [c for c in cols if load(out, stem + c[2] + "_z") is not None]
+    fig, axes = plt.subplots(3, len(cols), figsize=(3.2 * len(cols), 9.0), squeeze=False)
+    for ci, (title, g, l) in enumerate(cols):
+        for ri, ax_name in enumerate(["z", "y", "x"]):
+            overlay(axes[ri][ci], load(out, stem + g + "_" + ax_name), load(out, stem + l + "_" + ax_name),
+                    f"{title}\nmid-slice normal to {ax_name}")
+    fig.suptitle(st["name"], fontsize=10)
+    return save(fig, out, f"slices_{stem}.png")
+
+
+def img_tag(out, name, alt):
+    with open(os.path.join(out, name), "rb") as f:
+        data = base64.b64encode(f.read()).decode("ascii")
+    return f'<figure><img src="data:image/png;base64,{data}" alt="{html.escape(alt)}">' \
+           f'<figcaption>{html.escape(alt)} (<a href="{name}">{name}</a>)</figcaption></figure>'
+
+
+def table(headers, rows):
+    h = "".join(f"<th>{html.escape(x)}</th>" for x in headers)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>" for r in rows)
+    return f"<table><tr>{h}</tr>{body}</table>"
+
+
+def main():
+    if len(sys.argv) != 2:
+        sys.exit("usage: make_report.py REPORT_DIR")
+    out = sys.argv[1]
+    meta = json.load(open(os.path.join(out, "report.json")))
+    stages = meta["stages"]
+    summary = read_csv(os.path.join(out, "summary.csv"))
+    psd = read_csv(os.path.join(out, "psd.csv"))
+    cls = read_csv(os.path.join(out, "shape_classes.csv"))
+    dist = read_csv(os.path.join(out, "distances.csv"))
+    ss = read_csv(os.path.join(out, "stress_strain.csv"))
+    br = read_csv(os.path.join(out, "broken.csv"))
+
+    figs = [
+        (plot_psd(out, stages, psd), "PSD by mass on Dmed, per stage"),
+        (plot_classes(out, stages, cls, "fr", FR_CLASSES, "Flatness ratio FR = Dmin/Dmed (study's classes)"),
+         "FR classes per stage"),
+        (plot_classes(out, stages, cls, "ar", AR_CLASSES, "Aspect ratio AR = Dmax/Dmin (study's classes)"),
+         "AR classes per stage"),
+        (plot_stress(out, ss), "Axial stress vs axial strain"),
+        (plot_broken(out, br), "Fraction of grains broken vs axial strain"),
+        (plot_distances(out, stages, dist), "KS distances per stage"),
+    ]
+    slice_figs = [(plot_slices(out, st), f"Orthogonal slices, {st['name']}: experiment and simulation")
+                  for st in stages]
+
+    synthetic = [st for st in stages if st["experiment"].get("synthetic")]
+    parts = ["<!DOCTYPE html><html><head><meta charset='utf-8'>",
+             f"<title>{html.escape(meta['title'])}</title>",
+             "<style>body{font-family:sans-serif;max-width:1250px;margin:auto;padding:1em}"
+             "table{border-collapse:collapse;font-size:12px;margin:0.5em 0}td,th{border:1px solid #bbb;padding:2px 6px}"
+             "img{max-width:100%}figure{margin:1em 0}.warn{background:#fff3cd;padding:0.6em;border:1px solid #e0c36c}"
+             "</style></head><body>",
+             f"<h1>{html.escape(meta['title'])}</h1>"]
+    if synthetic:
+        parts.append("<p class='warn'><b>Synthetic inputs.</b> The experiment series of "
+                     + ", ".join(html.escape(st["name"]) for st in synthetic)
+                     + " comes from synthetic scans (tomograin synth), not from a scanner.</p>")
+    if meta.get("notes"):
+        parts.append(f"<p>{html.escape(meta['notes'])}</p>")
+    parts.append(f"<p>Sizing: {html.escape(meta['sizing'])}. DEM run: {html.escape(meta['dem_run'])}. "
+                 f"Compute time: {meta['compute_seconds']:.1f} s. Two DEM paths: <i>ideal</i> measures the voxelised "
+                 "truth labels; <i>imaged</i> segments the voxelised grey scan with the same segment() as the "
+                 "experiment. Their distance is the segmentation bias.</p>")
+    parts.append("<h2>Stages</h2>")
+    parts.append(table(
+        ["stage", "experiment input", "synthetic", "XCT strain", "DEM snapshot", "DEM strain",
+         "particles exp / ideal / imaged", "time (s)"],
+        [[st["name"], st["experiment"]["source"], "yes" if st["experiment"].get("synthetic") else "no",
+          fmt(st["experiment"]["strain"]), os.path.basename(st["dem"]["snapshot"]), fmt(st["dem"]["strain"]),
+          f"{st['experiment']['particles']} / {st['dem']['particles_ideal']} / {st['dem']['particles_imaged']}",
+          f"{st['seconds']:.1f}"] for st in stages]))
+    parts.append("<h2>Gradings, breakage</h2>")
+    parts.append(table(["stage", "series", "strain", "particles", "D10 (mm)", "D50 (mm)", "Cu", "Hardin Br",
+                        "broken", "broken from"],
+                       [[r["stage"], r["series"], fmt(r["axial_strain"]), r["particles"], fmt(r["d10_mm"]),
+                         fmt(r["d50_mm"]), fmt(r["cu"]), fmt(r["hardin_br"]), fmt(r["broken_fraction"]),
+                         r["broken_method"]] for r in summary]))
+    parts.append("<h2>Distances (Kolmogorov–Smirnov, Wasserstein-1)</h2>")
+    parts.append(table(["stage", "pair", "PSD KS", "PSD W1 (mm)", "FR KS", "FR W1", "AR KS", "AR W1"],
+                       [[r["stage"], r["pair"], fmt(r["psd_ks"]), fmt(r["psd_w1_mm"]), fmt(r["fr_ks"]),
+                         fmt(r["fr_w1"]), fmt(r["ar_ks"]), fmt(r["ar_w1"])] for r in dist]))
+    parts.append("<h2>Plots</h2>")
+    for name, alt in figs:
+        parts.append(img_tag(out, name, alt))
+    parts.append("<h2>Slices (labels overlaid)</h2>")
+    for name, alt in slice_figs:
+        parts.append(img_tag(out, name, alt))
+    parts.append("<h2>Imaging of the DEM snapshots</h2>")
+    parts.append(table(["stage", "voxel (µm)", "grid", "void grey", "solid grey", "noise σ", "PSF σ (vox)", "from"],
+                       [[st["name"], fmt(st["dem"]["ideal"]["voxelise"]["voxel_um"], 4),
+                         "×".join(str(v) for v in st["dem"]["ideal"]["voxelise"]["shape"]),
+                         fmt(st["dem"]["ideal"]["voxelise"]["void_grey"], 5),
+                         fmt(st["dem"]["ideal"]["voxelise"]["solid_grey"], 5),
+                         fmt(st["dem"]["ideal"]["voxelise"]["noise_sigma"], 4),
+                         fmt(st["dem"]["ideal"]["voxelise"]["psf_sigma_vox"]),
+                         st["dem"]["ideal"]["voxelise"]["imaging_from"]] for st in stages]))
+    parts.append("<h2>Data files</h2><p>Every number behind every plot: "
+                 + ", ".join(f"<a href='{f}'>{f}</a>" for f in
+                             ["report.json", "summary.csv", "psd.csv", "shape_classes.csv", "distances.csv",
+                              "stress_strain.csv", "broken.csv", "particles/", "slices/"])
+                 + ".</p></body></html>")
+    tmp = os.path.join(out, "index.html.tmp")
+    with open(tmp, "w", encoding="utf-8") as f:
+        f.write("\n".join(parts))
+    os.replace(tmp, os.path.join(out, "index.html"))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,84 @@
+// Voxelising a DEM packing: spheres (metres, cylinder axis z, centred on
+// x = y = 0, bottom platen at z = 0), grouped into particles by a particle id
+// (a bonded cluster is one particle), become what a CT scan of them would be:
+//   1. a grid: voxel size given; field of view = the spheres' bounding box
+//      plus a margin (default), or the oedometer cylinder (square in x, y of
+//      the cylinder's diameter, z from the bottom platen to the top sphere);
+//   2. the exact partial-volume solid fraction and the u32 truth labels, one
+//      label per particle, by data_synth's renderer (data_synth/render.hpp:
+//      every voxel's covered fraction from the exact sphere–cube integral;
+//      a cluster is a data_synth `cluster` particle, the union of its spheres,
+//      so overlapping members are not counted twice);
+//   3. the grey u16 scan by data_synth's imaging model (imaging.hpp: grey
+//      levels, Gaussian PSF, noise), default levels or estimated from an
+//      experimental scan (compare/imaging_estimate.hpp).
+// Nothing here re-implements rendering or imaging: it maps DEM tables to
+// data_synth particles and a grid, then calls data_synth.
+// Cost: that of the renderer, O(Σ bbox voxels) + O(surface voxels · ~1 µs),
+// and of the imaging model, O(N · (8σ+1)); memory 8 B/voxel (solid + labels)
+// plus 2 B/voxel for the grey output.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/table.hpp"
+#include "core/volume.hpp"
+#include "data_synth/geometry.hpp"
+#include "data_synth/imaging.hpp"
+#include "data_synth/render.hpp"
+
+namespace tg::compare {
+
+// Spheres of a DEM snapshot or packing, SI units.
+struct SphereTable {
+  std::vector<double> x_m, y_m, z_m, r_m;
+  std::vector<int64_t> particle;  // particle id of each sphere (the row index when the file has none)
+  std::string source;             // file name, for messages
+  size_t size() const { return r_m.size(); }
+};
+
+// From a table with columns x_m, y_m, z_m, r_m and optionally `particle`
+// (or `cluster`, data_synth's name for the same thing). Radii must be > 0,
+// positions finite, ids integers (InputError naming the row otherwise).
+SphereTable spheres_from_table(const Table& t);
+// A CSV file, or an HDF5 file "snap.h5[:/group]": without a group, the
+// group holding an x_m dataset (the first, in file order).
+SphereTable read_spheres(const std::string& path);
+
+enum class FieldOfView { spheres, cylinder };
+
+struct VoxeliseOptions {
+  double voxel_m = 0;                  // voxel edge, metres (required, > 0)
+  FieldOfView field = FieldOfView::spheres;
+  double margin_vox = 3;               // void voxels added around the field on every side
+  double cylinder_diameter_m = 15e-3;  // field = cylinder: the reference study's Ø15 mm cell
+  synth::ImagingOptions imaging;       // grey levels, PSF, noise (data_synth defaults)
+  bool grey = true;                    // false: skip the imaging model (labels + truth only)
+  synth::RenderOptions render;         // renderer accuracy knobs (data_synth defaults)
+};
+
+struct Voxelised {
+  Volume<uint16_t> grey;    // imaged scan (empty when options.grey is false)
+  Volume<uint32_t> labels;  // truth labels 1..particles, 0 = void
+  // Input particle id of label l at index l (index 0 unused): labels follow
+  // the order in which particle ids first appear in the table.
+  std::vector<int64_t> particle_of_label;
+  Table truth;              // data_synth truth table + column `particle` (input id)
+  double solid_fraction = 0;  // mean solid fraction of the grid (before imaging)
+  int64_t saturated = 0;      // grey voxels clipped at 0 or 65535
+  double render_s = 0, imaging_s = 0;
+};
+
+// The spheres as data_synth particles in the voxel coordinates of `geometry`
+// (isotropic voxel size required): a lone sphere becomes a `grain`, a group of
+// spheres a `cluster`. Ids 1..n in order of first appearance.
+std::vector<synth::Particle> to_particles(const SphereTable& s, const Geometry& geometry,
+                                          std::vector<int64_t>* particle_of_label = nullptr);
+
+// The grid voxelise() uses (shape + geometry) for these spheres and options.
+std::pair<Shape, Geometry> voxel_grid(const SphereTable& s, const VoxeliseOptions& opt);
+
+Voxelised voxelise(const SphereTable& s, const VoxeliseOptions& opt);
+
+}  // namespace tg::compare

@@ -70,7 +70,7 @@ SegmentOptions SegmentOptions::resolved() const {
   SegmentOptions o = *this;
   validate(o);
   if (o.pore_max_volume_vox < 0) o.pore_max_volume_vox = PoreFilterOptions::from_grain_radius(grain_radius_vox).max_volume_vox;
-  if (o.h < 0) o.h = std::max(1.0, 0.1 * grain_radius_vox);
+  if (!(o.h >= 0)) throw UsageError("segment: the marker depth h must be >= 0");
   return o;
 }
 

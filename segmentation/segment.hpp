@@ -46,13 +46,18 @@ struct SegmentOptions {
   int64_t pore_max_volume_vox = -1;  // < 0: 2 % of the expected grain volume (PoreFilterOptions::from_grain_radius)
   double pore_min_sphericity = 0.5;
 
-  double h = -1;  // marker depth, distance units; < 0: max(1, 0.1 * grain radius)
+  // Marker depth (h-maxima dynamic), distance units. 0.7 voxels: above the
+  // staircase ripples of a digital distance map (< 0.5), below the dynamic of
+  // thin fragments (chips of 3-8 voxels) joined to their parent by blur
+  // bridges. Measured on data_synth zeolite stages at R = 22.7 voxels:
+  // h = 0.7 -> F1 0.980/0.989 (broken/intact); h = 2.3 (0.1 R) -> 0.91/0.98.
+  double h = 0.7;
   int connectivity = 26;
   bool watershed_lines = true;
   double buckets_per_unit = 4.0;
 
   bool merge = true;
-  double merge_ratio = 0.5;  // MergeOptions::ratio
+  double merge_ratio = 1.0;  // MergeOptions::ratio
 
   int64_t min_size_vox = 8;  // labels smaller than this become void (after merging)
 

@@ -42,7 +42,7 @@ TEST(MergeLabels, RatioIsTunable) {
 
 TEST(MergeLabels, SmallContactBetweenGrainsIsKept) {
   // Two balls radius 10, touching through a neck of radius ~4.4 (as the
-  // watershed leaves them): interface ~ 60 < 0.5 pi 10^2.
+  // watershed leaves them): interface ~ 60, far below pi 10^2.
   Volume<uint8_t> solid = Volume<uint8_t>::filled(Shape{26, 26, 44}, 0);
   draw_ball(solid, 12.5, 12.5, 12.5, 10);
   draw_ball(solid, 12.5, 12.5, 30.5, 10);

@@ -125,9 +125,8 @@ TEST(Segment, AnisotropicVoxelsAndSummary) {
 
 TEST(Segment, ResolvedDefaultsFollowTheGrainRadius) {
   const auto o = opts(30).resolved();
-  EXPECT_DOUBLE_EQ(o.h, 3.0);
+  EXPECT_DOUBLE_EQ(o.h, 0.7);
   EXPECT_EQ(o.pore_max_volume_vox, PoreFilterOptions::from_grain_radius(30).max_volume_vox);
-  EXPECT_DOUBLE_EQ(opts(5).resolved().h, 1.0);
   auto bad = opts(5);
   bad.connectivity = 7;
   EXPECT_THROW(bad.resolved(), UsageError);

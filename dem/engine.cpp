@@ -105,9 +105,12 @@ void Engine::step() {
   opt_.walls.top_z += dt * opt_.walls.top_vz;
 
   // Skin criterion: max displacement since the last build > skin/2.
+  // Spheres appended since the last build (breakage) have no x0_ entry: the
+  // size test below rebuilds then; never read past x0_.
+  const int64_t n_built = std::min<int64_t>(n, static_cast<int64_t>(x0_.size()));
   double d2max = 0;
 #pragma omp parallel for schedule(static) reduction(max : d2max) if (n >= opt_.parallel_min_items)
-  for (int64_t s = 0; s < n; ++s) {
+  for (int64_t s = 0; s < n_built; ++s) {
     const double dx = p.x[s] - x0_[s], dy = p.y[s] - y0_[s], dz = p.z[s] - z0_[s];
     d2max = std::max(d2max, dx * dx + dy * dy + dz * dz);
   }

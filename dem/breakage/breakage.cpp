@@ -81,15 +81,15 @@ void BreakageModel::add_bond_forces(Engine& e) {
     p.ty[j] += l.torque_on_b.y;
     p.tz[j] += l.torque_on_b.z;
   }
-  if (any_broken) compact_bonds();
+  if (any_broken) compact_bonds(&rec_.bonds_broken);
 }
 
-void BreakageModel::compact_bonds() {
+void BreakageModel::compact_bonds(int64_t* counter) {
   int64_t w = 0;
   const int64_t nb = static_cast<int64_t>(ba_.size());
   for (int64_t b = 0; b < nb; ++b) {
     if (broken_[b]) {
-      ++rec_.bonds_broken;
+      ++*counter;
       continue;
     }
     ba_[w] = ba_[b];
@@ -215,7 +215,7 @@ Replacement BreakageModel::split(int64_t s, const SplittingPlane& plane) {
       broken_[b] = 1;
       dropped = true;
     }
-  if (dropped) compact_bonds();
+  if (dropped) compact_bonds(&rec_.bonds_dropped);
 
   const int64_t n0 = p.size();
   const int64_t count = static_cast<int64_t>(rep.spheres.size());

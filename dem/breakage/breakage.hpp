@@ -20,7 +20,7 @@
 //   the first takes the mother's index, 33 are appended through the
 //   particle field list (Particles::resize + copy_sphere: every field is
 //   inherited, then position/size/mass/velocity/force are set); its bonds
-//   are dropped (a cluster element that splits leaves its cluster); the
+//   are dropped (recorded apart from bonds broken by stress); the
 //   fragment's 40 internal bonds are created; particle ids are relabelled
 //   (a particle = connected set of bonded spheres, id = smallest sphere
 //   index of the set); the time step is lowered if the new spheres need it.
@@ -63,7 +63,8 @@ struct BreakageOptions {
 struct BreakageRecord {
   int64_t grains_broken = 0;                  // original (generation 0) spheres that split
   std::vector<int64_t> splits_by_generation;  // [g] = splits of spheres of generation g
-  int64_t bonds_broken = 0;
+  int64_t bonds_broken = 0;                   // by stress (σmax > σ̄c or τmax > τ̄c)
+  int64_t bonds_dropped = 0;                  // removed with a cluster element that split
   int64_t bonds_intact = 0;
   int64_t spheres = 0;
   int64_t particles = 0;                      // connected bonded sets
@@ -114,7 +115,8 @@ class BreakageModel {
   std::vector<ContactLoad> contacts_of(int64_t s) const;
   void relabel_particles();
   void update_time_step();
-  void compact_bonds();
+  // Removes the bonds flagged in broken_; adds their count to *counter.
+  void compact_bonds(int64_t* counter);
 
   Engine& eng_;
   BreakageOptions opt_;

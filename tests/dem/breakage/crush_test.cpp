@@ -10,10 +10,16 @@ using namespace tg::dem;
 using namespace tg::dem::breakage;
 
 namespace {
-CrushResult crush_once() {
-  CrushOptions o;
-  o.final_travel_fraction = 0.3;
-  return run_crush(o);
+// One run shared by the tests (~10⁵ steps): 1.2 mm grain, Table 1
+// parameters, platen travel 9 % of d: the grain splits, then an element of a
+// fragment splits again (sequential breakage), and bonds break.
+const CrushResult& crush_once() {
+  static const CrushResult res = [] {
+    CrushOptions o;
+    o.final_travel_fraction = 0.09;
+    return run_crush(o);
+  }();
+  return res;
 }
 }  // namespace
 
@@ -23,7 +29,7 @@ CrushResult crush_once() {
 // travel plus 3 % for the dynamics of a 0.1 m/s platen.
 TEST(Crush, SplitsWhenForceOverDiameterSquaredExceedsStrength) {
   const CrushOptions o;
-  const CrushResult res = crush_once();
+  const CrushResult& res = crush_once();
   ASSERT_GE(res.splits.size(), 1u);
   const SplitEvent& ev = res.splits.front();
   EXPECT_EQ(ev.generation, 0);
@@ -45,7 +51,7 @@ TEST(Crush, SplitsWhenForceOverDiameterSquaredExceedsStrength) {
 }
 
 TEST(Crush, SplitsAlongThePredictedPlaneWithTheTemplateVolume) {
-  const CrushResult res = crush_once();
+  const CrushResult& res = crush_once();
   ASSERT_GE(res.splits.size(), 1u);
   const SplitEvent& ev = res.splits.front();
   // Two platen contacts: σ2 = σ3 and n_f ∥ e1 = z → fixed-axis rule, plane x = 0.
@@ -60,7 +66,7 @@ TEST(Crush, SplitsAlongThePredictedPlaneWithTheTemplateVolume) {
 // bonds break under further loading; the time step was lowered for the
 // small spheres.
 TEST(Crush, FragmentsCarryLoadAndBondsBreakLater) {
-  const CrushResult res = crush_once();
+  const CrushResult& res = crush_once();
   ASSERT_GE(res.splits.size(), 1u);
   const int64_t split_step = res.splits.front().step;
   double f_after = 0;
@@ -72,6 +78,22 @@ TEST(Crush, FragmentsCarryLoadAndBondsBreakLater) {
   EXPECT_GE(res.final_record.particles, 2);
   EXPECT_EQ(res.final_record.grains_broken, 1);
   EXPECT_LT(res.time_step_final_s, res.time_step_initial_s);
+}
+
+// Sequential breakage: a cluster element (d ≥ 0.2 mm) splits again by the
+// same rule; its bonds leave with it (recorded apart from stress breakage).
+TEST(Crush, ClusterElementSplitsAgain) {
+  const CrushResult& res = crush_once();
+  ASSERT_GE(res.splits.size(), 2u);
+  const SplitEvent& ev = res.splits[1];
+  EXPECT_EQ(ev.generation, 1);
+  EXPECT_GE(ev.diameter_m, 2e-4);
+  EXPECT_GT(ev.stress_Pa, ev.strength_Pa);
+  ASSERT_GE(res.final_record.splits_by_generation.size(), 2u);
+  EXPECT_EQ(res.final_record.splits_by_generation[0], 1);
+  EXPECT_GE(res.final_record.splits_by_generation[1], 1);
+  EXPECT_GT(res.final_record.bonds_dropped, 0);
+  EXPECT_EQ(res.final_record.spheres, 1 + 33 * static_cast<int64_t>(res.splits.size()));
 }
 
 TEST(Crush, WithoutBreakageNothingBreaks) {

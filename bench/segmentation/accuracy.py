@@ -19,16 +19,21 @@ def load_labels(path, shape):
         return f["labels"][...]
 
 
-def evaluate(truth, pred, table):
+def evaluate(truth, pred, table, min_voxels=1):
     t = truth.ravel().astype(np.uint64)
     p = pred.ravel().astype(np.uint64)
     st = np.bincount(t.astype(np.int64))
     sp = np.bincount(p.astype(np.int64))
+    # particles and labels below min_voxels are not counted (as AccuracyOptions)
+    st[st < min_voxels] = 0
+    sp[sp < min_voxels] = 0
     both = (t > 0) & (p > 0)
     key = (t[both] << np.uint64(32)) | p[both]
     k, c = np.unique(key, return_counts=True)
     kt = (k >> np.uint64(32)).astype(np.int64)
     kp = (k & np.uint64(0xffffffff)).astype(np.int64)
+    keep = (st[kt] > 0) & (sp[kp] > 0)
+    k, c, kt, kp = k[keep], c[keep], kt[keep], kp[keep]
     iou = c / (st[kt] + sp[kp] - c)
     match = {}
     for a, b, v in zip(kt, kp, iou):
@@ -76,13 +81,14 @@ def main():
     ap.add_argument("scan")
     ap.add_argument("labels")
     ap.add_argument("--json")
+    ap.add_argument("--min-voxels", type=int, default=1, help="leave out smaller particles and labels")
     a = ap.parse_args()
     with h5py.File(a.scan, "r") as f:
         truth = f["labels"][...]
     pred = load_labels(a.labels, truth.shape)
     with open(a.scan[:-3] + "_truth.csv") as f:
         table = list(csv.DictReader(f))
-    res = evaluate(truth, pred, table)
+    res = evaluate(truth, pred, table, a.min_voxels)
     print(json.dumps(res))
     if a.json:
         with open(a.json, "w") as f:

@@ -173,10 +173,15 @@ std::vector<std::string> find_snapshots(const fs::path& run) {
   return out;
 }
 
-// A snapshot's strain from its own file: column axial_strain/strain or HDF5 attribute.
+// A snapshot's strain from its own file: the DEM snapshot attribute (JSON "strain"),
+// an HDF5 attribute axial_strain, or a CSV column axial_strain/strain.
 double snapshot_strain(const std::string& path) {
   if (is_h5(path)) {
-    const std::string a = H5Reader(path).read_attribute("axial_strain");
+    H5Reader rd(path);
+    // dem/snapshot.hpp: root attribute "snapshot" = JSON with "strain".
+    const json j = json::parse(rd.read_attribute("snapshot"), nullptr, false);
+    if (j.is_object() && j.contains("strain") && j["strain"].is_number()) return j["strain"].get<double>();
+    const std::string a = rd.read_attribute("axial_strain");
     if (!a.empty()) {
       try {
         return std::stod(a);

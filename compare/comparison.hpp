@@ -68,7 +68,8 @@ struct CompareInputs {
   std::string dem_run;
   std::vector<std::string> dem_snapshots;  // optional explicit list (overrides the search)
   // Snapshot strains: this list, else RUNDIR/snapshots.csv (file, axial_strain),
-  // else a column axial_strain/strain or an HDF5 attribute axial_strain in the snapshot.
+  // else the snapshot's own: dem/snapshot.hpp's root attribute "snapshot" (JSON "strain"),
+  // an HDF5 attribute axial_strain, or a CSV column axial_strain/strain.
   std::vector<double> dem_strains;
   std::string experimental_curve;  // optional CSV: axial strain + axial stress columns
   std::string report_dir;          // output folder (created; files inside are replaced)

@@ -58,22 +58,32 @@ void watershed(const Volume<float>& dist, const Volume<uint8_t>& solid, Volume<u
       const int64_t x = b[head];
       const auto [k, j, i] = s.coords(x);
       const bool in = seg::interior(s, k, j, i);
-      uint32_t lab = L[x] & kLabelMask;
-      if (lab == 0) {
-        // Lines mode only (without lines every queued voxel already has a label):
-        // the label of the labelled neighbours, or a line if they disagree.
-        uint32_t seen = 0;
-        bool line = false;
-        for (int t = 0; t < nb.count && !line; ++t) {
-          if (!in) {
-            const seg::Step st = nb.step[size_t(t)];
-            if (!s.contains(k + st.dz, j + st.dy, i + st.dx)) continue;
-          }
-          const uint32_t l = L[x + nb.offset[size_t(t)]] & kLabelMask;
-          if (l == 0) continue;
-          if (seen == 0) seen = l;
-          else if (l != seen) line = true;
+      // One pass over the neighbours: the labels they carry (lines mode) and
+      // the solid ones not yet queued, which x will queue if it is not a line.
+      uint32_t lab = L[x] & kLabelMask, seen = 0;
+      bool line = false;
+      int64_t cand[26];
+      int nc = 0;
+      for (int t = 0; t < nb.count; ++t) {
+        if (!in) {
+          const seg::Step st = nb.step[size_t(t)];
+          if (!s.contains(k + st.dz, j + st.dy, i + st.dx)) continue;
         }
+        const int64_t y = x + nb.offset[size_t(t)];
+        const uint32_t ly = L[y];
+        if (!(ly & kQueued)) {
+          if (m[y]) cand[nc++] = y;
+          continue;
+        }
+        const uint32_t l = ly & kLabelMask;
+        if (l == 0 || line) continue;
+        if (seen == 0) seen = l;
+        else if (l != seen) line = true;
+      }
+      if (lab == 0) {
+        // Lines mode only (without lines every queued voxel already has a
+        // label): the label of the labelled neighbours, or a line if they
+        // disagree (or, never expected, if none is labelled).
         if (line || seen == 0) {
           L[x] |= kLine;
           continue;
@@ -81,13 +91,8 @@ void watershed(const Volume<float>& dist, const Volume<uint8_t>& solid, Volume<u
         lab = seen;
         L[x] = kQueued | lab;
       }
-      for (int t = 0; t < nb.count; ++t) {
-        if (!in) {
-          const seg::Step st = nb.step[size_t(t)];
-          if (!s.contains(k + st.dz, j + st.dy, i + st.dx)) continue;
-        }
-        const int64_t y = x + nb.offset[size_t(t)];
-        if (!m[y] || (L[y] & kQueued)) continue;
+      for (int c = 0; c < nc; ++c) {
+        const int64_t y = cand[c];
         L[y] = kQueued | (opt.lines ? 0u : lab);
         bucket[size_t(std::min(level(y), cur))].push_back(y);
       }

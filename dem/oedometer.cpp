@@ -54,6 +54,7 @@ OedometerSetup read_oedometer_config(Config& cfg, const std::filesystem::path& b
   p.target_porosity = cfg.get("pluviation.target_porosity", p.target_porosity);
   p.seed = static_cast<uint64_t>(cfg.get("pluviation.seed", static_cast<int64_t>(p.seed)));
   p.time_step_safety = cfg.get("pluviation.time_step_safety", p.time_step_safety);
+  p.deposition_friction = cfg.get("pluviation.deposition_friction", p.deposition_friction);
   p.kinetic_energy_tol_J = cfg.get("pluviation.kinetic_energy_tol_J", p.kinetic_energy_tol_J);
   p.max_time_s = cfg.get("pluviation.max_time_s", p.max_time_s);
   p.cylinder_radius_m = e.walls.cylinder_radius;

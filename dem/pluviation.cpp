@@ -65,6 +65,8 @@ PluviationResult pluviate(const PluviationOptions& o, EngineOptions eo) {
   Particles p = insert_grains(o, eo.material.density_kg_m3);
   const CriticalTimeStep c = critical_time_step(p, eo.material, {});
   eo.time_step = o.time_step_safety * c.dt_critical;
+  if (!(o.deposition_friction >= 0)) throw InputError("pluviation: deposition friction must be >= 0");
+  eo.friction = eo.walls.platen_friction = eo.walls.cylinder_friction = o.deposition_friction;
   eo.walls.bottom = eo.walls.top = eo.walls.cylinder = true;
   eo.walls.cylinder_radius = o.cylinder_radius_m;
   eo.walls.top_z = o.generation_height_m;

@@ -39,14 +39,16 @@ void validate(const SegmentOptions& o) {
 }
 
 ThresholdResult choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o) {
+  const auto hist = histogram_u16(grey);
+  ThresholdResult t;
   if (o.threshold == ThresholdMethod::manual) {
-    ThresholdResult t;
     t.method = ThresholdMethod::manual;
     t.value = static_cast<uint16_t>(o.manual_threshold);
-    return t;
+  } else {
+    t = o.threshold == ThresholdMethod::otsu ? otsu_threshold(hist) : moments_threshold(hist);
   }
-  const auto hist = histogram_u16(grey);
-  return o.threshold == ThresholdMethod::otsu ? otsu_threshold(hist) : moments_threshold(hist);
+  t.separability = separability(hist, t.value);
+  return t;
 }
 
 SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owned, const SegmentOptions& opt) {
@@ -60,6 +62,10 @@ SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owne
   SegmentResult r = segment_mask(std::move(mask), opt);
   r.threshold = t;
   if (!t.note.empty()) r.notes.insert(r.notes.begin(), t.note);
+  if (t.separability < 0.75)
+    r.notes.push_back("the grey histogram is hardly bimodal (separability " + std::to_string(t.separability) +
+                      " < 0.75; one noisy phase gives 0.64): the scan may hold void only or solid only, and the "
+                      "labels may be noise");
   r.stage_seconds.insert(r.stage_seconds.begin(), r0.stage_seconds.begin(), r0.stage_seconds.end());
   return r;
 }
@@ -157,6 +163,7 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                     {"value", r.threshold.value},
                     {"rule", "voxels with grey value > value are solid"},
                     {"p0", r.threshold.p0},
+                    {"separability", r.threshold.separability},
                     {"z0", r.threshold.z0},
                     {"z1", r.threshold.z1}};
   j["solid_fraction"] = r.solid_fraction;

@@ -152,6 +152,21 @@ ThresholdResult otsu_threshold(const std::vector<int64_t>& hist) {
   return r;
 }
 
+double separability(const std::vector<int64_t>& hist, uint16_t t) {
+  double n = 0, s = 0, s2 = 0, n0 = 0, s0 = 0;
+  for (size_t g = 0; g < hist.size(); ++g) {
+    const double c = double(hist[g]), x = double(g);
+    n += c, s += c * x, s2 += c * x * x;
+    if (g <= t) n0 += c, s0 += c * x;
+  }
+  const double n1 = n - n0;
+  if (n == 0 || n0 == 0 || n1 == 0) return 0.0;
+  const double mu = s / n, var = s2 / n - mu * mu;
+  if (!(var > 0)) return 0.0;
+  const double d = s0 / n0 - (s - s0) / n1;
+  return (n0 / n) * (n1 / n) * d * d / var;
+}
+
 Volume<uint8_t> binarise(const Volume<uint16_t>& v, uint16_t t) {
   Volume<uint8_t> m(v.shape(), v.geometry());
   const uint16_t* x = v.data();

@@ -48,6 +48,10 @@ struct ThresholdResult {
   double p0 = 0;       // moments only: fraction of void voxels of the two-level image
   double z0 = 0, z1 = 0;  // moments only: the two preserved grey levels
   std::string note;    // non-empty for special cases (two grey levels only)
+  // Otsu's separability eta at `value`: between-class / total grey variance.
+  // 2/pi = 0.64 for a single Gaussian phase (noise only: an empty or
+  // all-solid scan), 0.9+ for grains and void; segment() notes eta < 0.75.
+  double separability = 0;
 };
 
 // 65536-bin histogram of a 16-bit volume.
@@ -57,6 +61,9 @@ std::vector<int64_t> histogram_u16(const Volume<uint16_t>& v);
 ThresholdResult moments_threshold(const std::vector<int64_t>& hist);
 // Otsu threshold of the same histogram.
 ThresholdResult otsu_threshold(const std::vector<int64_t>& hist);
+
+// Separability eta of the split "<= t" / "> t" of a histogram (0 if degenerate).
+double separability(const std::vector<int64_t>& hist, uint16_t t);
 
 // Solid mask (1 where v > t, else 0), geometry kept.
 Volume<uint8_t> binarise(const Volume<uint16_t>& v, uint16_t t);

@@ -77,6 +77,23 @@ TEST(Segment, ConstantVolumeIsAnInputError) {
   EXPECT_THROW(segment(Volume<uint16_t>::filled(Shape{8, 8, 8}, 1234), opts(5)), InputError);
 }
 
+TEST(Segment, NoiseOnlyScanIsFlagged) {
+  // A scan of one noisy phase (empty specimen): any global threshold splits
+  // the noise; the result carries a note saying so.
+  Volume<uint16_t> g(Shape{24, 24, 24});
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(10000, 800);
+  for (auto& v : g.span()) v = uint16_t(noise(rng));
+  const auto r = segment(g, opts(5));
+  EXPECT_LT(r.threshold.separability, 0.7);
+  bool flagged = false;
+  for (const auto& n : r.notes) flagged = flagged || n.find("bimodal") != std::string::npos;
+  EXPECT_TRUE(flagged);
+  auto m = Volume<uint8_t>::filled(Shape{28, 28, 46}, 0);
+  draw_ball(m, 13.5, 13.5, 13.5, 10);
+  EXPECT_GT(segment(grey_of(m), opts(10)).threshold.separability, 0.85);
+}
+
 TEST(Segment, EmptyAndAllSolidMasks) {
   auto e = segment_mask(Volume<uint8_t>::filled(Shape{8, 8, 8}, 0), opts(5));
   EXPECT_EQ(e.count, 0u);

@@ -142,6 +142,17 @@ TEST(Threshold, HistogramAndBinarise) {
   for (int64_t i = 0; i < v.size(); ++i) EXPECT_EQ(m[i], i > 5 ? 1 : 0);
 }
 
+TEST(Threshold, Separability) {
+  // Two equal spikes: all variance is between classes -> 1.
+  std::vector<int64_t> h(65536, 0);
+  h[100] = 50, h[900] = 50;
+  EXPECT_NEAR(separability(h, 100), 1.0, 1e-12);
+  // One Gaussian split at its mean: 2/pi.
+  const auto g = bimodal(30000, 1000, 30000, 1000, 500000, 500000, 9);
+  EXPECT_NEAR(separability(g, 30000), 2.0 / 3.14159265358979, 0.01);
+  EXPECT_EQ(separability(h, 65535), 0.0);  // one class empty
+}
+
 TEST(Threshold, ParseMethod) {
   EXPECT_EQ(parse_threshold_method("otsu"), ThresholdMethod::otsu);
   EXPECT_THROW(parse_threshold_method("tsai"), UsageError);

@@ -63,6 +63,22 @@ OedometerSetup read_oedometer_config(Config& cfg, const std::filesystem::path& b
   s.snapshot_strains = cfg.get("oedometer.snapshot_strains", s.snapshot_strains);
   s.history_every = cfg.get("oedometer.history_every_steps", s.history_every);
   s.checkpoint_every = cfg.get("oedometer.checkpoint_every_steps", s.checkpoint_every);
+  breakage::BreakageOptions& b = s.breakage_options;
+  s.breakage = cfg.get("breakage.enabled", s.breakage);
+  b.check_interval = cfg.get("breakage.check_every_steps", b.check_interval);
+  b.min_split_diameter_m = cfg.get("breakage.min_split_diameter_m", b.min_split_diameter_m);
+  b.strength.sigma_t0_Pa = cfg.get("breakage.sigma_t0_Pa", b.strength.sigma_t0_Pa);
+  b.strength.weibull_modulus = cfg.get("breakage.weibull_modulus", b.strength.weibull_modulus);
+  b.strength.d0_m = cfg.get("breakage.d0_m", b.strength.d0_m);
+  b.strength.seed = static_cast<uint64_t>(cfg.get("breakage.seed", static_cast<int64_t>(b.strength.seed)));
+  b.bond.radius_multiplier = cfg.get("breakage.bond_radius_multiplier", b.bond.radius_multiplier);
+  b.bond.tensile_strength_Pa = cfg.get("breakage.bond_normal_strength_Pa", b.bond.tensile_strength_Pa);
+  b.bond.shear_strength_Pa = cfg.get("breakage.bond_shear_strength_Pa", b.bond.shear_strength_Pa);
+  b.time_step_safety = cfg.get("breakage.time_step_safety", b.time_step_safety);
+  cfg.require(b.check_interval > 0, "breakage.check_every_steps", "must be positive");
+  cfg.require(b.min_split_diameter_m >= 0, "breakage.min_split_diameter_m", "must be >= 0");
+  cfg.require(b.strength.d0_m >= 0, "breakage.d0_m", "must be >= 0 (0 = mean grain diameter)");
+  cfg.require(b.time_step_safety > 0 && b.time_step_safety <= 1, "breakage.time_step_safety", "must be in (0, 1]");
 
   cfg.require(e.time_step >= 0, "run.time_step_s", "must be >= 0 (0 = automatic)");
   cfg.require(s.time_step_safety > 0 && s.time_step_safety <= 1, "run.time_step_safety", "must be in (0, 1]");
@@ -92,10 +108,12 @@ struct Scene {
   double h0 = 0;
   int64_t next_snapshot = 0;
   std::string encode() const { return fmt17(h0) + " " + std::to_string(next_snapshot); }
+  std::string breakage_state;  // BreakageModel::encode() when breakage is on
   static Scene decode(const std::string& s) {
     Scene c;
     std::istringstream is(s);
     if (!(is >> c.h0 >> c.next_snapshot)) throw InputError("checkpoint: scene state unreadable");
+    std::getline(is >> std::ws, c.breakage_state, '\0');
     return c;
   }
 };
@@ -104,8 +122,14 @@ struct History {
   std::vector<std::string> names{"step", "time_s", "strain", "top_stress_Pa", "bottom_stress_Pa", "lateral_stress_Pa",
                                  "K0", "kinetic_energy_J", "coordination", "contacts", "porosity", "platen_z_m"};
   std::vector<std::vector<double>> cols = std::vector<std::vector<double>>(12);
-  void add(const std::vector<double>& row) {
-    for (size_t c = 0; c < cols.size(); ++c) cols[c].push_back(row[c]);
+  void add_breakage_columns() {
+    for (const char* n : {"grains_broken", "splits_gen0", "splits_gen1", "splits_gen2", "splits_gen3", "bonds_broken",
+                          "bonds_dropped", "bonds_intact", "spheres", "particles", "volume_lost_m3", "time_step_s"})
+      names.push_back(n);
+    cols.resize(names.size());
+  }
+  void add(const std::vector<double>& row) {  // missing trailing values are 0 (filled by the caller)
+    for (size_t c = 0; c < cols.size(); ++c) cols[c].push_back(c < row.size() ? row[c] : 0.0);
   }
   void write(const std::filesystem::path& path) const {
     Table t;
@@ -193,6 +217,29 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
   }
   Engine& e = *eng;
   for (int64_t i = 0; i < e.particles().size(); ++i) vsolid += 4.0 / 3.0 * std::numbers::pi * std::pow(e.particles().r[i], 3);
+  std::optional<breakage::BreakageModel> brk;
+  if (s.breakage) {
+    breakage::BreakageOptions bo = s.breakage_options;
+    bo.bond.youngs_modulus_Pa = eo.material.youngs_modulus();
+    bo.bond.shear_modulus_Pa = eo.material.shear_modulus_Pa;
+    if (bo.strength.d0_m == 0) {  // mean diameter of the initial grains (from packing_initial.csv on restart)
+      const Particles p0 = c.restart ? read_packing_csv(rundir / "packing_initial.csv", eo.material.density_kg_m3) : e.particles();
+      double sum_d = 0;
+      for (int64_t i = 0; i < p0.size(); ++i) sum_d += 2 * p0.r[i];
+      bo.strength.d0_m = sum_d / static_cast<double>(p0.size());
+    }
+    brk.emplace(e, bo);
+    if (c.restart) {
+      brk->restore(scene.breakage_state);
+      vsolid += brk->record().volume_lost_m3;  // vsolid above summed the surviving spheres
+    }
+    hist.add_breakage_columns();
+    if (c.restart) {  // re-read with the breakage columns
+      hist = History{};
+      hist.add_breakage_columns();
+      hist.read_until(rundir / "history.csv", e.step_count());
+    }
+  }
   sum.time_step = eo.time_step;
   sum.spheres = e.particles().size();
   sum.initial_height_m = scene.h0;
@@ -206,7 +253,20 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
     const double sv = 0.5 * (st + sb);
     hist.add({static_cast<double>(e.step_count()), e.time(), strain(), st, sb, sl, sv > 0 ? sl / sv : 0.0,
               e.kinetic_energy(), e.coordination_number(), static_cast<double>(e.contact_count()),
-              1 - vsolid / (area * h), h});
+              1 - (vsolid - (brk ? brk->record().volume_lost_m3 : 0.0)) / (area * h), h});
+    if (brk) {
+      const breakage::BreakageRecord& r = brk->record();
+      auto gen = [&](size_t g) {
+        double v = 0;
+        for (size_t k = g; k < r.splits_by_generation.size() && (g == 3 || k == g); ++k) v += static_cast<double>(r.splits_by_generation[k]);
+        return v;
+      };
+      std::vector<double> row{static_cast<double>(r.grains_broken), gen(0), gen(1), gen(2), gen(3),
+                              static_cast<double>(r.bonds_broken), static_cast<double>(r.bonds_dropped),
+                              static_cast<double>(r.bonds_intact), static_cast<double>(r.spheres),
+                              static_cast<double>(r.particles), r.volume_lost_m3, e.options().time_step};
+      for (size_t k = 0; k < row.size(); ++k) hist.cols[12 + k].back() = row[k];
+    }
   };
   auto snapshot = [&] {
     const double target = s.snapshot_strains[static_cast<size_t>(scene.next_snapshot)];
@@ -215,11 +275,33 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
     write_snapshot(e.particles(), rundir / "snapshots" / name,
                    "{\"requested_strain\": " + fmt17(target) + ", \"strain\": " + fmt17(strain()) +
                        ", \"time_s\": " + fmt17(e.time()) + ", \"step\": " + std::to_string(e.step_count()) + "}");
+    if (brk) {
+      Table t;
+      std::vector<double> a, b2, fn, fs, mt, mb;
+      for (int64_t k = 0; k < brk->bond_count(); ++k) {
+        const breakage::BondState& st = brk->bond_state(k);
+        a.push_back(static_cast<double>(brk->bond_a(k)));
+        b2.push_back(static_cast<double>(brk->bond_b(k)));
+        fn.push_back(st.fn);
+        fs.push_back(norm(st.fs));
+        mt.push_back(st.mt);
+        mb.push_back(norm(st.mb));
+      }
+      t.add("sphere_a", a);
+      t.add("sphere_b", b2);
+      t.add("normal_force_N", fn);
+      t.add("shear_force_N", fs);
+      t.add("twist_moment_Nm", mt);
+      t.add("bending_moment_Nm", mb);
+      std::string bn = name;
+      bn.replace(bn.size() - 3, 3, "_bonds.csv");
+      write_csv(t, rundir / "snapshots" / bn);
+    }
     ++scene.next_snapshot;
   };
   auto checkpoint = [&] {
     hist.write(rundir / "history.csv");
-    save_checkpoint(e, scene.encode(), ckpt);
+    save_checkpoint(e, brk ? scene.encode() + " " + brk->encode() : scene.encode(), ckpt);
   };
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -236,6 +318,7 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
     }
     if (c.stop_after_steps >= 0 && e.step_count() >= c.stop_after_steps) break;
     e.step();
+    if (brk && e.step_count() % s.breakage_options.check_interval == 0) brk->check();
     if (e.step_count() % s.history_every == 0) {
       record();
       if (!c.quiet) bar.update(100 * strain());
@@ -252,6 +335,8 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
   sum.strain = strain();
   sum.top_stress_Pa = e.wall_forces().top_z / area;
   sum.final_state = e.particles();
+  if (brk) sum.breakage = brk->record();
+  sum.time_step = e.options().time_step;
   return sum;
 }
 

@@ -12,12 +12,20 @@
 // choice: time step and critical step, damping, mass scaling, threads,
 // specimen), history.csv, packing_initial.csv, snapshots/strain_X.h5 + .xmf,
 // checkpoint.bin (restart continues bit for bit; tested).
+// With breakage on, history.csv gains grains_broken, splits_gen0..3 (gen3 =
+// generation 3 and above), bonds_broken, bonds_dropped, bonds_intact,
+// spheres, particles, volume_lost_m3 and time_step_s; porosity counts the
+// lost volume; every snapshot gets a bonds CSV beside it
+// (snapshots/strain_X_bonds.csv: sphere_a, sphere_b, normal_force_N, ...);
+// particle ids in the snapshot are connected bonded sets; the breakage state
+// (bonds with forces, sphere keys) travels in the checkpoint.
 #pragma once
 #include <filesystem>
 #include <string>
 #include <vector>
 
 #include "core/config.hpp"
+#include "dem/breakage/breakage.hpp"
 #include "dem/engine.hpp"
 #include "dem/pluviation.hpp"
 
@@ -36,6 +44,15 @@ struct OedometerSetup {
   int64_t history_every = 1000;    // steps between history rows
   int64_t checkpoint_every = 200000;  // steps between checkpoints
   int threads = 0;                 // 0 = OpenMP default
+  // Sequential breakage (issue 7, dem/breakage/): on by default as in Table 1.
+  // strength.d0_m = 0 means "the mean grain diameter of the packing"; the
+  // bond moduli are taken from the material.
+  bool breakage = true;
+  breakage::BreakageOptions breakage_options = [] {
+    breakage::BreakageOptions b;
+    b.strength.d0_m = 0;
+    return b;
+  }();
 };
 
 // Reads every key (defaults from the study), then rejects unknown keys.
@@ -55,6 +72,7 @@ struct OedometerSummary {
   double wall_seconds = 0, particle_steps_per_second = 0;
   double initial_height_m = 0, initial_porosity = 0;
   bool finished = false;          // reached the target strain
+  breakage::BreakageRecord breakage;  // zeros when breakage is off
   Particles final_state;
 };
 

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <sstream>
 #include <string>
 
 #include "core/errors.hpp"
@@ -308,6 +310,72 @@ void BreakageModel::update_time_step() {
   }
   const double want = opt_.time_step_safety * dt;
   if (want < eng_.options().time_step) eng_.set_time_step(want);
+}
+
+namespace {
+std::string g17(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+}  // namespace
+
+std::string BreakageModel::encode() const {
+  std::ostringstream os;
+  const int64_t n = static_cast<int64_t>(key_.size());
+  os << "breakage1 " << g17(eng_.options().time_step) << ' ' << n;
+  for (int64_t s = 0; s < n; ++s) os << ' ' << key_[s] << ' ' << generation_[s];
+  os << ' ' << rec_.grains_broken << ' ' << rec_.bonds_broken << ' ' << rec_.bonds_dropped << ' ' << g17(rec_.volume_lost_m3)
+     << ' ' << rec_.splits_by_generation.size();
+  for (int64_t c : rec_.splits_by_generation) os << ' ' << c;
+  os << ' ' << ba_.size();
+  for (size_t b = 0; b < ba_.size(); ++b) {
+    const BondState& st = state_[b];
+    os << ' ' << ba_[b] << ' ' << bb_[b] << ' ' << g17(st.fn) << ' ' << g17(st.fs.x) << ' ' << g17(st.fs.y) << ' '
+       << g17(st.fs.z) << ' ' << g17(st.mt) << ' ' << g17(st.mb.x) << ' ' << g17(st.mb.y) << ' ' << g17(st.mb.z);
+  }
+  return os.str();
+}
+
+void BreakageModel::restore(const std::string& state) {
+  std::istringstream is(state);
+  auto fail = [](const std::string& what) { throw InputError("checkpoint: breakage state " + what); };
+  std::string tag;
+  double dt = 0;
+  int64_t n = 0;
+  if (!(is >> tag >> dt >> n) || tag != "breakage1") fail("missing or of an unknown version");
+  const Particles& p = eng_.particles();
+  if (n != p.size()) fail("has " + std::to_string(n) + " spheres, the checkpoint " + std::to_string(p.size()));
+  key_.resize(n);
+  generation_.resize(n);
+  strength_.resize(n);
+  for (int64_t s = 0; s < n; ++s) {
+    if (!(is >> key_[s] >> generation_[s])) fail("truncated (spheres)");
+    strength_[s] = sphere_strength(opt_.strength, key_[s], 2 * p.r[s]);
+  }
+  size_t ngen = 0;
+  if (!(is >> rec_.grains_broken >> rec_.bonds_broken >> rec_.bonds_dropped >> rec_.volume_lost_m3 >> ngen)) fail("truncated (records)");
+  rec_.splits_by_generation.assign(ngen, 0);
+  for (auto& c : rec_.splits_by_generation)
+    if (!(is >> c)) fail("truncated (generations)");
+  size_t nb = 0;
+  if (!(is >> nb)) fail("truncated (bonds)");
+  ba_.assign(nb, 0);
+  bb_.assign(nb, 0);
+  state_.assign(nb, BondState{});
+  section_.assign(nb, BondSection{});
+  broken_.assign(nb, 0);
+  for (size_t b = 0; b < nb; ++b) {
+    BondState& st = state_[b];
+    if (!(is >> ba_[b] >> bb_[b] >> st.fn >> st.fs.x >> st.fs.y >> st.fs.z >> st.mt >> st.mb.x >> st.mb.y >> st.mb.z))
+      fail("truncated (bond " + std::to_string(b) + ")");
+    if (ba_[b] < 0 || bb_[b] >= n || ba_[b] >= bb_[b]) fail("names a bond between spheres out of range");
+    section_[b] = bond_section(opt_.bond, p.r[ba_[b]], p.r[bb_[b]]);
+  }
+  eng_.set_time_step(dt);
+  rec_.spheres = n;
+  rec_.bonds_intact = static_cast<int64_t>(nb);
+  relabel_particles();
 }
 
 void BreakageModel::run(int64_t steps) {

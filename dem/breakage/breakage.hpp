@@ -39,6 +39,7 @@
 // hook, no checks. Cost with breakage: O(bonds) per step, O(pairs) per check.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "dem/breakage/parallel_bond.hpp"
@@ -106,6 +107,13 @@ class BreakageModel {
   int64_t bond_a(int64_t b) const { return ba_[b]; }
   int64_t bond_b(int64_t b) const { return bb_[b]; }
   const BondState& bond_state(int64_t b) const { return state_[b]; }
+  // The whole model state as text (bit-exact %.17g; keys, generations, bonds
+  // with their forces, records, the engine's current time step), for the
+  // checkpoint; restore() reads it back into a model built on the restored
+  // engine (strengths are recomputed from keys and diameters). Throws
+  // InputError on a malformed or mismatched state.
+  std::string encode() const;
+  void restore(const std::string& state);
   // Largest normal contact force of every sphere in the last force evaluation, N.
   std::vector<double> max_normal_forces() const;
 

@@ -3,7 +3,7 @@
 set -u
 B=${1:-build/release}
 echo "== machine: $(nproc) cores, $(free -g | awk '/Mem/{print $2}') GiB; load: $(cut -d' ' -f1-3 /proc/loadavg)"
-for exe in "$B"/bench/*/bench_*; do
+for exe in "$B"/bench/*/*bench*; do
   [[ -x "$exe" ]] || continue
   echo "== $(basename "$exe")"
   "$exe" || echo "(failed: $?)"

@@ -143,14 +143,59 @@ std::pair<Shape, Geometry> voxel_grid(const SphereTable& s, const VoxeliseOption
   return {Shape{n[0], n[1], n[2]}, g};
 }
 
+namespace {
+
+// True when no two member spheres penetrate deeper than tol × the smaller radius.
+bool members_disjoint(const synth::Piece* begin, const synth::Piece* end, double tol) {
+  if (tol < 0) return false;
+  for (const synth::Piece* a = begin; a != end; ++a)
+    for (const synth::Piece* b = a + 1; b != end; ++b) {
+      const double d = std::hypot(a->sphere.c[0] - b->sphere.c[0], a->sphere.c[1] - b->sphere.c[1],
+                                  a->sphere.c[2] - b->sphere.c[2]);
+      if (a->sphere.r + b->sphere.r - d > tol * std::min(a->sphere.r, b->sphere.r)) return false;
+    }
+  return true;
+}
+
+}  // namespace
+
 Voxelised voxelise(const SphereTable& s, const VoxeliseOptions& opt) {
   const auto [shape, geom] = voxel_grid(s, opt);
   Voxelised out;
   const std::vector<synth::Particle> particles = to_particles(s, geom, &out.particle_of_label);
+  // What the renderer gets: clusters with disjoint members as separate spheres
+  // (render ids 1..n), with label_of[render id] = particle label.
+  std::vector<synth::Particle> render_list;
+  std::vector<uint32_t> label_of{0};
+  bool split_any = false;
+  for (const synth::Particle& p : particles) {
+    const bool split = p.kind == synth::Kind::cluster && p.pieces.size() <= 256 &&
+                       members_disjoint(p.pieces.data(), p.pieces.data() + p.pieces.size(), opt.member_overlap);
+    if (p.kind == synth::Kind::cluster) ++(split ? out.clusters_split : out.clusters_union);
+    if (!split) {
+      synth::Particle q = p;
+      q.id = static_cast<uint32_t>(label_of.size());
+      render_list.push_back(std::move(q));
+      label_of.push_back(p.id);
+      continue;
+    }
+    split_any = true;
+    for (const synth::Piece& piece : p.pieces) {
+      render_list.push_back(synth::make_grain(static_cast<uint32_t>(label_of.size()), piece.sphere.c, piece.sphere.r));
+      label_of.push_back(p.id);
+    }
+  }
+  if (label_of.size() >= std::numeric_limits<uint32_t>::max()) throw InputError(s.source + ": too many spheres");
   auto t0 = std::chrono::steady_clock::now();
   synth::RenderOptions ro = opt.render;
   ro.labels = true;
-  synth::Rendered r = synth::render(particles, shape, geom, ro);
+  synth::Rendered r = synth::render(render_list, shape, geom, ro);
+  if (split_any) {
+    uint32_t* lab = r.labels.data();
+    const int64_t n = r.labels.size();
+#pragma omp parallel for schedule(static)
+    for (int64_t q = 0; q < n; ++q) lab[q] = label_of[lab[q]];
+  }
   out.render_s = seconds_since(t0);
   {
     // Mean solid fraction, per slice then in slice order (thread independent).
@@ -166,9 +211,11 @@ Voxelised voxelise(const SphereTable& s, const VoxeliseOptions& opt) {
     for (double v : per) tot += v;
     out.solid_fraction = tot / static_cast<double>(r.solid.size());
   }
-  out.truth = synth::truth_table(particles, r.labels, shape, geom);
-  std::vector<double> pid(out.particle_of_label.begin() + 1, out.particle_of_label.end());
-  out.truth.add("particle", std::move(pid));
+  if (opt.truth) {
+    out.truth = synth::truth_table(particles, r.labels, shape, geom);
+    std::vector<double> pid(out.particle_of_label.begin() + 1, out.particle_of_label.end());
+    out.truth.add("particle", std::move(pid));
+  }
   if (opt.grey) {
     t0 = std::chrono::steady_clock::now();
     synth::apply_imaging(r.solid, opt.imaging);

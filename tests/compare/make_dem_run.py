@@ -1,21 +1,29 @@
 #!/usr/bin/python3
-"""A small stand-in DEM run folder for the report test, made from a synthetic
-specimen's stage-0 truth table (tomograin synth): NOT a DEM simulation.
+"""A stand-in DEM run folder made from a synthetic specimen's stage-0 truth
+table (tomograin synth): NOT a DEM simulation; a fixture for the report test
+and for measuring the segmentation bias on fragment clusters.
 
   RUN/snapshots/strain_00.00pct.h5  the grains as spheres, in the DEM snapshot
-                                    format (group /spheres, root attribute
-                                    "snapshot" = {"strain": ...})
-  RUN/snapshots/strain_07.12pct.csv the packing compressed by 7.12 % in z with
-                                    every third grain split into two fragments,
-                                    each a cluster of two overlapping spheres
-                                    (one particle id per fragment), column strain
-  RUN/history.csv                   strain, top_stress_Pa, broken_grains
+                                    format (group /spheres with a "columns"
+                                    attribute, root attribute "snapshot" =
+                                    {"strain": ...}), as dem/snapshot.cpp writes
+  RUN/snapshots/strain_XX.XXpct.csv one per later strain: the packing compressed
+                                    in z by the strain, a fraction of the grains
+                                    replaced by two 17-sphere fragments each (the
+                                    DEM template of dem/breakage/fragment_template.hpp:
+                                    ring A of 8 spheres ra = 0.26330 on the plane,
+                                    a central sphere rc = 0.44948, ring B of 8
+                                    spheres rb = 0.16097 at 45 degrees), splitting
+                                    plane normal drawn at random; column strain
+  RUN/history.csv                   strain, top_stress_Pa, broken_grains (invented curve)
   EXP.csv                           an invented experimental curve (axial_strain,
                                     axial_stress_MPa)
-Usage: make_dem_run.py STAGE0_TRUTH.csv RUN EXP.csv
+Usage: make_dem_run.py STAGE0_TRUTH.csv RUN EXP.csv [STRAINS BROKEN]
+       STRAINS, BROKEN: comma lists, e.g. 0,0.0712 and 0,0.3 (the default).
 """
 import csv
 import json
+import math
 import os
 import sys
 
@@ -23,49 +31,83 @@ import h5py
 import numpy as np
 
 truth, run, exp = sys.argv[1:4]
+strains = [float(v) for v in (sys.argv[4] if len(sys.argv) > 4 else "0,0.0712").split(",")]
+broken = [float(v) for v in (sys.argv[5] if len(sys.argv) > 5 else "0,0.3").split(",")]
 rows = list(csv.DictReader(open(truth)))
 c = np.array([[float(r["cx_mm"]), float(r["cy_mm"]), float(r["cz_mm"])] for r in rows]) * 1e-3
 rad = np.array([float(r["radius_mm"]) for r in rows]) * 1e-3
 os.makedirs(os.path.join(run, "snapshots"), exist_ok=True)
 
-with h5py.File(os.path.join(run, "snapshots", "strain_00.00pct.h5"), "w") as f:
-    g = f.create_group("spheres")
-    for k, name in enumerate(["x_m", "y_m", "z_m"]):
-        g[name] = c[:, k]
-    g["r_m"] = rad
-    g["particle"] = np.arange(len(rad), dtype=np.float64)
-    g.attrs["columns"] = np.bytes_("x_m,y_m,z_m,r_m,particle")  # core/io/hdf5's table convention
-    f.attrs["snapshot"] = np.bytes_(json.dumps({"strain": 0.0, "requested_strain": 0.0}))
+# Fragment template in mother radii, fragment on the z > 0 side.
+RA, RC, RB = 0.26330, 0.44948, 0.16097
+TEMPLATE = [((0.0, 0.0, RC), RC)]
+rho_a = math.sqrt((1 - RA) ** 2 - RA ** 2)
+for k in range(8):
+    a = k * math.pi / 4
+    TEMPLATE.append(((rho_a * math.cos(a), rho_a * math.sin(a), RA), RA))
+for k in range(8):
+    a = math.pi / 8 + k * math.pi / 4
+    d = (1 - RB) / math.sqrt(2)
+    TEMPLATE.append(((d * math.cos(a), d * math.sin(a), d), RB))
 
-strain = 0.0712
-out = []  # x, y, z, r, particle
-pid = 0
-broken = 0
-for q in range(len(rad)):
-    x, y, z = c[q]
-    z *= 1 - strain
-    r = rad[q]
-    if q % 3 == 1:
-        broken += 1
-        for side in (-1, 1):
-            for dx in (-0.25 * r, 0.25 * r):
-                out.append((x + dx, y, z + side * 0.5 * r, 0.45 * r, pid))
+
+def frame(n):
+    n = n / np.linalg.norm(n)
+    t = np.array([1.0, 0, 0]) if abs(n[0]) < 0.9 else np.array([0, 1.0, 0])
+    e1 = np.cross(n, t)
+    e1 /= np.linalg.norm(e1)
+    return e1, np.cross(n, e1), n
+
+
+def write_h5(path, strain):
+    with h5py.File(path, "w") as f:
+        g = f.create_group("spheres")
+        for k, name in enumerate(["x_m", "y_m", "z_m"]):
+            g[name] = c[:, k]
+        g["r_m"] = rad
+        g["particle"] = np.arange(len(rad), dtype=np.float64)
+        g.attrs["columns"] = np.bytes_("x_m,y_m,z_m,r_m,particle")  # core/io/hdf5's table convention
+        f.attrs["snapshot"] = np.bytes_(json.dumps({"strain": strain, "requested_strain": strain}))
+
+
+rng = np.random.default_rng(11)
+order = rng.permutation(len(rad))  # grains break in this order as the strain grows
+n_broken = []
+for s, (strain, frac) in enumerate(zip(strains, broken)):
+    nb = int(round(frac * len(rad)))
+    n_broken.append(nb)
+    if s == 0 and nb == 0:
+        write_h5(os.path.join(run, "snapshots", "strain_00.00pct.h5"), strain)
+        continue
+    split = set(order[:nb].tolist())
+    out, pid = [], 0
+    for q in range(len(rad)):
+        x, y, z = c[q]
+        centre = np.array([x, y, z * (1 - strain)])
+        r = rad[q]
+        if q in split:
+            e1, e2, n = frame(rng.normal(size=3))
+            for side in (1.0, -1.0):  # two mirrored fragments
+                for (tx, ty, tz), tr in TEMPLATE:
+                    p = centre + r * (tx * e1 + ty * e2 + side * tz * n)
+                    out.append((p[0], p[1], p[2], r * tr, pid))
+                pid += 1
+        else:
+            out.append((centre[0], centre[1], centre[2], r, pid))
             pid += 1
-    else:
-        out.append((x, y, z, r, pid))
-        pid += 1
-with open(os.path.join(run, "snapshots", "strain_07.12pct.csv"), "w", newline="") as f:
-    w = csv.writer(f)
-    w.writerow(["x_m", "y_m", "z_m", "r_m", "particle", "strain"])
-    for row in out:
-        w.writerow([repr(float(v)) for v in row[:4]] + [row[4], strain])
+    name = "strain_%05.2fpct.csv" % (100 * strain)
+    with open(os.path.join(run, "snapshots", name), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["x_m", "y_m", "z_m", "r_m", "particle", "strain"])
+        for row in out:
+            w.writerow([repr(float(v)) for v in row[:4]] + [row[4], strain])
 
-e = np.linspace(0, 0.08, 41)
+e = np.linspace(0, max(strains) * 1.05, 41)
 with open(os.path.join(run, "history.csv"), "w", newline="") as f:
     w = csv.writer(f)
     w.writerow(["step", "strain", "top_stress_Pa", "broken_grains"])
     for k, ek in enumerate(e):
-        w.writerow([k * 1000, ek, 2e6 * (1 - np.exp(-ek / 0.02)) + 1e7 * ek, round(broken * min(1, ek / strain))])
+        w.writerow([k * 1000, ek, 2e6 * (1 - np.exp(-ek / 0.02)) + 1e7 * ek, np.interp(ek, strains, n_broken)])
 with open(exp, "w", newline="") as f:
     w = csv.writer(f)
     w.writerow(["axial_strain", "axial_stress_MPa"])

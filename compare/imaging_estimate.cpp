@@ -9,16 +9,17 @@
 namespace tg::compare {
 namespace {
 
-// Outer half width at half maximum of the peak at bin `mode`, walking with
-// `step` (-1 down, +1 up), linearly interpolated between bins; in bins.
-double outer_hwhm(const std::vector<double>& h, int64_t mode, int step) {
-  const double half = 0.5 * h[static_cast<size_t>(mode)];
+// Distance (bins, linearly interpolated) from the peak at `mode` to where the
+// histogram first falls to `frac` of the peak height, walking with `step`
+// (-1 down, +1 up).
+double outer_crossing(const std::vector<double>& h, int64_t mode, int step, double frac) {
+  const double level = frac * h[static_cast<size_t>(mode)];
   int64_t b = mode;
-  while (b + step >= 0 && b + step < static_cast<int64_t>(h.size()) && h[static_cast<size_t>(b + step)] > half) b += step;
+  while (b + step >= 0 && b + step < static_cast<int64_t>(h.size()) && h[static_cast<size_t>(b + step)] > level) b += step;
   const int64_t nb = b + step;
   if (nb < 0 || nb >= static_cast<int64_t>(h.size())) return static_cast<double>(std::abs(b - mode));
   const double hb = h[static_cast<size_t>(b)], hn = h[static_cast<size_t>(nb)];
-  const double t = hb > hn ? (hb - half) / (hb - hn) : 0.0;
+  const double t = hb > hn ? (hb - level) / (hb - hn) : 0.0;
   return static_cast<double>(std::abs(b - mode)) + t;
 }
 
@@ -52,20 +53,26 @@ GreyEstimate estimate_grey_levels(const std::vector<int64_t>& hist, const GreyEs
   const auto bright = std::max_element(h.begin() + split + 1, h.end());
   if (!(*dark > 0) || !(*bright > 0)) throw InputError("grey-level estimate: one class of the histogram is empty");
   const int64_t md = dark - h.begin(), mb = bright - h.begin();
-  // Bin centres in grey levels.
-  e.void_grey = (static_cast<double>(md) + 0.5) * opt.bin - 0.5;
-  e.solid_grey = (static_cast<double>(mb) + 0.5) * opt.bin - 0.5;
-  // σ of the measured peak = HWHM / sqrt(2 ln 2); remove the smoothing (σ_s bins)
-  // and rebinning (width² / 12) variances, which add to the noise variance.
-  const double k = 1.0 / std::sqrt(2.0 * std::log(2.0));
-  const double extra = opt.smooth_bins * opt.smooth_bins + 1.0 / 12.0;
-  auto sigma = [&](double hwhm_bins) {
-    const double s2 = hwhm_bins * hwhm_bins * k * k - extra;
-    return s2 > 0 ? std::sqrt(s2) * opt.bin : 0.0;
+  // A Gaussian peak N(mu, sigma) falls to a fraction f of its height at
+  // mu -+ sigma sqrt(-2 ln f): two crossings on the outer side (f = 1/2, 1/10)
+  // give sigma and mu without using the flat, noisy top (whose argmax wanders
+  // by ~0.2 sigma) or the inner side (partial-volume voxels).
+  const double z05 = std::sqrt(2 * std::log(2.0)), z01 = std::sqrt(2 * std::log(10.0));
+  const double extra = opt.smooth_bins * opt.smooth_bins + 1.0 / 12.0;  // smoothing + rebinning variance
+  auto fit = [&](int64_t mode, int step, double& mu, double& sigma) {
+    const double d05 = outer_crossing(h, mode, step, 0.5), d01 = outer_crossing(h, mode, step, 0.1);
+    const double sm = (d01 - d05) / (z01 - z05);
+    const double s2 = sm * sm - extra;
+    const double sb = s2 > 0 ? std::sqrt(s2) : 0.0;
+    const double pos = static_cast<double>(mode) + step * d05 - step * z05 * sm;  // bins
+    mu = (pos + 0.5) * opt.bin - 0.5;
+    sigma = sb * opt.bin;
   };
-  e.sigma_void = sigma(outer_hwhm(h, md, -1));
-  e.sigma_solid = sigma(outer_hwhm(h, mb, +1));
-  e.noise_sigma = 0.5 * (e.sigma_void + e.sigma_solid);
+  fit(md, -1, e.void_grey, e.sigma_void);
+  fit(mb, +1, e.solid_grey, e.sigma_solid);
+  // The taller peak has more voxels far from any surface, so blur and partial
+  // volume widen it least (small grains: the solid peak is the contaminated one).
+  e.noise_sigma = *dark >= *bright ? e.sigma_void : e.sigma_solid;
   return e;
 }
 

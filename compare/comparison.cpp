@@ -120,7 +120,7 @@ Curve read_curve(const fs::path& path) {
   c.stress_column = s;
   c.strain = t.num(e);
   for (double v : t.num(s)) c.stress_mpa.push_back(v * scale);
-  const std::string b = first_of(t, {"broken_grains", "broken_particles", "broken"});
+  const std::string b = first_of(t, {"grains_broken", "broken_grains", "broken_particles", "broken"});
   if (!b.empty()) c.broken = t.num(b);
   return c;
 }

@@ -62,8 +62,8 @@ struct CompareInputs {
   std::vector<double> xct_strains;   // optional, one per stage; else the file's synth
                                      // provenance (axial_strain), else matched by order
   std::vector<std::string> stage_names;  // optional; default "stage N (ε = …)"
-  // DEM run folder: history.csv (axial strain, axial stress, optional
-  // broken_grains) and the snapshots: RUNDIR/snapshots/*.{csv,h5}, else
+  // DEM run folder: history.csv (strain, top_stress_Pa or another axial
+  // stress column, optional grains_broken) and the snapshots: RUNDIR/snapshots/*.{csv,h5}, else
   // RUNDIR/*.{csv,h5} other than history.csv and snapshots.csv.
   std::string dem_run;
   std::vector<std::string> dem_snapshots;  // optional explicit list (overrides the search)

@@ -15,7 +15,7 @@ and for measuring the segmentation bias on fragment clusters.
                                     a central sphere rc = 0.44948, ring B of 8
                                     spheres rb = 0.16097 at 45 degrees), splitting
                                     plane normal drawn at random; column strain
-  RUN/history.csv                   strain, top_stress_Pa, broken_grains (invented curve)
+  RUN/history.csv                   strain, top_stress_Pa, grains_broken (invented curve; DEM column names)
   EXP.csv                           an invented experimental curve (axial_strain,
                                     axial_stress_MPa)
 Usage: make_dem_run.py STAGE0_TRUTH.csv RUN EXP.csv [STRAINS BROKEN]
@@ -105,7 +105,7 @@ for s, (strain, frac) in enumerate(zip(strains, broken)):
 e = np.linspace(0, max(strains) * 1.05, 41)
 with open(os.path.join(run, "history.csv"), "w", newline="") as f:
     w = csv.writer(f)
-    w.writerow(["step", "strain", "top_stress_Pa", "broken_grains"])
+    w.writerow(["step", "strain", "top_stress_Pa", "grains_broken"])
     for k, ek in enumerate(e):
         w.writerow([k * 1000, ek, 2e6 * (1 - np.exp(-ek / 0.02)) + 1e7 * ek, np.interp(ek, strains, n_broken)])
 with open(exp, "w", newline="") as f:

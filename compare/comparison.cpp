@@ -166,7 +166,15 @@ std::vector<std::string> find_snapshots(const fs::path& run) {
     if (!e.is_regular_file()) continue;
     const auto name = e.path().filename().string();
     if (name == "history.csv" || name == "snapshots.csv") continue;
-    if (e.path().extension() == ".csv" || is_h5(e.path())) out.push_back(e.path().string());
+    if (is_h5(e.path())) out.push_back(e.path().string());
+    if (e.path().extension() == ".csv") {
+      // Only sphere tables: the DEM also writes other CSVs beside snapshots (bonds).
+      std::ifstream f(e.path());
+      std::string header;
+      std::getline(f, header);
+      if (header.find("x_m") != std::string::npos && header.find("r_m") != std::string::npos)
+        out.push_back(e.path().string());
+    }
   }
   std::sort(out.begin(), out.end(), natural_less);
   if (out.empty()) throw InputError(run.string() + ": no DEM snapshots (*.csv or *.h5 in snapshots/ or the run folder)");

@@ -64,7 +64,8 @@ struct CompareInputs {
   std::vector<std::string> stage_names;  // optional; default "stage N (ε = …)"
   // DEM run folder: history.csv (strain, top_stress_Pa or another axial
   // stress column, optional grains_broken) and the snapshots: RUNDIR/snapshots/*.{csv,h5}, else
-  // RUNDIR/*.{csv,h5} other than history.csv and snapshots.csv.
+  // RUNDIR/*.{csv,h5} other than history.csv and snapshots.csv; CSVs count only when their
+  // header has x_m and r_m (the DEM's bond tables beside the snapshots are skipped).
   std::string dem_run;
   std::vector<std::string> dem_snapshots;  // optional explicit list (overrides the search)
   // Snapshot strains: this list, else RUNDIR/snapshots.csv (file, axial_strain),

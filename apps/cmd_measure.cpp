@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "apps/command.hpp"
+#include "apps/jobs.hpp"
 #include "core/errors.hpp"
 #include "core/io/hdf5.hpp"
 #include "core/io/volume_io.hpp"
@@ -28,20 +29,12 @@ bool is_h5(const std::string& p) {
 
 // ---------------------------------------------------------------- measure
 
-struct MeasureOpts {
-  std::string in;
-  std::vector<std::string> out;
-  std::string feret = "60";
-  std::string sizing = "feret";
-  double limit_mm = 0.2;
-  double face_offset = 0.3;
-  bool no_box = false;
-  int threads = 0;
-  unsigned seed = 42;
-  double voxel_um = 0;
-};
 
-int run_measure(const MeasureOpts& o) {
+}  // namespace
+
+namespace tg::app {
+
+int run_measure(const MeasureJob& o) {
   measure::ParticleOptions po;
   if (o.feret == "exact") {
     po.feret_exact = true;
@@ -116,6 +109,10 @@ int run_measure(const MeasureOpts& o) {
   return 0;
 }
 
+}  // namespace tg::app
+
+namespace {
+
 tg::app::Registrar reg_measure{{"measure", 40, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
   sub = app.add_subcommand(
       "measure",
@@ -137,7 +134,7 @@ tg::app::Registrar reg_measure{{"measure", 40, [](CLI::App& app, CLI::App*& sub)
       "  tomograin measure labels.h5 -o particles.csv\n"
       "  tomograin measure labels.h5 -o particles.csv -o particles.h5 --feret exact\n"
       "  tomograin measure labels.tif --voxel-um 11.6 --sizing obb -o particles.csv");
-  auto o = std::make_shared<MeasureOpts>();
+  auto o = std::make_shared<tg::app::MeasureJob>();
   sub->add_option("labels", o->in, "Label volume (u32): .h5[:/dataset], .tif, folder of slices, raw .json")->required();
   sub->add_option("-o,--output", o->out,
                   "Output table(s): .csv, or .h5 (/labels + /particles table; naming the input .h5 adds the "
@@ -161,18 +158,11 @@ tg::app::Registrar reg_measure{{"measure", 40, [](CLI::App& app, CLI::App*& sub)
       ->check(CLI::NonNegativeNumber)
       ->default_str("0");
   tg::app::add_voxel_option(sub, o->voxel_um);
-  return [o] { return run_measure(*o); };
+  return [o] { return tg::app::run_measure(*o); };
 }}};
 
 // ---------------------------------------------------------------- psd
 
-struct PsdOpts {
-  std::vector<std::string> in;
-  std::string out, summary;
-  std::vector<double> sieves, fr_bins, ar_bins;
-  bool exclude_below = false, exclude_border = false;
-  double hardin_cut = 0.074, fractal = 2.6, einav_dmin = 0;
-};
 
 Table read_particles(const std::string& file) {
   const std::vector<std::string> need{"volume_mm3", "d_med_mm", "d_eq_mm", "fr", "ar"};
@@ -198,7 +188,11 @@ std::vector<std::string> class_names(const std::string& what, const std::vector<
   return n;
 }
 
-int run_psd(PsdOpts o) {
+}  // namespace
+
+namespace tg::app {
+
+int run_psd(PsdJob o) {
   if (o.sieves.empty()) o.sieves = measure::default_sieves_mm();
   std::sort(o.sieves.begin(), o.sieves.end());
   if (o.fr_bins.empty()) o.fr_bins = measure::fr_thresholds();
@@ -297,6 +291,10 @@ int run_psd(PsdOpts o) {
   return 0;
 }
 
+}  // namespace tg::app
+
+namespace {
+
 tg::app::Registrar reg_psd{{"psd", 45, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
   sub = app.add_subcommand(
       "psd",
@@ -312,7 +310,7 @@ tg::app::Registrar reg_psd{{"psd", 45, [](CLI::App& app, CLI::App*& sub) -> tg::
       "  tomograin psd particles.csv -o psd.csv\n"
       "  tomograin psd stage0.csv stage1.csv stage2.csv -o psd.csv --exclude-below-limit\n"
       "  tomograin psd p.csv -o psd.csv --sieves-mm 0.2,0.4,0.8,1.6 --fr-bins 0.5,0.7,0.9");
-  auto o = std::make_shared<PsdOpts>();
+  auto o = std::make_shared<tg::app::PsdJob>();
   sub->add_option("tables", o->in, "Particle tables, initial stage first")->required()->check(CLI::ExistingFile);
   sub->add_option("-o,--output", o->out, "Grading table (.csv)")->required();
   sub->add_option("--summary", o->summary, "Per-stage summary (.csv; default OUT_summary.csv)");
@@ -331,7 +329,7 @@ tg::app::Registrar reg_psd{{"psd", 45, [](CLI::App& app, CLI::App*& sub) -> tg::
       ->default_str("2.6");
   sub->add_option("--einav-dmin-mm", o->einav_dmin, "Smallest size of Einav's integrals (0 = smallest sieve)")
       ->default_str("0");
-  return [o] { return run_psd(*o); };
+  return [o] { return tg::app::run_psd(*o); };
 }}};
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "apps/command.hpp"
+#include "apps/jobs.hpp"
 #include "core/atomic_file.hpp"
 #include "core/io/hdf5.hpp"
 #include "core/io/volume_io.hpp"
@@ -13,14 +14,6 @@
 
 namespace {
 
-struct Opts {
-  std::string in, out, summary, threshold = "moments";
-  double voxel_um = 0, grain_radius_vox = 0, grain_diameter_um = 1360.0;
-  int manual = -1;
-  tg::SegmentOptions seg;
-  bool no_pores = false, no_lines = false, no_merge = false;
-  int compression = 1;
-};
 
 // Any input type as u16: float32 is normalised (auto range, printed), u8 widened.
 tg::Volume<uint16_t> to_grey(tg::AnyVolume&& v, const std::string& name) {
@@ -38,7 +31,11 @@ tg::Volume<uint16_t> to_grey(tg::AnyVolume&& v, const std::string& name) {
   throw tg::InputError(name + ": holds uint32 (labels?); segment expects a grey scan (uint16, float32 or uint8)");
 }
 
-int run_segment(Opts& o) {
+}  // namespace
+
+namespace tg::app {
+
+int run_segment(SegmentJob& o) {
   tg::ReadOptions ro;
   ro.voxel_um = o.voxel_um;
   tg::Volume<uint16_t> grey = to_grey(tg::read_volume(o.in, ro), o.in);
@@ -101,7 +98,7 @@ int run_segment(Opts& o) {
   return 0;
 }
 
-}  // namespace
+}  // namespace tg::app
 
 static tg::app::Registrar reg{{"segment", 30, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
   sub = app.add_subcommand(
@@ -121,7 +118,7 @@ static tg::app::Registrar reg{{"segment", 30, [](CLI::App& app, CLI::App*& sub) 
       "  tomograin segment scan.h5 -o labels.h5 --voxel-um 12.3            (R from 1360 um grains)\n"
       "  tomograin segment scan.tif -o labels.h5 --grain-radius-vox 20 --h 2\n"
       "  tomograin segment scan.h5 -o labels.h5 --grain-radius-vox 20 --threshold otsu --no-lines");
-  auto o = std::make_shared<Opts>();
+  auto o = std::make_shared<tg::app::SegmentJob>();
   sub->add_option("input", o->in, "Grey scan (.tif/.tiff, folder, .json sidecar, .h5[:/dataset]); uint16 or float32")
       ->required();
   sub->add_option("-o,--output", o->out, "Labels output, .h5[:/dataset] (default dataset /labels) or TIFF")->required();
@@ -160,5 +157,5 @@ static tg::app::Registrar reg{{"segment", 30, [](CLI::App& app, CLI::App*& sub) 
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--compress", o->compression, "HDF5 deflate level 0-9")->check(CLI::Range(0, 9))->capture_default_str();
-  return [o] { return run_segment(*o); };
+  return [o] { return tg::app::run_segment(*o); };
 }}};

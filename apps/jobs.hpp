@@ -1,0 +1,48 @@
+// The jobs behind `segment`, `measure` and `psd`, callable from other
+// commands: `analyse` and `demo` chain them on files exactly as a user would
+// on the command line, so there is one implementation of each step.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "segmentation/segment.hpp"
+
+namespace tg::app {
+
+// tomograin segment: grey scan -> /labels (u32) + JSON summary.
+struct SegmentJob {
+  std::string in, out, summary, threshold = "moments";
+  double voxel_um = 0, grain_radius_vox = 0, grain_diameter_um = 1360.0;
+  int manual = -1;
+  tg::SegmentOptions seg;
+  bool no_pores = false, no_lines = false, no_merge = false;
+  int compression = 1;
+};
+int run_segment(SegmentJob& job);
+
+// tomograin measure: label volume -> particle table (CSV and/or HDF5).
+struct MeasureJob {
+  std::string in;
+  std::vector<std::string> out;
+  std::string feret = "60";
+  std::string sizing = "feret";
+  double limit_mm = 0.2;
+  double face_offset = 0.3;
+  bool no_box = false;
+  int threads = 0;
+  unsigned seed = 42;
+  double voxel_um = 0;
+};
+int run_measure(const MeasureJob& job);
+
+// tomograin psd: particle tables of one or more stages -> gradings and summaries.
+struct PsdJob {
+  std::vector<std::string> in;
+  std::string out, summary;
+  std::vector<double> sieves, fr_bins, ar_bins;
+  bool exclude_below = false, exclude_border = false;
+  double hardin_cut = 0.074, fractal = 2.6, einav_dmin = 0;
+};
+int run_psd(PsdJob job);
+
+}  // namespace tg::app

@@ -1,4 +1,5 @@
 #include "compare/comparison.hpp"
+#include "core/natural_order.hpp"
 
 #include <fmt/core.h>
 
@@ -137,28 +138,6 @@ double interpolate(const std::vector<double>& x, const std::vector<double>& y, d
   return y[best];
 }
 
-// Natural order: digit runs compare as numbers (snap_9 before snap_10).
-bool natural_less(const std::string& a, const std::string& b) {
-  size_t i = 0, j = 0;
-  while (i < a.size() && j < b.size()) {
-    if (std::isdigit(static_cast<unsigned char>(a[i])) && std::isdigit(static_cast<unsigned char>(b[j]))) {
-      size_t i2 = i, j2 = j;
-      while (i2 < a.size() && std::isdigit(static_cast<unsigned char>(a[i2]))) ++i2;
-      while (j2 < b.size() && std::isdigit(static_cast<unsigned char>(b[j2]))) ++j2;
-      const std::string na = a.substr(i, i2 - i), nb = b.substr(j, j2 - j);
-      if (na.size() != nb.size()) return na.size() < nb.size();
-      if (na != nb) return na < nb;
-      i = i2;
-      j = j2;
-    } else {
-      if (a[i] != b[j]) return a[i] < b[j];
-      ++i;
-      ++j;
-    }
-  }
-  return a.size() - i < b.size() - j;
-}
-
 std::vector<std::string> find_snapshots(const fs::path& run) {
   fs::path dir = fs::is_directory(run / "snapshots") ? run / "snapshots" : run;
   std::vector<std::string> out;
@@ -176,7 +155,7 @@ std::vector<std::string> find_snapshots(const fs::path& run) {
         out.push_back(e.path().string());
     }
   }
-  std::sort(out.begin(), out.end(), natural_less);
+  std::sort(out.begin(), out.end(), tg::natural_less);
   if (out.empty()) throw InputError(run.string() + ": no DEM snapshots (*.csv or *.h5 in snapshots/ or the run folder)");
   return out;
 }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/dtype.hpp"
+#include "core/natural_order.hpp"
 
 namespace tg {
 
@@ -25,8 +26,6 @@ template <class T>
 void write_tiff_folder(const Volume<T>& v, const std::string& dir, bool progress);
 void write_tiff_folder(const AnyVolume& v, const std::string& dir, bool progress);
 
-// Natural ("human") order: digit runs compare as numbers.
-bool natural_less(const std::string& a, const std::string& b);
 // The TIFF files of a folder in natural order; InputError if there are none.
 std::vector<std::string> tiff_slices_in(const std::string& dir);
 

@@ -49,7 +49,7 @@ fuzz: fuzz-build
 
 # Short fuzz runs inside `make test`, so reader regressions surface in CI.
 test-fuzz: fuzz-build
-	tests/fuzz/run.sh $(FUZZ_BUILD) 20
+	tests/fuzz/run.sh $(FUZZ_BUILD) ci
 
 # Benchmarks build in their own folder so `make test` never compiles them.
 BENCH_BUILD ?= build/bench

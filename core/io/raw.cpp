@@ -41,7 +41,18 @@ void byteswap_all(T* p, int64_t n) {
 
 }  // namespace
 
+AnyVolume read_raw_checked(const std::string& path, bool progress);
+
 AnyVolume read_raw(const std::string& path, bool progress) {
+  // A field of the wrong JSON type ("byte_order": 2) is bad input, not an internal error.
+  try {
+    return read_raw_checked(path, progress);
+  } catch (const json::exception& e) {
+    throw InputError(path + ": invalid sidecar field (" + std::string(e.what()) + ")");
+  }
+}
+
+AnyVolume read_raw_checked(const std::string& path, bool progress) {
   std::ifstream jf(path);
   if (!jf) throw InputError(path + ": cannot open sidecar");
   json h;

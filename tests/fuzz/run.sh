@@ -8,7 +8,10 @@
 #                                                or luck (make test)
 set -uo pipefail
 B=$(cd "$1" && pwd); SECONDS_EACH=${2:-20}
-declare -A CI_RUNS=([tiff]=20000 [raw_json]=150000 [hdf5]=2000 [toml]=200000 [csv]=200000)
+# hdf5: 0 in CI. Exploring it finds memory errors inside libhdf5 1.10.8 itself
+# (tests/fuzz/known/), at random moments, which would make CI flaky without
+# saying anything about our code; CI replays its regression inputs only.
+declare -A CI_RUNS=([tiff]=20000 [raw_json]=150000 [hdf5]=0 [toml]=200000 [csv]=200000)
 SRC=$(cd "$(dirname "$0")" && pwd)
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
@@ -24,7 +27,10 @@ for h in tiff raw_json hdf5 toml csv; do
   if compgen -G "$SRC/regressions/$h/*" >/dev/null; then
     LSAN_OPTIONS="suppressions=$SRC/lsan.supp" "$B/tests/fuzz/fuzz_$h" "$SRC"/regressions/$h/* >"$W/$h.regress.log" 2>&1 || { echo "fuzz_$h: regression input fails"; tail -30 "$W/$h.regress.log"; status=1; }
   fi
-  if [[ "$SECONDS_EACH" == ci ]]; then LIMIT="-seed=1 -runs=${CI_RUNS[$h]}"; else LIMIT="-max_total_time=$SECONDS_EACH"; fi
+  if [[ "$SECONDS_EACH" == ci ]]; then
+    LIMIT="-seed=1 -runs=${CI_RUNS[$h]}"
+    if [[ ${CI_RUNS[$h]} -eq 0 ]]; then echo "fuzz_$h: regression inputs only (see tests/fuzz/known/README.md)"; continue; fi
+  else LIMIT="-max_total_time=$SECONDS_EACH"; fi
   (cd "$W" && LSAN_OPTIONS="suppressions=$SRC/lsan.supp" "$B/tests/fuzz/fuzz_$h" $LIMIT \
      -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
      -print_final_stats=1 "$W/$h" >"$W/$h.log" 2>&1) || {

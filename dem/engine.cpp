@@ -88,9 +88,8 @@ void Engine::step() {
   const int64_t n = p_.size();
   const double dt = opt_.time_step, half = 0.5 * dt;
   Particles& p = p_;
-#pragma omp parallel for schedule(static) if (n >= opt_.parallel_min_items)
-  for (int64_t s = 0; s < n; ++s) {
-    if (p.flags[s] & kFlagFixed) continue;
+  // Velocity Verlet: half kick, drift, forces, half kick.
+  const auto half_kick = [&](int64_t s) {
     const double im = half / p.m[s], ii = half / p.inertia[s];
     p.vx[s] += im * p.fx[s];
     p.vy[s] += im * p.fy[s];
@@ -98,6 +97,11 @@ void Engine::step() {
     p.wx[s] += ii * p.tx[s];
     p.wy[s] += ii * p.ty[s];
     p.wz[s] += ii * p.tz[s];
+  };
+#pragma omp parallel for schedule(static) if (n >= opt_.parallel_min_items)
+  for (int64_t s = 0; s < n; ++s) {
+    if (p.flags[s] & kFlagFixed) continue;
+    half_kick(s);
     p.x[s] += dt * p.vx[s];
     p.y[s] += dt * p.vy[s];
     p.z[s] += dt * p.vz[s];
@@ -122,16 +126,8 @@ void Engine::step() {
   compute_forces();
 
 #pragma omp parallel for schedule(static) if (n >= opt_.parallel_min_items)
-  for (int64_t s = 0; s < n; ++s) {
-    if (p.flags[s] & kFlagFixed) continue;
-    const double im = half / p.m[s], ii = half / p.inertia[s];
-    p.vx[s] += im * p.fx[s];
-    p.vy[s] += im * p.fy[s];
-    p.vz[s] += im * p.fz[s];
-    p.wx[s] += ii * p.tx[s];
-    p.wy[s] += ii * p.ty[s];
-    p.wz[s] += ii * p.tz[s];
-  }
+  for (int64_t s = 0; s < n; ++s)
+    if (!(p.flags[s] & kFlagFixed)) half_kick(s);
   time_ += dt;
   ++steps_;
 }

@@ -84,6 +84,41 @@ void Engine::rebuild() {
 
 void Engine::reset_pair_history() { std::fill(xi_.begin(), xi_.end(), 0.0); }
 
+std::vector<int64_t> Engine::remove_spheres(const std::vector<uint8_t>& remove) {
+  const int64_t n = p_.size();
+  if (static_cast<int64_t>(remove.size()) != n) throw std::logic_error("Engine::remove_spheres: mask size");
+  std::vector<int64_t> map(n, -1);
+  int64_t kept = 0;
+  for (int64_t s = 0; s < n; ++s)
+    if (!remove[s]) {
+      if (s != kept) p_.copy_sphere(s, kept);  // every field of the declared list
+      map[s] = kept++;
+    }
+  p_.resize(kept);
+  // The current list in the new numbering (monotone map: i < j and the
+  // ascending order within each row survive), so that rebuild() carries the
+  // tangential histories over by (i, j) as usual.
+  const int64_t old_n = static_cast<int64_t>(list_.offsets.size()) - 1;
+  PairListCSR carried;
+  carried.offsets.assign(kept + 1, 0);
+  std::vector<double> xi;
+  for (int64_t i = 0; i < std::min(old_n, n); ++i) {
+    if (map[i] < 0) continue;
+    for (int64_t k = list_.offsets[i]; k < list_.offsets[i + 1]; ++k) {
+      const int64_t j = list_.j[k];
+      if (j >= n || map[j] < 0) continue;
+      carried.j.push_back(map[j]);
+      for (int c = 0; c < 3; ++c) xi.push_back(xi_[3 * k + c]);
+      ++carried.offsets[map[i] + 1];
+    }
+  }
+  for (int64_t s = 0; s < kept; ++s) carried.offsets[s + 1] += carried.offsets[s];
+  list_ = std::move(carried);
+  xi_ = std::move(xi);
+  rebuild();
+  return map;
+}
+
 void Engine::step() {
   const int64_t n = p_.size();
   const double dt = opt_.time_step, half = 0.5 * dt;

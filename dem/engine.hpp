@@ -152,6 +152,12 @@ class Engine {
   // platen (z) and outward radial force on the cylinder, N.
   const double* sphere_wall_forces(int64_t s) const { return &wall_f_[3 * s]; }
   void reset_pair_history();
+  // Removes the spheres with remove[s] != 0 (breakage: fines), keeping the
+  // survivors in their order (index s -> old_to_new[s], -1 when removed),
+  // and rebuilds the pair list. Tangential histories of surviving pairs and
+  // the spheres' wall histories are kept (the map is monotone, so the CSR
+  // order survives), i.e. nothing else in the run is perturbed. Returns the map.
+  std::vector<int64_t> remove_spheres(const std::vector<uint8_t>& remove);
 
   // Full state for checkpoints: pair list with histories and time.
   struct PairHistory {

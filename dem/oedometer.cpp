@@ -75,6 +75,14 @@ OedometerSetup read_oedometer_config(Config& cfg, const std::filesystem::path& b
   b.bond.tensile_strength_Pa = cfg.get("breakage.bond_normal_strength_Pa", b.bond.tensile_strength_Pa);
   b.bond.shear_strength_Pa = cfg.get("breakage.bond_shear_strength_Pa", b.bond.shear_strength_Pa);
   b.time_step_safety = cfg.get("breakage.time_step_safety", b.time_step_safety);
+  b.min_time_step_s = cfg.get("breakage.min_time_step_s", b.min_time_step_s);
+  const std::string policy = cfg.get("breakage.sublimit_policy", std::string("remove"));
+  cfg.require(policy == "remove" || policy == "keep", "breakage.sublimit_policy", "must be \"remove\" or \"keep\"");
+  b.sublimit = policy == "keep" ? breakage::SublimitPolicy::kKeep : breakage::SublimitPolicy::kRemove;
+  b.fines_overlap = cfg.get("breakage.fines_overlap", b.fines_overlap);
+  cfg.require(b.min_time_step_s >= 0, "breakage.min_time_step_s", "must be >= 0 (0 = no density scaling)");
+  cfg.require(b.fines_overlap > 0 && b.fines_overlap < e.overlap_limit, "breakage.fines_overlap",
+              "must be in (0, run.overlap_limit)");
   cfg.require(b.check_interval > 0, "breakage.check_every_steps", "must be positive");
   cfg.require(b.min_split_diameter_m >= 0, "breakage.min_split_diameter_m", "must be >= 0");
   cfg.require(b.strength.d0_m >= 0, "breakage.d0_m", "must be >= 0 (0 = mean grain diameter)");
@@ -124,7 +132,8 @@ struct History {
   std::vector<std::vector<double>> cols = std::vector<std::vector<double>>(12);
   void add_breakage_columns() {
     for (const char* n : {"grains_broken", "splits_gen0", "splits_gen1", "splits_gen2", "splits_gen3", "bonds_broken",
-                          "bonds_dropped", "bonds_intact", "spheres", "particles", "volume_lost_m3", "time_step_s"})
+                          "bonds_dropped", "bonds_intact", "spheres", "particles", "volume_lost_m3", "time_step_s",
+                          "fines_removed", "fines_volume_m3", "added_mass_fraction"})
       names.push_back(n);
     cols.resize(names.size());
   }
@@ -207,7 +216,16 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
        << ",\n  \"mass_scaling\": " << fmt17(s.mass_scaling) << ",\n  \"damping\": {\"viscous_restitution\": "
        << fmt17(eo.restitution) << ", \"local\": " << fmt17(eo.local_damping)
        << "},\n  \"contact\": \"hertz_mindlin\",\n  \"threads\": " << omp_get_max_threads()
-       << ",\n  \"specimen\": \"" << (s.packing_csv.empty() ? std::string("pluviation") : s.packing_csv) << "\"\n}\n";
+       << ",\n  \"specimen\": \"" << (s.packing_csv.empty() ? std::string("pluviation") : s.packing_csv) << "\"";
+    if (s.breakage) {
+      const breakage::BreakageOptions& b = s.breakage_options;
+      js << ",\n  \"breakage\": {\"min_split_diameter_m\": " << fmt17(b.min_split_diameter_m)
+         << ", \"density_scaling_min_time_step_s\": " << fmt17(b.min_time_step_s)
+         << ", \"time_step_safety\": " << fmt17(b.time_step_safety) << ", \"sublimit_policy\": \""
+         << (b.sublimit == breakage::SublimitPolicy::kKeep ? "keep" : "remove") << "\", \"fines_overlap\": "
+         << fmt17(b.fines_overlap) << "}";
+    }
+    js << "\n}\n";
     AtomicPath rec(rundir / "run.json");
     {
       std::ofstream os(rec.temp());
@@ -264,7 +282,8 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
       std::vector<double> row{static_cast<double>(r.grains_broken), gen(0), gen(1), gen(2), gen(3),
                               static_cast<double>(r.bonds_broken), static_cast<double>(r.bonds_dropped),
                               static_cast<double>(r.bonds_intact), static_cast<double>(r.spheres),
-                              static_cast<double>(r.particles), r.volume_lost_m3, e.options().time_step};
+                              static_cast<double>(r.particles), r.volume_lost_m3, e.options().time_step,
+                              static_cast<double>(r.fines_removed), r.fines_volume_m3, r.added_mass_fraction};
       for (size_t k = 0; k < row.size(); ++k) hist.cols[12 + k].back() = row[k];
     }
   };
@@ -301,6 +320,20 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
   };
   auto checkpoint = [&] {
     hist.write(rundir / "history.csv");
+    if (brk) {  // one row per split of this process (a restart starts a new list)
+      Table t;
+      std::vector<double> cols[11];
+      for (const breakage::SplitEvent& ev : brk->events()) {
+        const double v[11] = {static_cast<double>(ev.step), ev.time_s, static_cast<double>(ev.generation), ev.diameter_m,
+                              ev.position.x, ev.position.y, ev.position.z, ev.f_max_N, ev.stress_Pa, ev.strength_Pa,
+                              ev.volume_retained_m3};
+        for (int k = 0; k < 11; ++k) cols[k].push_back(v[k]);
+      }
+      const char* names[11] = {"step", "time_s", "generation", "diameter_m", "x_m", "y_m", "z_m", "f_max_N", "stress_Pa",
+                               "strength_Pa", "volume_retained_m3"};
+      for (int k = 0; k < 11; ++k) t.add(names[k], cols[k]);
+      write_csv(t, rundir / (c.restart ? "splits_after_restart.csv" : "splits.csv"));
+    }
     save_checkpoint(e, brk ? scene.encode() + " " + brk->encode() : scene.encode(), ckpt);
   };
 

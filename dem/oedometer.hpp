@@ -14,7 +14,9 @@
 // checkpoint.bin (restart continues bit for bit; tested).
 // With breakage on, history.csv gains grains_broken, splits_gen0..3 (gen3 =
 // generation 3 and above), bonds_broken, bonds_dropped, bonds_intact,
-// spheres, particles, volume_lost_m3 and time_step_s; porosity counts the
+// spheres, particles, volume_lost_m3, time_step_s, fines_removed,
+// fines_volume_m3 and added_mass_fraction (splits.csv: one row per split);
+// porosity counts the
 // lost volume; every snapshot gets a bonds CSV beside it
 // (snapshots/strain_X_bonds.csv: sphere_a, sphere_b, normal_force_N, ...);
 // particle ids in the snapshot are connected bonded sets; the breakage state

@@ -26,11 +26,16 @@ BreakageModel::BreakageModel(Engine& engine, const BreakageOptions& opt) : eng_(
   if (opt_.check_interval < 1) throw InputError("breakage: check interval must be >= 1 step");
   if (!(opt_.min_split_diameter_m >= 0)) throw InputError("breakage: minimum split diameter must be >= 0");
   if (!(opt_.time_step_safety > 0 && opt_.time_step_safety <= 1)) throw InputError("breakage: time step safety must be in (0, 1]");
+  if (!(opt_.min_time_step_s >= 0) || !std::isfinite(opt_.min_time_step_s))
+    throw InputError("breakage: minimum time step must be >= 0 (0 = no density scaling)");
+  if (!(opt_.fines_overlap > 0 && opt_.fines_overlap < 1)) throw InputError("breakage: fines overlap must be in (0, 1)");
+  law_ = make_hertz_mindlin(eng_.options().material, eng_.options().material, 0.0, 1.0);
   const Particles& p = eng_.particles();
   const int64_t n = p.size();
   strength_.resize(n);
   key_.resize(n);
   generation_.assign(n, 0);
+  mass_factor_.assign(n, 1.0);
   for (int64_t s = 0; s < n; ++s) {
     key_[s] = static_cast<uint64_t>(s);
     strength_[s] = sphere_strength(opt_.strength, key_[s], 2 * p.r[s]);
@@ -164,17 +169,30 @@ int BreakageModel::check() {
   // Collect every split first: planes are computed from the state of the
   // check, before any sphere is replaced.
   std::vector<SplitEvent> todo;
+  std::vector<int64_t> fines;
+  const bool remove = opt_.sublimit == SublimitPolicy::kRemove;
+  std::vector<double> overlap;
+  if (remove) overlap = max_overlap_ratios();
   for (int64_t s = 0; s < n; ++s) {
     const double d = 2 * p.r[s];
-    if (d < opt_.min_split_diameter_m || !(p.flags[s] & kFlagBreakable) || fmax[s] <= 0) continue;
+    if (!(p.flags[s] & kFlagBreakable)) continue;
+    const bool over = fmax[s] > 0 && fmax[s] / (d * d) > strength_[s];
+    if (d < opt_.min_split_diameter_m) {
+      // Sub-limit: it would break into pieces below the resolution, or it is
+      // being pushed through a neighbour its Hertz stiffness cannot resist.
+      if (remove && (over || overlap[s] > opt_.fines_overlap)) fines.push_back(s);
+      continue;
+    }
+    if (!over) continue;
     const double sigma = fmax[s] / (d * d);
-    if (!(sigma > strength_[s])) continue;
     const std::vector<ContactLoad> c = contacts_of(s);
     const double volume = std::numbers::pi / 6 * d * d * d;
     const auto plane = splitting_plane(pos(p, s), volume, c);
     if (!plane) continue;
     SplitEvent ev;
     ev.step = eng_.step_count();
+    ev.time_s = eng_.time();
+    ev.position = pos(p, s);
     ev.sphere = s;
     ev.generation = generation_[s];
     ev.diameter_m = d;
@@ -194,6 +212,10 @@ int BreakageModel::check() {
     eng_.request_rebuild();
     update_time_step();
   }
+  // Splits keep every existing index (the mother's is reused, the rest are
+  // appended), so the fines found above are still where they were.
+  if (!fines.empty()) remove_fines(fines);
+  if (!todo.empty() || !fines.empty()) update_mass_record();
   if (!todo.empty() || bonds_changed_) relabel_particles();
   rec_.spheres = p.size();
   rec_.bonds_intact = bond_count();
@@ -228,9 +250,11 @@ Replacement BreakageModel::split(int64_t s, const SplittingPlane& plane) {
   for (int64_t k = 1; k < count; ++k) p.copy_sphere(s, idx[k]);  // inherit material, flags, ...
   const double m_mother = p.m[s], r_mother = p.r[s];
   const uint64_t mother_key = key_[s];
+  const double factor_mother = mass_factor_[s];
   strength_.resize(n0 + count - 1);
   key_.resize(n0 + count - 1);
   generation_.resize(n0 + count - 1);
+  mass_factor_.resize(n0 + count - 1);
   for (int64_t k = 0; k < count; ++k) {
     const NewSphere& ns = rep.spheres[k];
     const int64_t t = idx[k];
@@ -250,6 +274,7 @@ Replacement BreakageModel::split(int64_t s, const SplittingPlane& plane) {
     key_[t] = fragment_key(mother_key, ns.slot);
     generation_[t] = g + 1;
     strength_[t] = sphere_strength(opt_.strength, key_[t], 2 * ns.r);
+    mass_factor_[t] = factor_mother;
   }
   for (auto b : rep.bonds) {
     const int64_t i = idx[b[0]], j = idx[b[1]];
@@ -260,7 +285,120 @@ Replacement BreakageModel::split(int64_t s, const SplittingPlane& plane) {
     broken_.push_back(0);
   }
   bonds_changed_ = true;
+  if (opt_.min_time_step_s > 0) {
+    // Selective density scaling: each new sphere's own critical step (its
+    // mass against its stiffest springs: Hertz at the reference overlap and
+    // its fragment bonds) is lifted to min_time_step / safety if below. m and
+    // I scale alike, so both √(m/k) and √(I/k_rot) grow by √factor.
+    const size_t first_bond = ba_.size() - rep.bonds.size();
+    std::vector<double> kt(count, 0.0), kr(count, 0.0);
+    for (size_t q = 0; q < rep.bonds.size(); ++q) {
+      const BondSection& sec = section_[first_bond + q];
+      for (int e : {rep.bonds[q][0], rep.bonds[q][1]}) {
+        kt[e] += bond_axial_stiffness(sec);
+        kr[e] += bond_bending_stiffness(sec);
+      }
+    }
+    const double need = opt_.min_time_step_s / opt_.time_step_safety;
+    for (int64_t k = 0; k < count; ++k) {
+      const int64_t t = idx[k];
+      const double own = own_critical_step(p.m[t], p.inertia[t], p.r[t], kt[k], kr[k]);
+      if (own >= need) continue;
+      const double f = (need / own) * (need / own) * (1 + 1e-9);  // margin for rounding
+      p.m[t] *= f;
+      p.inertia[t] *= f;
+      mass_factor_[t] *= f;
+    }
+  }
   return rep;
+}
+
+void BreakageModel::remove_fines(const std::vector<int64_t>& spheres) {
+  Particles& p = eng_.particles();
+  const int64_t n = p.size();
+  std::vector<uint8_t> kill(n, 0);
+  for (int64_t s : spheres) {
+    if (s < 0 || s >= n || kill[s]) throw std::logic_error("BreakageModel::remove_fines: bad or repeated sphere index");
+    kill[s] = 1;
+    const double v = 4.0 / 3.0 * std::numbers::pi * p.r[s] * p.r[s] * p.r[s];
+    rec_.fines_volume_m3 += v;
+    rec_.volume_lost_m3 += v;
+    ++rec_.fines_removed;
+  }
+  bool dropped = false;
+  for (size_t b = 0; b < ba_.size(); ++b)
+    if (kill[ba_[b]] || kill[bb_[b]]) {
+      broken_[b] = 1;
+      dropped = true;
+    }
+  if (dropped) compact_bonds(&rec_.bonds_dropped);
+  const std::vector<int64_t> map = eng_.remove_spheres(kill);
+  for (size_t b = 0; b < ba_.size(); ++b) {  // monotone map: ba < bb stays true
+    ba_[b] = map[ba_[b]];
+    bb_[b] = map[bb_[b]];
+  }
+  for (int64_t s = 0; s < n; ++s) {
+    const int64_t t = map[s];
+    if (t < 0 || t == s) continue;
+    strength_[t] = strength_[s];
+    key_[t] = key_[s];
+    generation_[t] = generation_[s];
+    mass_factor_[t] = mass_factor_[s];
+  }
+  const int64_t kept = p.size();
+  strength_.resize(kept);
+  key_.resize(kept);
+  generation_.resize(kept);
+  mass_factor_.resize(kept);
+  bonds_changed_ = true;
+  relabel_particles();
+  rec_.spheres = kept;
+  rec_.bonds_intact = bond_count();
+  update_mass_record();
+}
+
+std::vector<double> BreakageModel::max_overlap_ratios() const {
+  const Particles& p = eng_.particles();
+  const int64_t n = p.size();
+  std::vector<double> o(n, 0.0);
+  for (int64_t k = 0; k < eng_.pair_count(); ++k) {
+    if (!eng_.pair_touching(k)) continue;
+    const int64_t i = eng_.pair_i(k), j = eng_.pair_j(k);
+    const double delta = p.r[i] + p.r[j] - norm(pos(p, j) - pos(p, i));
+    o[i] = std::max(o[i], delta / p.r[i]);
+    o[j] = std::max(o[j], delta / p.r[j]);
+  }
+  const Walls& w = eng_.options().walls;
+  for (int64_t s = 0; s < n; ++s) {
+    const double r = p.r[s];
+    double d = 0;
+    if (w.bottom) d = std::max(d, r - p.z[s]);
+    if (w.top) d = std::max(d, p.z[s] + r - w.top_z);
+    if (w.cylinder) d = std::max(d, std::hypot(p.x[s], p.y[s]) + r - w.cylinder_radius);
+    o[s] = std::max(o[s], d / r);
+  }
+  return o;
+}
+
+double BreakageModel::own_critical_step(double m, double inertia, double r, double kt, double kr) const {
+  // Hertz: the stiffest partner of a sphere of radius r has R* ≤ r (a wall
+  // or a larger sphere); stiffness at an overlap of 5 % of r (the engine's
+  // reference overlap).
+  const double ref = TimeStepOptions{}.reference_overlap;
+  double dt = std::sqrt(m / law_.normal_stiffness(ref * r, r));
+  if (kt > 0) dt = std::min({dt, std::sqrt(m / kt), std::sqrt(inertia / kr)});
+  return dt;
+}
+
+void BreakageModel::update_mass_record() {
+  const Particles& p = eng_.particles();
+  double nominal = 0, total = 0;
+  for (int64_t s = 0; s < p.size(); ++s) {
+    total += p.m[s];
+    nominal += p.m[s] / mass_factor_[s];
+  }
+  rec_.added_mass_kg = total - nominal;
+  rec_.added_mass_fraction = nominal > 0 ? rec_.added_mass_kg / nominal : 0.0;
 }
 
 void BreakageModel::relabel_particles() {
@@ -296,18 +434,11 @@ void BreakageModel::update_time_step() {
       kr[s] += bond_bending_stiffness(section_[b]);
     }
   }
-  // Hertz, per sphere: the stiffest partner of a sphere of radius r has
-  // R* ≤ r (a wall or a larger sphere); stiffness at an overlap of 5 % of r
-  // (the engine's reference overlap). Pairing each sphere's own mass with its
-  // own stiffness avoids the m_min / k(r_max) mismatch of a global estimate
-  // once fragments are two orders of magnitude lighter than grains.
-  const HertzMindlin law = make_hertz_mindlin(eng_.options().material, eng_.options().material, 0.0, 1.0);
-  const double ref = TimeStepOptions{}.reference_overlap;
+  // Pairing each sphere's own mass with its own stiffness avoids the
+  // m_min / k(r_max) mismatch of a global estimate once fragments are two
+  // orders of magnitude lighter than grains.
   double dt = std::numeric_limits<double>::infinity();
-  for (int64_t s = 0; s < n; ++s) {
-    dt = std::min(dt, std::sqrt(p.m[s] / law.normal_stiffness(ref * p.r[s], p.r[s])));
-    if (kt[s] > 0) dt = std::min({dt, std::sqrt(p.m[s] / kt[s]), std::sqrt(p.inertia[s] / kr[s])});
-  }
+  for (int64_t s = 0; s < n; ++s) dt = std::min(dt, own_critical_step(p.m[s], p.inertia[s], p.r[s], kt[s], kr[s]));
   const double want = opt_.time_step_safety * dt;
   if (want < eng_.options().time_step) eng_.set_time_step(want);
 }
@@ -323,10 +454,10 @@ std::string g17(double v) {
 std::string BreakageModel::encode() const {
   std::ostringstream os;
   const int64_t n = static_cast<int64_t>(key_.size());
-  os << "breakage1 " << g17(eng_.options().time_step) << ' ' << n;
-  for (int64_t s = 0; s < n; ++s) os << ' ' << key_[s] << ' ' << generation_[s];
+  os << "breakage2 " << g17(eng_.options().time_step) << ' ' << n;
+  for (int64_t s = 0; s < n; ++s) os << ' ' << key_[s] << ' ' << generation_[s] << ' ' << g17(mass_factor_[s]);
   os << ' ' << rec_.grains_broken << ' ' << rec_.bonds_broken << ' ' << rec_.bonds_dropped << ' ' << g17(rec_.volume_lost_m3)
-     << ' ' << rec_.splits_by_generation.size();
+     << ' ' << rec_.fines_removed << ' ' << g17(rec_.fines_volume_m3) << ' ' << rec_.splits_by_generation.size();
   for (int64_t c : rec_.splits_by_generation) os << ' ' << c;
   os << ' ' << ba_.size();
   for (size_t b = 0; b < ba_.size(); ++b) {
@@ -343,18 +474,21 @@ void BreakageModel::restore(const std::string& state) {
   std::string tag;
   double dt = 0;
   int64_t n = 0;
-  if (!(is >> tag >> dt >> n) || tag != "breakage1") fail("missing or of an unknown version");
+  if (!(is >> tag >> dt >> n) || tag != "breakage2") fail("missing or of an unknown version");
   const Particles& p = eng_.particles();
   if (n != p.size()) fail("has " + std::to_string(n) + " spheres, the checkpoint " + std::to_string(p.size()));
   key_.resize(n);
   generation_.resize(n);
   strength_.resize(n);
+  mass_factor_.resize(n);
   for (int64_t s = 0; s < n; ++s) {
-    if (!(is >> key_[s] >> generation_[s])) fail("truncated (spheres)");
+    if (!(is >> key_[s] >> generation_[s] >> mass_factor_[s]) || !(mass_factor_[s] >= 1)) fail("truncated (spheres)");
     strength_[s] = sphere_strength(opt_.strength, key_[s], 2 * p.r[s]);
   }
   size_t ngen = 0;
-  if (!(is >> rec_.grains_broken >> rec_.bonds_broken >> rec_.bonds_dropped >> rec_.volume_lost_m3 >> ngen)) fail("truncated (records)");
+  if (!(is >> rec_.grains_broken >> rec_.bonds_broken >> rec_.bonds_dropped >> rec_.volume_lost_m3 >> rec_.fines_removed >>
+        rec_.fines_volume_m3 >> ngen))
+    fail("truncated (records)");
   rec_.splits_by_generation.assign(ngen, 0);
   for (auto& c : rec_.splits_by_generation)
     if (!(is >> c)) fail("truncated (generations)");
@@ -376,6 +510,7 @@ void BreakageModel::restore(const std::string& state) {
   rec_.spheres = n;
   rec_.bonds_intact = static_cast<int64_t>(nb);
   relabel_particles();
+  update_mass_record();
 }
 
 void BreakageModel::run(int64_t steps) {

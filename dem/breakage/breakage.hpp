@@ -28,7 +28,12 @@
 // Time step: dt ≤ safety × min over spheres of √(m/k_Hertz(r)) (k at 5 %
 // overlap against a wall, the stiffest partner a sphere can have), and for
 // bonded spheres √(m/Σ k̄n A) and √(I/Σ k̄n I_b) over their bonds;
-// re-evaluated after each split, never raised.
+// re-evaluated after each split, never raised. Selective density scaling
+// (min_time_step_s) scales the mass and inertia of new spheres that would
+// pull it below the minimum; sub-limit spheres that meet the criterion or
+// are squeezed past fines_overlap are removed as fines (SublimitPolicy).
+// Both are modelling decisions of this implementation, argued and measured
+// in dem/breakage/README.md.
 //
 // Known approximations (stated, not hidden): the sphere that takes the
 // mother's index inherits the tangential histories of the mother's sphere
@@ -50,6 +55,13 @@
 
 namespace tg::dem::breakage {
 
+// What happens to a sphere below the minimum split diameter that meets the
+// breakage criterion or is squeezed into a neighbour (README: "Sub-limit spheres").
+enum class SublimitPolicy {
+  kRemove,  // removed as fines (volume counted as lost: below the 0.2 mm XCT resolution)
+  kKeep,    // stays; the engine's overlap limit may then stop the run
+};
+
 struct BreakageOptions {
   int64_t check_interval = 10;       // steps between grain checks (the study: 10)
   double min_split_diameter_m = 2e-4;  // smaller spheres never split (the study: 0.2 mm)
@@ -58,6 +70,17 @@ struct BreakageOptions {
   // dt ≤ safety × critical step when spheres appear; 0.5 × √(m/k) is ~0.35
   // of the two-body Verlet limit √(2m/k).
   double time_step_safety = 0.5;
+  // Selective density scaling: a sphere made by a split whose own critical
+  // step × time_step_safety is below this gets its mass and inertia scaled
+  // up by the smallest factor that lifts it to this, so the run's step never
+  // falls below it. Default 1e-8 s: the study's smallest step. 0 = off (the
+  // step follows the smallest fragment down to ~3e-9 s).
+  double min_time_step_s = 1e-8;
+  SublimitPolicy sublimit = SublimitPolicy::kRemove;
+  // kRemove: a sub-limit sphere whose largest contact overlap exceeds this
+  // fraction of its radius is removed too (the engine stops at overlap_limit,
+  // default 0.5, so this must be below it to act first).
+  double fines_overlap = 0.3;
 };
 
 // Counters for the history table.
@@ -69,13 +92,19 @@ struct BreakageRecord {
   int64_t bonds_intact = 0;
   int64_t spheres = 0;
   int64_t particles = 0;                      // connected bonded sets
-  double volume_lost_m3 = 0;
+  double volume_lost_m3 = 0;                  // template loss + fines, m³
+  int64_t fines_removed = 0;                  // sub-limit spheres removed (SublimitPolicy::kRemove)
+  double fines_volume_m3 = 0;                 // their volume (part of volume_lost_m3)
+  double added_mass_kg = 0;                   // density scaling: Σ (m - m_nominal) over the spheres
+  double added_mass_fraction = 0;             // added_mass_kg / Σ m_nominal
 };
 
 // One split, for tests and logs.
 struct SplitEvent {
   int64_t step = 0;
+  double time_s = 0;      // engine time of the check
   int64_t sphere = 0;     // index of the mother (now the first fragment sphere)
+  Vec3 position;          // the mother's centre, m
   int generation = 0;     // of the mother
   double diameter_m = 0;
   double f_max_N = 0, stress_Pa = 0, strength_Pa = 0;
@@ -97,6 +126,12 @@ class BreakageModel {
   void run(int64_t steps);
   // One grain check now; returns the number of spheres split.
   int check();
+  // Removes these spheres (indices now) as fines: volume to volume_lost and
+  // fines_volume, their bonds dropped, the others renumbered in order
+  // (Engine::remove_spheres). Used by check(); public for tests.
+  void remove_fines(const std::vector<int64_t>& spheres);
+  // Density scaling factor of sphere s (1 = nominal mass).
+  double mass_factor(int64_t s) const { return mass_factor_[s]; }
 
   const BreakageRecord& record() const { return rec_; }
   const std::vector<SplitEvent>& events() const { return events_; }
@@ -123,6 +158,12 @@ class BreakageModel {
   std::vector<ContactLoad> contacts_of(int64_t s) const;
   void relabel_particles();
   void update_time_step();
+  void update_mass_record();
+  // √(m/k) of one sphere: Hertz at 5 % overlap against a wall, its bonds'
+  // axial and bending springs (kt, kr: sums over its bonds; 0 = none).
+  double own_critical_step(double m, double inertia, double r, double kt, double kr) const;
+  // Largest contact overlap of every sphere / its radius (last positions).
+  std::vector<double> max_overlap_ratios() const;
   // Removes the bonds flagged in broken_; adds their count to *counter.
   void compact_bonds(int64_t* counter);
 
@@ -134,6 +175,8 @@ class BreakageModel {
   std::vector<double> strength_;
   std::vector<uint64_t> key_;
   std::vector<int> generation_;
+  std::vector<double> mass_factor_;  // density scaling, inherited by fragments
+  HertzMindlin law_;                 // for the per-sphere critical step
   // Bonds (structure of arrays).
   std::vector<int64_t> ba_, bb_;
   std::vector<BondSection> section_;

@@ -273,6 +273,47 @@ TEST(Engine, SameResultWithOneAndTwoThreads) {
   EXPECT_EQ(la, lb);
 }
 
+// Removing a sphere (breakage fines) renumbers the others but must not
+// perturb them: an oblique impact (tangential history building up) with a
+// far, idle sphere at index 0 that is removed mid-contact ends bit for bit
+// like the same impact run without that sphere.
+TEST(Engine, RemovingASphereKeepsTheOthersAndTheirHistories) {
+  EngineOptions o = free_space(1e-8);
+  o.friction = 0.3;
+  auto pair = [](Particles& p) {
+    const double gap = 1e-7;
+    const int64_t a = p.append_sphere(-kR - gap, 0, 0, kR, 2180, 0);
+    const int64_t b = p.append_sphere(kR + gap, 0, 0, kR, 2180, 1);
+    p.vx[a] = 0.05, p.vx[b] = -0.05;
+    p.vy[a] = 0.02, p.vy[b] = -0.02;
+  };
+  Particles with, without;
+  with.append_sphere(0, 0, 20 * kR, 0.3 * kR, 2180, 7);  // far away, never touches
+  pair(with);
+  pair(without);
+  Engine e1(std::move(with), o), e2(std::move(without), o);
+  const int before = 500, after = 2000;
+  e1.run(before);
+  e2.run(before);
+  ASSERT_EQ(e1.contact_count(), 1);
+  ASSERT_EQ(e1.pair_history().i.size(), 1u);  // a non-zero tangential history to carry
+  const std::vector<int64_t> map = e1.remove_spheres({1, 0, 0});
+  EXPECT_EQ(map, (std::vector<int64_t>{-1, 0, 1}));
+  ASSERT_EQ(e1.particles().size(), 2);
+  ASSERT_EQ(e1.pair_history().xi, e2.pair_history().xi);
+  e1.run(after);
+  e2.run(after);
+  const Particles &a = e1.particles(), &b = e2.particles();
+  for (int s = 0; s < 2; ++s) {
+    EXPECT_EQ(a.x[s], b.x[s]);
+    EXPECT_EQ(a.y[s], b.y[s]);
+    EXPECT_EQ(a.vy[s], b.vy[s]);
+    EXPECT_EQ(a.wz[s], b.wz[s]);
+    EXPECT_EQ(a.particle[s], b.particle[s]);
+  }
+  EXPECT_NE(a.wz[0], 0.0);  // friction acted
+}
+
 TEST(Engine, RejectsBadOptions) {
   Particles p;
   p.append_sphere(0, 0, kR, kR, 2180, 0);

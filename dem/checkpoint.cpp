@@ -2,6 +2,8 @@
 
 #include <cstring>
 #include <fstream>
+#include <iterator>
+#include <sstream>
 #include <type_traits>
 
 #include "core/atomic_file.hpp"
@@ -10,7 +12,20 @@
 namespace tg::dem {
 
 namespace {
-constexpr char kMagic[8] = {'T', 'G', 'D', 'E', 'M', 'C', 'K', '1'};
+// Version 2 added the checksum; version 1 files are refused by name.
+constexpr char kMagic[8] = {'T', 'G', 'D', 'E', 'M', 'C', 'K', '2'};
+
+// 64-bit FNV-1a over the body. Each step (xor a byte, multiply by an odd
+// constant) is a bijection of the state, so any change confined to one byte
+// always changes the sum; other damage escapes with probability ~2^-64.
+uint64_t fnv1a(const char* p, size_t n) {
+  uint64_t h = 14695981039346656037ull;
+  for (size_t k = 0; k < n; ++k) {
+    h ^= static_cast<unsigned char>(p[k]);
+    h *= 1099511628211ull;
+  }
+  return h;
+}
 
 template <class T>
 void put(std::ostream& os, const T& v) {
@@ -28,7 +43,7 @@ void put_vec(std::ostream& os, const std::vector<T>& v) {
 }
 
 struct Reader {
-  std::ifstream is;
+  std::istringstream is;
   std::string path;
   template <class T>
   T get() {
@@ -55,11 +70,8 @@ struct Reader {
 }  // namespace
 
 void save_checkpoint(const Engine& e, const std::string& scene, const std::filesystem::path& path) {
-  AtomicPath out(path);
+  std::ostringstream os(std::ios::binary);
   {
-    std::ofstream os(out.temp(), std::ios::binary);
-    if (!os) throw InputError(path.string() + ": cannot write checkpoint");
-    os.write(kMagic, 8);
     const Particles& p = e.particles();
     put<int64_t>(os, p.size());
     p.for_each_field([&](std::string_view name, const auto& v) {
@@ -76,16 +88,36 @@ void save_checkpoint(const Engine& e, const std::string& scene, const std::files
     put_vec(os, h.j);
     put_vec(os, h.xi);
     put_str(os, scene);
-    if (!os) throw InputError(path.string() + ": write failed");
+  }
+  const std::string body = os.str();
+  AtomicPath out(path);
+  {
+    std::ofstream f(out.temp(), std::ios::binary);
+    if (!f) throw InputError(path.string() + ": cannot write checkpoint");
+    f.write(kMagic, 8);
+    f.write(body.data(), static_cast<std::streamsize>(body.size()));
+    put<uint64_t>(f, fnv1a(body.data(), body.size()));
+    if (!f) throw InputError(path.string() + ": write failed");
   }
   out.commit();
 }
 
 CheckpointState load_checkpoint(const std::filesystem::path& path) {
-  Reader r{std::ifstream(path, std::ios::binary), path.string()};
-  if (!r.is) throw InputError(path.string() + ": cannot open checkpoint");
-  char magic[8];
-  if (!r.is.read(magic, 8) || std::memcmp(magic, kMagic, 8) != 0) r.fail("bad magic");
+  // Whole file first: magic, version and checksum are checked before any
+  // field is parsed, so a damaged file never yields a plausible state.
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw InputError(path.string() + ": cannot open checkpoint");
+  const std::string all((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  Reader r{std::istringstream(), path.string()};
+  if (all.size() < 8 || std::memcmp(all.data(), kMagic, 7) != 0) r.fail("bad magic");
+  if (all[7] != kMagic[7])
+    r.fail("format version " + all.substr(7, 1) + ", this tomograin reads version " + std::string(1, kMagic[7]));
+  if (all.size() < 16) r.fail("truncated");
+  const size_t nbody = all.size() - 16;
+  uint64_t stored = 0;
+  std::memcpy(&stored, all.data() + 8 + nbody, 8);
+  if (fnv1a(all.data() + 8, nbody) != stored) r.fail("checksum mismatch: the file is damaged or truncated");
+  r.is.str(all.substr(8, nbody));  // parsed from memory: the file was read once
   CheckpointState s;
   const int64_t n = r.get<int64_t>();
   s.particles.for_each_field([&](std::string_view name, auto& v) {
@@ -102,6 +134,7 @@ CheckpointState load_checkpoint(const std::filesystem::path& path) {
   r.get_vec(s.history.xi, "pair history");
   if (s.history.j.size() != s.history.i.size() || s.history.xi.size() != 3 * s.history.i.size()) r.fail("pair arrays disagree");
   s.scene = r.get_str();
+  if (r.is.peek() != std::char_traits<char>::eof()) r.fail("trailing bytes after the scene");
   return s;
 }
 

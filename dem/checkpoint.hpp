@@ -3,9 +3,13 @@
 // the declared field list, so none can be forgotten), time, step count, the
 // walls (top platen position and speed), the pair tangential histories, and
 // an opaque text blob for the scene (strain reference, next snapshot...).
-// Layout: magic "TGDEMCK1", then length-prefixed records; doubles are
-// stored raw (little-endian machines only; the magic check rejects others
-// only by the field-size check). Written atomically.
+// Layout: magic "TGDEMCK2" (the last character is the format version),
+// length-prefixed records, then a 64-bit FNV-1a checksum of the records.
+// Doubles are stored raw (little-endian machines only; the magic check
+// rejects others only by the field-size check). Written atomically (temp +
+// rename), so a kill mid-write leaves the previous checkpoint. Loading checks
+// magic, version and checksum before parsing: a truncated or bit-flipped file
+// is an InputError naming it (tests/apps/crash_restart_test.py).
 #pragma once
 #include <filesystem>
 #include <string>

@@ -77,15 +77,19 @@ PluviationResult pluviate(const PluviationOptions& o, EngineOptions eo) {
   const int64_t chunk = std::max<int64_t>(1, static_cast<int64_t>(1e-3 / eo.time_step));  // check every 1 ms
   // Let the grains fall first: free fall from the top takes sqrt(2H/g).
   const double t_fall = eo.gravity_z < 0 ? std::sqrt(2 * o.generation_height_m / -eo.gravity_z) : 0;
-  while (e.time() < o.max_time_s) {
-    e.run(chunk);
-    bar.update(e.time());
-    res.kinetic_energy_J = e.kinetic_energy();
-    if (e.time() > t_fall && res.kinetic_energy_J < o.kinetic_energy_tol_J) {
-      res.settled = true;
-      break;
+  // Runs until the kinetic energy falls below the tolerance (after `t_min`)
+  // or the time limit; true when settled. (Taps after settling were tried
+  // and loosened the frictionless deposit: 45.53 % vs 45.22 %, README.)
+  auto settle = [&](double t_min) {
+    while (e.time() < o.max_time_s) {
+      e.run(chunk);
+      bar.update(e.time());
+      res.kinetic_energy_J = e.kinetic_energy();
+      if (e.time() > t_min && res.kinetic_energy_J < o.kinetic_energy_tol_J) return true;
     }
-  }
+    return false;
+  };
+  res.settled = settle(t_fall);
   bar.finish();
   res.settle_time_s = e.time();
   res.particles = e.particles();

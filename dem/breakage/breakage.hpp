@@ -79,7 +79,9 @@ struct BreakageOptions {
   SublimitPolicy sublimit = SublimitPolicy::kRemove;
   // kRemove: a sub-limit sphere whose largest contact overlap exceeds this
   // fraction of its radius is removed too (the engine stops at overlap_limit,
-  // default 0.5, so this must be below it to act first).
+  // default 0.5, so this must be below it to act first); so is a new
+  // fragment sphere (any size) born overlapping a neighbour of its mother or
+  // a wall by more than this (the crushed zone at the mother's contact).
   double fines_overlap = 0.3;
 };
 
@@ -164,6 +166,7 @@ class BreakageModel {
   double own_critical_step(double m, double inertia, double r, double kt, double kr) const;
   // Largest contact overlap of every sphere / its radius (last positions).
   std::vector<double> max_overlap_ratios() const;
+  double wall_overlap(int64_t s) const;  // largest overlap with a wall, m (0 = none)
   // Removes the bonds flagged in broken_; adds their count to *counter.
   void compact_bonds(int64_t* counter);
 

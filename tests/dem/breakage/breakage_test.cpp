@@ -61,7 +61,8 @@ Crushed crush_until_split(double d, const BreakageOptions& b) {
 // at 1e-8 s. The added mass is checked against an independent count: the
 // nominal mass is ρ Σ 4/3 π r³ over the spheres.
 TEST(BreakageModel, DensityScalingLiftsTheStepToTheMinimum) {
-  const BreakageOptions b = options(1e-8);
+  BreakageOptions b = options(1e-8);
+  b.sublimit = SublimitPolicy::kKeep;  // all 34 spheres (see the next test)
   Crushed c = crush_until_split(0.22e-3, b);
   const Particles& p = c.eng->particles();
   ASSERT_EQ(p.size(), 34);
@@ -89,6 +90,33 @@ TEST(BreakageModel, DensityScalingLiftsTheStepToTheMinimum) {
   // The split itself is the same (density scaling acts only on new spheres).
   EXPECT_EQ(ref.model->events().front().step, c.model->events().front().step);
   EXPECT_EQ(ref.model->events().front().f_max_N, c.model->events().front().f_max_N);
+}
+
+// The same split with kRemove: the fragment spheres born overlapping a
+// platen by more than fines_overlap × their radius (the mother pressed
+// ~15 µm into each platen: a small sphere there starts deep in the platen)
+// are removed at once as fines; counted from the geometry of the
+// kKeep split (independent of the removal code).
+TEST(BreakageModel, FragmentSpheresBornDeepInAContactAreFines) {
+  BreakageOptions keep = options(1e-8);
+  keep.sublimit = SublimitPolicy::kKeep;
+  Crushed k = crush_until_split(0.22e-3, keep);
+  const Particles& q = k.eng->particles();
+  int deep = 0;
+  double v_deep = 0;
+  for (int64_t s = 0; s < q.size(); ++s) {
+    const double o = std::max(q.r[s] - q.z[s], q.z[s] + q.r[s] - k.eng->walls().top_z);
+    if (o > 0.3 * q.r[s]) {
+      ++deep;
+      v_deep += sphere_volume(q.r[s]);
+    }
+  }
+  ASSERT_GT(deep, 0);
+  Crushed c = crush_until_split(0.22e-3, options(1e-8));
+  EXPECT_EQ(c.eng->particles().size(), 34 - deep);
+  EXPECT_EQ(c.model->record().fines_removed, deep);
+  EXPECT_NEAR(c.model->record().fines_volume_m3, v_deep, 1e-9 * v_deep);
+  c.model->run(2000);  // and the run goes on without them
 }
 
 // Removing a fragment element renumbers the spheres after it; every

@@ -1,0 +1,121 @@
+#!/usr/bin/env python3
+"""Closing figures of a breakage oedometer run (issue 7), each beside the study's.
+
+Usage: breakage_analysis.py RUNDIR [N_GRAINS]
+
+Reads RUNDIR/history.csv, RUNDIR/splits.csv and RUNDIR/run.json (written by
+`tomograin dem oedometer`). Rules (stated, not tuned):
+  * yield stress: the e-log(sigma) curve (void ratio e = n/(1-n) from the
+    history's porosity, sigma = top-platen stress) from 0.05 MPa to the end is
+    fitted by two straight lines (least squares, breakpoint chosen to minimise
+    the total squared residual: the recompression and the normal-compression
+    line); the yield stress is where the two lines cross (Casagrande-like
+    bilinear rule).
+  * "at 4 MPa": the first history row with sigma_top >= 4 MPa.
+  * breakage vs height: generation-0 splits (grains broken), binned by the
+    grain centre's height at the split divided by the platen height then
+    (z / h(t), h(t) = H0 - v t), 5 equal bins from the bottom platen.
+"""
+import csv
+import json
+import math
+import sys
+
+
+def read_csv(path):
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    return {k: [float(r[k]) for r in rows] for k in rows[0]} if rows else {}
+
+
+def line_fit(x, y):
+    n = len(x)
+    mx, my = sum(x) / n, sum(y) / n
+    sxx = sum((a - mx) ** 2 for a in x)
+    sxy = sum((a - mx) * (b - my) for a, b in zip(x, y))
+    b = sxy / sxx if sxx > 0 else 0.0
+    a = my - b * mx
+    sse = sum((yy - a - b * xx) ** 2 for xx, yy in zip(x, y))
+    return a, b, sse
+
+
+def yield_stress(sig, por, lo=0.05e6):
+    pts = [(math.log10(s), n / (1 - n)) for s, n in zip(sig, por) if s >= lo]
+    # keep the loading envelope only (sigma non-decreasing), so unloading
+    # wiggles after a collapse do not enter the fit twice
+    env, smax = [], -1e300
+    for x, y in pts:
+        if x >= smax:
+            env.append((x, y))
+            smax = x
+    best = None
+    for k in range(5, len(env) - 5):
+        a1, b1, s1 = line_fit([p[0] for p in env[:k]], [p[1] for p in env[:k]])
+        a2, b2, s2 = line_fit([p[0] for p in env[k:]], [p[1] for p in env[k:]])
+        if best is None or s1 + s2 < best[0]:
+            best = (s1 + s2, a1, b1, a2, b2)
+    if best is None or best[2] == best[4]:
+        return float("nan")
+    _, a1, b1, a2, b2 = best
+    return 10 ** ((a2 - a1) / (b1 - b2))
+
+
+def main():
+    run = sys.argv[1]
+    h = read_csv(f"{run}/history.csv")
+    info = json.load(open(f"{run}/run.json"))
+    n0 = int(sys.argv[2]) if len(sys.argv) > 2 else int(info["spheres"])
+    h0 = info["initial_height_m"]
+    sig, por = h["top_stress_Pa"], h["porosity"]
+    sy = yield_stress(sig, por)
+
+    def at(cond):
+        for i in range(len(sig)):
+            if cond(i):
+                return i
+        return None
+
+    i_y = at(lambda i: sig[i] >= sy)
+    i_4 = at(lambda i: sig[i] >= 4e6)
+    last = len(sig) - 1
+
+    def row(i):
+        if i is None:
+            return "not reached"
+        return (f"strain {100*h['strain'][i]:.2f} %, sigma {sig[i]/1e6:.2f} MPa: grains broken {int(h['grains_broken'][i])}, "
+                f"bonds broken {int(h['bonds_broken'][i])} (+{int(h['bonds_dropped'][i])} dropped with split elements), "
+                f"spheres {int(h['spheres'][i])}, fines removed {int(h['fines_removed'][i])}")
+
+    print(f"run {run}: {n0} grains, H0 {1e3*h0:.3f} mm, initial porosity {100*info['initial_porosity']:.2f} %")
+    print(f"yield stress (bilinear e-log sigma): {sy/1e6:.2f} MPa   [study ~2 MPa]")
+    print(f"at yield: {row(i_y)}   [study: 20 grains / 300 bonds]")
+    print(f"at 4 MPa: {row(i_4)}   [study: 280 grains / 10 000 bonds]")
+    print(f"at end:   {row(last)}")
+    print(f"intact grains broken at the end: {100*h['grains_broken'][last]/n0:.1f} %   [study 35 %]")
+    print(f"final: spheres {int(h['spheres'][last])}, particles {int(h['particles'][last])}, "
+          f"volume lost {1e9*h['volume_lost_m3'][last]:.3f} mm3 (fines {1e9*h['fines_volume_m3'][last]:.4f}), "
+          f"added mass fraction {h['added_mass_fraction'][last]:.2e}, dt {h['time_step_s'][last]:.3g} s, "
+          f"max KE {max(h['kinetic_energy_J']):.3g} J")
+    try:
+        sp = read_csv(f"{run}/splits.csv")
+    except (FileNotFoundError, StopIteration):
+        sp = {}
+    if sp:
+        v = 0.1
+        bins = [0] * 5
+        for g, z, t in zip(sp["generation"], sp["z_m"], sp["time_s"]):
+            if g != 0:
+                continue
+            rel = z / (h0 - v * t)
+            bins[min(4, max(0, int(rel * 5)))] += 1
+        print("grains broken by height (z/h, bottom -> top): " +
+              ", ".join(f"{k/5:.1f}-{(k+1)/5:.1f}: {c}" for k, c in enumerate(bins)) +
+              "   [study: more near the platens]")
+        gens = {}
+        for g in sp["generation"]:
+            gens[int(g)] = gens.get(int(g), 0) + 1
+        print("splits by generation: " + ", ".join(f"gen {g}: {c}" for g, c in sorted(gens.items())))
+
+
+if __name__ == "__main__":
+    main()

@@ -49,7 +49,10 @@ static tg::app::Registrar reg{{"dem", 60, [](CLI::App& app, CLI::App*& sub) -> t
       "RUNDIR receives: config.toml (copy), run.json (time step, critical step, damping, mass\n"
       "scaling, threads), history.csv (strain, top/bottom/lateral stress in Pa, K0, kinetic energy,\n"
       "coordination number, contacts, porosity), snapshots/strain_*.h5 + .xmf (ParaView: open the\n"
-      ".xmf, apply Glyph scaled by r_m), checkpoint.bin (for --restart).\n\n"
+      ".xmf, apply Glyph scaled by r_m), checkpoint.bin (for --restart).\n"
+      "Breakage ([breakage], on by default, Table 1): history.csv gains grains broken, splits per\n"
+      "generation, bonds broken, spheres, volume lost, fines removed, added mass (density scaling keeps\n"
+      "dt >= breakage.min_time_step_s, 1e-8 s); splits.csv lists every split; snapshots get bond CSVs.\n\n"
       "Example:\n  tomograin dem oedometer dem/examples/demo.toml -o runs/demo");
   oed->add_option("config", o->config, "TOML config (unknown keys are errors)")->required();
   oed->add_option("-o,--output", o->out, "Run folder (created)")->required();
@@ -58,7 +61,8 @@ static tg::app::Registrar reg{{"dem", 60, [](CLI::App& app, CLI::App*& sub) -> t
       "pack",
       "Specimen by pluviation: diameters ~ normal (pluviation.d50_m 1.36 mm, pluviation.cu 1.07),\n"
       "random non-overlapping insertion in a Ø15 mm x 30 mm cylinder, settling under gravity until the\n"
-      "kinetic energy is below pluviation.kinetic_energy_tol_J. The grain count fills\n"
+      "kinetic energy is below pluviation.kinetic_energy_tol_J, with friction\n"
+      "pluviation.deposition_friction (default 0: frictionless deposition, dense). The grain count fills\n"
       "pluviation.target_height_m (12.25 mm) at pluviation.target_porosity (44.5 %).\n"
       "Prints count, height and porosity reached; writes CSV x_m,y_m,z_m,r_m (metres, axis z, bottom z = 0).\n\n"
       "Example:\n  tomograin dem pack dem/examples/oedometer.toml -o packing.csv");
@@ -80,6 +84,8 @@ static tg::app::Registrar reg{{"dem", 60, [](CLI::App& app, CLI::App*& sub) -> t
   crush->add_option("--d0", o->crush.breakage.strength.d0_m, "Weibull reference size d0, m (default 1e-3)");
   crush->add_option("--seed", o->crush.breakage.strength.seed, "Strength seed (default 1)");
   crush->add_option("--min-split", o->crush.breakage.min_split_diameter_m, "Smallest diameter that splits, m (default 2e-4)");
+  crush->add_option("--min-dt", o->crush.breakage.min_time_step_s,
+                    "Density scaling: new spheres are made heavy enough for this time step, s (default 1e-8; 0 = off)");
   crush->add_option("-o,--output", o->out, "History CSV to write")->required();
   return [o, oed, pack, crush] {
     if (crush->parsed()) {

@@ -1,5 +1,7 @@
 #include "core/memory.hpp"
 
+#include <sys/mman.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -82,5 +84,22 @@ std::string human_bytes(double b) {
   std::snprintf(buf, sizeof buf, u == 0 ? "%.0f %s" : "%.2f %s", b, units[u]);
   return buf;
 }
+
+void* allocate_large(size_t bytes) {
+  constexpr size_t kHuge = size_t(2) << 20;
+  if (bytes < kHuge) {
+    void* p = std::malloc(bytes ? bytes : 1);
+    if (!p) throw ResourceError("out of memory allocating " + human_bytes(double(bytes)));
+    return p;
+  }
+  void* p = nullptr;
+  const size_t rounded = (bytes + kHuge - 1) / kHuge * kHuge;
+  if (posix_memalign(&p, kHuge, rounded) != 0 || !p)
+    throw ResourceError("out of memory allocating " + human_bytes(double(bytes)));
+  madvise(p, rounded, MADV_HUGEPAGE);  // a hint: ignored where THP is off
+  return p;
+}
+
+void free_large(void* p) noexcept { std::free(p); }
 
 }  // namespace tg

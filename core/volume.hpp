@@ -3,9 +3,9 @@
 // volume, a slab of slices or a sub-box (strided in z and y, contiguous in x).
 //
 // Volumes are move-only: copying 3.6 GB by accident is a bug, so a copy is
-// the explicit clone(). Memory is allocated uninitialised (make_unique_for_
-// overwrite) after check_allocation(), so an impossible request fails with a
-// clear message; use Volume::filled() when a defined value is needed.
+// the explicit clone(). Memory is allocated uninitialised (allocate_large:
+// huge-page aligned) after check_allocation(), so an impossible request fails
+// with a clear message; use Volume::filled() when a defined value is needed.
 //
 // See core/shape.hpp for the index and coordinate conventions.
 #pragma once
@@ -98,7 +98,7 @@ class Volume {
     if (__builtin_mul_overflow(n, static_cast<int64_t>(sizeof(T)), &bytes))
       throw ResourceError("volume " + shape.str() + " is too large to address");
     check_allocation(bytes, "volume " + shape.str());
-    data_ = std::make_unique_for_overwrite<T[]>(static_cast<size_t>(n));
+    data_.reset(static_cast<T*>(allocate_large(static_cast<size_t>(bytes))));
   }
   static Volume filled(Shape shape, T value, Geometry geom = {}) {
     Volume v(shape, geom);
@@ -151,7 +151,7 @@ class Volume {
  private:
   Shape shape_;
   Geometry geom_;
-  std::unique_ptr<T[]> data_;
+  std::unique_ptr<T[], LargeFree> data_;
 };
 
 // Copy a (possibly strided) view into a new owning volume.

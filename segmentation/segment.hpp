@@ -76,6 +76,7 @@ struct SegmentResult {
   PoreFilterResult pores;
   double h = 0;
   uint32_t markers = 0;
+  double buckets_per_unit = 0;  // watershed levels per distance unit actually used (see quantise_levels)
   MergeResult merge;
   uint32_t count = 0;       // final labels
   int64_t dropped = 0;      // labels removed by min_size_vox

@@ -21,9 +21,20 @@
 // safe without lines, see scikit-image issue #2636 for why it is not with
 // them). Solid voxels that no marker reaches (cut off by lines) stay 0.
 //
-// Cost: O(N) time; memory: the u32 labels (the markers, updated in place;
-// one high bit flags queued voxels) plus the queued frontier, 8 B per
-// queued voxel, freed level by level. Serial and deterministic.
+// Levels live in one byte per voxel (0 = void, 1 + level on the solid):
+// quantise_levels() rewrites the solid mask in place, so the float distance
+// map can be freed before flooding (peak memory: mask 1 B + labels 4 B per
+// voxel + the frontier). At most 255 levels: when dmax * buckets_per_unit
+// would exceed 254, the quantisation is coarsened to 254 / dmax levels per
+// unit (returned and reported; grains of radius > 63 voxels at the default).
+//
+// Cost: O(N) time. The flood is bound by memory latency (it visits the 26
+// neighbours of every solid voxel in frontier order), so its inner loop
+// reads only the u32 label word of each neighbour: flags in its top bits
+// (queued, line, volume border, so no index division for interior voxels;
+// void voxels are pre-marked queued) and the level byte only for voxels it
+// queues. Frontier entries are 4 B (8 B for volumes over 2^32 voxels),
+// freed level by level. Serial and deterministic.
 #pragma once
 #include <cstdint>
 
@@ -37,10 +48,20 @@ struct WatershedOptions {
   double buckets_per_unit = 4.0;   // distance quantisation: levels per distance unit
 };
 
-// `labels` holds the markers on entry (1..2^30-1, 0 elsewhere) and the
-// watershed labels on exit (0 on void and on line voxels). `dist` must be
-// finite on the solid.
-void watershed(const Volume<float>& dist, const Volume<uint8_t>& solid, Volume<uint32_t>& labels,
-               const WatershedOptions& opt = {});
+// Rewrites `solid` (0 = void, non-zero = solid) in place into flooding
+// levels: 0 on void, 1 + floor(d * q) on the solid, where q is
+// buckets_per_unit, lowered when needed so that the top level is <= 255.
+// Returns the q used. `dist` must be finite on the solid.
+double quantise_levels(const Volume<float>& dist, Volume<uint8_t>& solid, double buckets_per_unit);
+
+// The flood on quantised levels (from quantise_levels). `labels` holds the
+// markers on entry (1..2^29-2, 0 elsewhere) and the watershed labels on exit
+// (0 on void and on line voxels). opt.buckets_per_unit is not used here.
+void watershed_levels(const Volume<uint8_t>& levels, Volume<uint32_t>& labels, const WatershedOptions& opt = {});
+
+// Convenience for callers that keep the distance map: quantises a copy of
+// the mask, then floods. Returns the q used.
+double watershed(const Volume<float>& dist, const Volume<uint8_t>& solid, Volume<uint32_t>& labels,
+                 const WatershedOptions& opt = {});
 
 }  // namespace tg

@@ -22,20 +22,25 @@ packing_csv = "$(realpath "$PACK")"
 [oedometer]
 target_strain = 0.10
 snapshot_strains = [0.0, 0.10]
+[breakage]
+enabled = false
 EOT
 for t in 1 2; do
-  start=$(date +%s.%N)
-  OMP_NUM_THREADS=$t TOMOGRAIN_QUIET=1 "$TG" dem oedometer bench.toml -o "tg_np$t" | tee "tg_np$t.txt"
+  OMP_NUM_THREADS=$t TOMOGRAIN_QUIET=1 /usr/bin/time -f "tomograin $t threads: %e s wall, %U s user, %S s sys, %P CPU" \
+    "$TG" dem oedometer bench.toml -o "tg_np$t" 2>&1 | tee "tg_np$t.txt"
 done
 for np in 1 2; do
   start=$(date +%s.%N)
   if [ $np = 1 ]; then
-    liggghts -in "$ROOT/bench/dem/in.compress_data" -var tag np1 -var px 1 -log log.np1 -echo none > screen.np1 2>&1
+    /usr/bin/time -f "liggghts np1: %e s wall, %U s user, %S s sys, %P CPU" -o time.np1 \
+      liggghts -in "$ROOT/bench/dem/in.compress_data" -var tag np1 -var px 1 -log log.np1 -echo none > screen.np1 2>&1
   else
-    mpirun --allow-run-as-root -np 2 liggghts -in "$ROOT/bench/dem/in.compress_data" -var tag np2 -var px 2 -log log.np2 -echo none > screen.np2 2>&1
+    /usr/bin/time -f "liggghts np2: %e s wall, %U s user, %S s sys, %P CPU" -o time.np2 \
+      mpirun --allow-run-as-root -np 2 liggghts -in "$ROOT/bench/dem/in.compress_data" -var tag np2 -var px 2 -log log.np2 -echo none > screen.np2 2>&1
   fi
   end=$(date +%s.%N)
   steps=$(tail -n 1 stress_strain_np$np.txt | awk '{print $1}')
   echo "liggghts np$np: $N spheres, $steps steps, $(echo "$end - $start" | bc) s wall, $(echo "$N * $steps / ($end - $start)" | bc) particle-steps/s (incl. start-up)" | tee "lg_np$np.txt"
+  cat time.np$np
 done
 /usr/bin/python3 "$ROOT/bench/dem/compare.py" tg_np1/history.csv stress_strain_np1.txt | tee compare.txt

@@ -12,20 +12,17 @@ namespace tg {
 namespace {
 
 // Flags in the label word while flooding; the label is in the low 29 bits.
-constexpr uint32_t kQueued =
-    1u << 31; // queued once (void voxels: pre-marked, never flooded)
-constexpr uint32_t kLine = 1u << 30; // line voxel (lines mode)
-constexpr uint32_t kBorder =
-    1u << 29; // on a face of the volume: neighbours need a bounds test
+constexpr uint32_t kQueued = 1u << 31;  // queued once (void voxels: pre-marked, never flooded)
+constexpr uint32_t kLine = 1u << 30;    // line voxel (lines mode)
+constexpr uint32_t kBorder = 1u << 29;  // on a face of the volume: neighbours need a bounds test
 constexpr uint32_t kLabelMask = kBorder - 1;
 
-void mark_border(const Shape &s, uint32_t *L) {
+void mark_border(const Shape& s, uint32_t* L) {
   auto row = [&](int64_t k, int64_t j) {
-    uint32_t *r = L + s.index(k, j, 0);
+    uint32_t* r = L + s.index(k, j, 0);
     const bool whole = k == 0 || k + 1 == s.nz || j == 0 || j + 1 == s.ny;
     if (whole)
-      for (int64_t i = 0; i < s.nx; ++i)
-        r[i] |= kBorder;
+      for (int64_t i = 0; i < s.nx; ++i) r[i] |= kBorder;
     else {
       r[0] |= kBorder;
       r[s.nx - 1] |= kBorder;
@@ -33,39 +30,32 @@ void mark_border(const Shape &s, uint32_t *L) {
   };
 #pragma omp parallel for schedule(static)
   for (int64_t k = 0; k < s.nz; ++k)
-    for (int64_t j = 0; j < s.ny; ++j)
-      row(k, j);
+    for (int64_t j = 0; j < s.ny; ++j) row(k, j);
 }
 
 // Stable counting sort of frontier entries by slice (z). Small batches are
 // left as they are: they fit in cache anyway.
-template <class Index> class SliceSorter {
-public:
-  explicit SliceSorter(const Shape &s)
-      : slice_(s.slice_voxels()), inv_(1.0 / double(s.slice_voxels())),
-        start_(size_t(s.nz) + 1) {}
-  void sort(Index *first, Index *last) {
+template <class Index>
+class SliceSorter {
+ public:
+  explicit SliceSorter(const Shape& s)
+      : slice_(s.slice_voxels()), inv_(1.0 / double(s.slice_voxels())), start_(size_t(s.nz) + 1) {}
+  void sort(Index* first, Index* last) {
     const size_t m = size_t(last - first);
-    if (m < 4096)
-      return;
+    if (m < 4096) return;
     std::fill(start_.begin(), start_.end(), 0);
-    for (const Index *p = first; p != last; ++p)
-      ++start_[size_t(slice(*p)) + 1];
-    for (size_t k = 1; k < start_.size(); ++k)
-      start_[k] += start_[k - 1];
+    for (const Index* p = first; p != last; ++p) ++start_[size_t(slice(*p)) + 1];
+    for (size_t k = 1; k < start_.size(); ++k) start_[k] += start_[k - 1];
     tmp_.resize(m);
-    for (const Index *p = first; p != last; ++p)
-      tmp_[size_t(start_[size_t(slice(*p))]++)] = *p;
+    for (const Index* p = first; p != last; ++p) tmp_[size_t(start_[size_t(slice(*p))]++)] = *p;
     std::copy(tmp_.begin(), tmp_.end(), first);
   }
 
-private:
-  int64_t slice(Index x) const { // x / slice_ without a division per entry
+ private:
+  int64_t slice(Index x) const {  // x / slice_ without a division per entry
     int64_t k = int64_t(double(x) * inv_);
-    if (k * slice_ > int64_t(x))
-      --k;
-    else if ((k + 1) * slice_ <= int64_t(x))
-      ++k;
+    if (k * slice_ > int64_t(x)) --k;
+    else if ((k + 1) * slice_ <= int64_t(x)) ++k;
     return k;
   }
   int64_t slice_;
@@ -75,14 +65,12 @@ private:
 };
 
 template <class Index>
-void flood(const uint8_t *lev, uint32_t *L, const Shape &s,
-           const seg::Neighbourhood &nb, bool lines) {
+void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbourhood& nb, bool lines) {
   const int64_t n = s.voxels();
   std::array<std::vector<Index>, 256> bucket;
   for (int64_t i = 0; i < n; ++i) {
     if (!lev[i]) {
-      L[i] = (L[i] & kBorder) |
-             kQueued; // void: never queued, seen as "queued, unlabelled"
+      L[i] = (L[i] & kBorder) | kQueued;  // void: never queued, seen as "queued, unlabelled"
     } else if (L[i] & kLabelMask) {
       bucket[lev[i]].push_back(Index(i));
       L[i] |= kQueued;
@@ -107,23 +95,19 @@ void flood(const uint8_t *lev, uint32_t *L, const Shape &s,
     for (int t = 0; t < nb.count; ++t) {
       if (border) {
         const seg::Step st = nb.step[size_t(t)];
-        if (!s.contains(k + st.dz, j + st.dy, i + st.dx))
-          continue;
+        if (!s.contains(k + st.dz, j + st.dy, i + st.dx)) continue;
       }
       const int64_t y = x + nb.offset[size_t(t)];
       const uint32_t ly = L[y];
       if (!(ly & kQueued)) {
-        __builtin_prefetch(lev + y); // its level is read below
+        __builtin_prefetch(lev + y);  // its level is read below
         cand[nc++] = y;
         continue;
       }
       const uint32_t l = ly & kLabelMask;
-      if (l == 0 || line)
-        continue;
-      if (seen == 0)
-        seen = l;
-      else if (l != seen)
-        line = true;
+      if (l == 0 || line) continue;
+      if (seen == 0) seen = l;
+      else if (l != seen) line = true;
     }
     uint32_t lab = lx & kLabelMask;
     if (lab == 0) {
@@ -146,25 +130,25 @@ void flood(const uint8_t *lev, uint32_t *L, const Shape &s,
   };
   SliceSorter<Index> sorter(s);
   // Software prefetch of the 3x3 rows around the voxel kAhead places down
-  // the queue, labels and levels (measured: the flood takes 0.95 s instead
-  // of 1.7 s on a 256^3 scan): the hardware cannot guess these addresses.
+  // the queue, labels and levels: the hardware cannot guess these addresses.
   constexpr size_t kAhead = 12;
   const int64_t sl = s.slice_voxels(), nx = s.nx;
-  const std::array<int64_t, 9> rows = {-sl - nx - 1, -sl - 1, -sl + nx - 1,
-                                       -nx - 1,      -1,      nx - 1,
-                                       sl - nx - 1,  sl - 1,  sl + nx - 1};
+  const std::array<int64_t, 9> rows = {-sl - nx - 1, -sl - 1, -sl + nx - 1, -nx - 1, -1,
+                                       nx - 1,       sl - nx - 1, sl - 1, sl + nx - 1};
   // Integer addresses: next to a border the row may lie outside the volume,
   // where a prefetch is harmless but pointer arithmetic would not be.
-  const auto Lbase = reinterpret_cast<uintptr_t>(L),
-             lbase = reinterpret_cast<uintptr_t>(lev);
+  const auto Lbase = reinterpret_cast<uintptr_t>(L), lbase = reinterpret_cast<uintptr_t>(lev);
   for (int cur = 255; cur >= 1; --cur) {
-    auto &b = bucket[size_t(cur)];
+    auto& b = bucket[size_t(cur)];
     // Breadth-first rounds: the voxels queued at this level so far, then
     // those they queue at this level, and so on (within a level, voxels
     // leave in order of geodesic distance, as with one FIFO). Each round is
     // put in slice order first, so the flood sweeps the volume instead of
-    // jumping around it: the loop is bound by cache misses on the labels,
-    // and this ordering halves its time.
+    // jumping around it: the loop is bound by cache misses on the labels.
+    // Measured on a 256^3 scan (10 M solid voxels, one core): 2.4 s in plain
+    // FIFO order, 1.7 s in slice order, 0.95 s with the prefetch. (Deciding
+    // each round from the rounds before it would let two threads share a
+    // round, but cost 35 % more on one core: not worth it on two.)
     for (size_t head = 0; head < b.size();) {
       const size_t end = b.size();
       sorter.sort(b.data() + head, b.data() + end);
@@ -172,35 +156,30 @@ void flood(const uint8_t *lev, uint32_t *L, const Shape &s,
         if (head + kAhead < end) {
           const uintptr_t z = uintptr_t(b[head + kAhead]);
           for (int64_t o : rows) {
-            __builtin_prefetch(reinterpret_cast<const void *>(
-                Lbase + (z + uintptr_t(o)) * sizeof(uint32_t)));
-            __builtin_prefetch(
-                reinterpret_cast<const void *>(lbase + (z + uintptr_t(o))));
+            __builtin_prefetch(reinterpret_cast<const void*>(Lbase + (z + uintptr_t(o)) * sizeof(uint32_t)));
+            __builtin_prefetch(reinterpret_cast<const void*>(lbase + (z + uintptr_t(o))));
           }
         }
         visit(int64_t(b[head]), cur);
       }
     }
-    std::vector<Index>().swap(b); // free this level's memory now
+    std::vector<Index>().swap(b);  // free this level's memory now
   }
 #pragma omp parallel for schedule(static)
-  for (int64_t i = 0; i < n; ++i)
-    L[i] = (L[i] & kLine) ? 0u : (L[i] & kLabelMask);
+  for (int64_t i = 0; i < n; ++i) L[i] = (L[i] & kLine) ? 0u : (L[i] & kLabelMask);
 }
 
-} // namespace
+}  // namespace
 
-double quantise_levels(const Volume<float> &dist, Volume<uint8_t> &solid,
-                       double buckets_per_unit) {
+double quantise_levels(const Volume<float>& dist, Volume<uint8_t>& solid, double buckets_per_unit) {
   if (dist.shape() != solid.shape())
-    throw UsageError("watershed: distance " + dist.shape().str() +
-                     " and mask " + solid.shape().str() +
+    throw UsageError("watershed: distance " + dist.shape().str() + " and mask " + solid.shape().str() +
                      " must have one shape");
   if (!(buckets_per_unit > 0) || !std::isfinite(buckets_per_unit))
     throw UsageError("watershed: buckets per distance unit must be positive");
   const int64_t n = solid.size();
-  const float *d = dist.data();
-  uint8_t *m = solid.data();
+  const float* d = dist.data();
+  uint8_t* m = solid.data();
   float dmax = 0;
   bool finite = true;
 #pragma omp parallel for schedule(static) reduction(max : dmax) reduction(&& : finite)
@@ -209,52 +188,41 @@ double quantise_levels(const Volume<float> &dist, Volume<uint8_t> &solid,
       finite = finite && std::isfinite(d[i]) && d[i] >= 0;
       dmax = std::max(dmax, d[i]);
     }
-  if (!finite)
-    throw UsageError("watershed: the distance map is not finite on the solid");
+  if (!finite) throw UsageError("watershed: the distance map is not finite on the solid");
   double q = buckets_per_unit;
-  if (double(dmax) * q >= 255.0)
-    q = 254.0 / double(dmax);
+  if (double(dmax) * q >= 255.0) q = 254.0 / double(dmax);
 #pragma omp parallel for schedule(static)
   for (int64_t i = 0; i < n; ++i)
-    if (m[i])
-      m[i] = uint8_t(1 + std::min(254, int(double(d[i]) * q)));
+    if (m[i]) m[i] = uint8_t(1 + std::min(254, int(double(d[i]) * q)));
   return q;
 }
 
-void watershed_levels(const Volume<uint8_t> &levels, Volume<uint32_t> &labels,
-                      const WatershedOptions &opt) {
+void watershed_levels(const Volume<uint8_t>& levels, Volume<uint32_t>& labels, const WatershedOptions& opt) {
   const Shape s = levels.shape();
   if (labels.shape() != s)
-    throw UsageError("watershed: levels " + s.str() + " and markers " +
-                     labels.shape().str() + " must have one shape");
+    throw UsageError("watershed: levels " + s.str() + " and markers " + labels.shape().str() + " must have one shape");
   const seg::Neighbourhood nb(s, opt.connectivity);
   const int64_t n = levels.size();
-  uint32_t *L = labels.data();
+  uint32_t* L = labels.data();
   bool ok = true;
 #pragma omp parallel for schedule(static) reduction(&& : ok)
-  for (int64_t i = 0; i < n; ++i)
-    ok = ok && L[i] < kLabelMask;
-  if (!ok)
-    throw UsageError("watershed: marker labels must be below 2^29 - 1");
-  if (s.empty())
-    return;
+  for (int64_t i = 0; i < n; ++i) ok = ok && L[i] < kLabelMask;
+  if (!ok) throw UsageError("watershed: marker labels must be below 2^29 - 1");
+  if (s.empty()) return;
   mark_border(s, L);
-  if (n <= int64_t(UINT32_MAX))
-    flood<uint32_t>(levels.data(), L, s, nb, opt.lines);
-  else
-    flood<int64_t>(levels.data(), L, s, nb, opt.lines);
+  if (n <= int64_t(UINT32_MAX)) flood<uint32_t>(levels.data(), L, s, nb, opt.lines);
+  else flood<int64_t>(levels.data(), L, s, nb, opt.lines);
 }
 
-double watershed(const Volume<float> &dist, const Volume<uint8_t> &solid,
-                 Volume<uint32_t> &labels, const WatershedOptions &opt) {
+double watershed(const Volume<float>& dist, const Volume<uint8_t>& solid, Volume<uint32_t>& labels,
+                 const WatershedOptions& opt) {
   if (dist.shape() != solid.shape() || labels.shape() != solid.shape())
-    throw UsageError("watershed: distance " + dist.shape().str() + ", mask " +
-                     solid.shape().str() + " and markers " +
-                     labels.shape().str() + " must have one shape");
+    throw UsageError("watershed: distance " + dist.shape().str() + ", mask " + solid.shape().str() +
+                     " and markers " + labels.shape().str() + " must have one shape");
   Volume<uint8_t> lev = solid.clone();
   const double q = quantise_levels(dist, lev, opt.buckets_per_unit);
   watershed_levels(lev, labels, opt);
   return q;
 }
 
-} // namespace tg
+}  // namespace tg

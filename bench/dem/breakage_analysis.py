@@ -96,6 +96,14 @@ def main():
           f"volume lost {1e9*h['volume_lost_m3'][last]:.3f} mm3 (fines {1e9*h['fines_volume_m3'][last]:.4f}), "
           f"added mass fraction {h['added_mass_fraction'][last]:.2e}, dt {h['time_step_s'][last]:.3g} s, "
           f"max KE {max(h['kinetic_energy_J']):.3g} J")
+    # Quasi-static check: kinetic energy against the work done by the platen so far.
+    area = math.pi * info.get("cylinder_radius_m", 7.5e-3) ** 2
+    work, ratio = 0.0, 0.0
+    for i in range(1, len(sig)):
+        work += 0.5 * (sig[i] + sig[i - 1]) * area * (h["platen_z_m"][i - 1] - h["platen_z_m"][i])
+        if sig[i] > 0.1e6:
+            ratio = max(ratio, h["kinetic_energy_J"][i] / work)
+    print(f"platen work {work:.3g} J; max kinetic energy / work so far (sigma > 0.1 MPa) {ratio:.2e}")
     try:
         sp = read_csv(f"{run}/splits.csv")
     except (FileNotFoundError, StopIteration):

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <queue>
+#include <random>
 #include <set>
 
 #include "core/errors.hpp"
@@ -105,6 +107,104 @@ TEST(Watershed, EmptyVolumeAndShapeMismatch) {
   Volume<float> d = Volume<float>::filled(Shape{5, 5, 5}, 0.f);
   auto lab = Volume<uint32_t>::filled(Shape{5, 5, 4}, 0);
   EXPECT_THROW(watershed(d, m, lab), UsageError);
+}
+
+TEST(Watershed, LevelsAreCoarsenedToFitOneByte) {
+  // d = 0.5 .. 100 voxels along x: at 4 levels per unit the top level would
+  // be 400, so q falls to 254 / 100 and every level still orders like d.
+  const Shape s{1, 1, 200};
+  Volume<float> d(s);
+  auto m = Volume<uint8_t>::filled(s, 1);
+  for (int64_t i = 0; i < 200; ++i) d[i] = 0.5f * float(i + 1);
+  m[7] = 0;  // void stays 0
+  EXPECT_DOUBLE_EQ(quantise_levels(d, m, 4.0), 2.54);
+  EXPECT_EQ(m[7], 0);
+  for (int64_t i = 1; i < 200; ++i)
+    if (i != 7 && i != 8) {
+      EXPECT_GE(m[i], m[i - 1]) << i;
+    }
+  EXPECT_EQ(m[199], 255);
+  EXPECT_EQ(m[0], 1 + int(0.5 * 2.54));
+  // Small distances keep the requested resolution.
+  Volume<uint8_t> m2 = Volume<uint8_t>::filled(s, 1);
+  for (int64_t i = 0; i < 200; ++i) d[i] = 0.25f * float(i % 40);
+  EXPECT_DOUBLE_EQ(quantise_levels(d, m2, 4.0), 4.0);
+  EXPECT_EQ(m2[39], 1 + 39);
+}
+
+// Invariants of a marker-controlled watershed, checked by brute force on
+// random packings of overlapping balls: every marker keeps its label; every
+// label is one 26-connected region holding its marker; with lines, no two
+// labels touch and every solid voxel is labelled or a line next to two
+// labels (or cut off); without lines every solid voxel connected to a
+// marker is labelled.
+TEST(Watershed, RandomPackingsKeepTheWatershedInvariants) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 4; ++trial) {
+    const Shape s{40, 36, 44};
+    auto m = Volume<uint8_t>::filled(s, 0);
+    std::uniform_real_distribution<double> uz(0, 40), uy(0, 36), ux(0, 44), ur(4, 8);
+    for (int b = 0; b < 14; ++b) draw_ball(m, uz(rng), uy(rng), ux(rng), ur(rng));
+    Volume<float> d;
+    distance_transform(m, d);
+    for (bool lines : {true, false}) {
+      Volume<uint32_t> mk;
+      const uint32_t nmk = find_markers(d, m, mk, {1.0, 26});
+      Volume<uint32_t> lab = mk.clone();
+      watershed(d, m, lab, {lines, 26, 4.0});
+      const int64_t n = s.voxels();
+      for (int64_t i = 0; i < n; ++i) {
+        if (mk[i]) {
+          ASSERT_EQ(lab[i], mk[i]);
+        }
+        if (!m[i]) {
+          ASSERT_EQ(lab[i], 0u);
+        }
+      }
+      // Connectivity of each label from its marker, and label contacts.
+      std::vector<uint8_t> seen(size_t(n), 0);
+      for (int64_t i = 0; i < n; ++i) {
+        if (!mk[i] || seen[size_t(i)]) continue;
+        std::queue<int64_t> q;
+        q.push(i);
+        seen[size_t(i)] = 1;
+        while (!q.empty()) {
+          const auto [k, j, x] = s.coords(q.front());
+          q.pop();
+          for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+              for (int dx = -1; dx <= 1; ++dx) {
+                if (!s.contains(k + dz, j + dy, x + dx)) continue;
+                const int64_t y = s.index(k + dz, j + dy, x + dx);
+                if (lines && lab[y] && lab[y] != mk[i]) {
+                  FAIL() << "labels " << lab[y] << " and " << mk[i] << " touch";
+                }
+                if (lab[y] == mk[i] && !seen[size_t(y)]) seen[size_t(y)] = 1, q.push(y);
+              }
+        }
+      }
+      std::set<uint32_t> kept;
+      for (int64_t i = 0; i < n; ++i)
+        if (lab[i]) {
+          ASSERT_TRUE(seen[size_t(i)]) << "label " << lab[i] << " is not connected to its marker";
+          kept.insert(lab[i]);
+        }
+      EXPECT_EQ(kept.size(), size_t(nmk));
+      if (!lines) {
+        // Every solid voxel 26-connected (through solid) to a marker is labelled.
+        for (int64_t i = 0; i < n; ++i)
+          if (m[i] && !lab[i]) {
+            const auto [k, j, x] = s.coords(i);
+            for (int dz = -1; dz <= 1; ++dz)
+              for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx)
+                  if (s.contains(k + dz, j + dy, x + dx)) {
+                    ASSERT_EQ(lab(k + dz, j + dy, x + dx), 0u) << "an unlabelled solid voxel next to a label";
+                  }
+          }
+      }
+    }
+  }
 }
 
 }  // namespace

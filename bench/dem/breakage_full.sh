@@ -17,6 +17,9 @@ SNAPS="[0.0, 0.044, 0.0712, 0.1128, 0.1548]"
 [ "$TARGET" = 0.1548 ] || SNAPS="[0.0, $TARGET]"
 HERE=$(cd "$(dirname "$0")" && pwd)
 EX="$HERE/../../dem/examples/oedometer.toml"
+# Passive OpenMP waiting and the requested thread count for both steps:
+# spinning barriers stall on oversubscribed cores.
+export OMP_WAIT_POLICY=passive OMP_NUM_THREADS=$THREADS
 mkdir -p "$RUN.work"
 PACK="$RUN.work/packing.csv"
 [ -f "$PACK" ] || "$BIN" dem pack "$EX" -o "$PACK"
@@ -25,6 +28,5 @@ sed -e "s|^packing_csv = \"\"|packing_csv = \"$(realpath "$PACK")\"|" \
     -e "s|^target_strain = 0.1548 |target_strain = $TARGET |" \
     -e "s|^snapshot_strains = \[0.0, 0.044, 0.0712, 0.1128, 0.1548\]|snapshot_strains = $SNAPS|" \
     "$EX" > "$RUN.work/oedometer.toml"
-# Passive OpenMP waiting: spinning barriers stall on oversubscribed cores.
-OMP_WAIT_POLICY=passive /usr/bin/time -v "$BIN" dem oedometer "$RUN.work/oedometer.toml" -o "$RUN" 2> "$RUN.log"
+/usr/bin/time -v "$BIN" dem oedometer "$RUN.work/oedometer.toml" -o "$RUN" 2> "$RUN.log"
 python3 "$HERE/breakage_analysis.py" "$RUN"

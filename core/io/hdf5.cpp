@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <sstream>
+#include <vector>
 
 #include "core/atomic_file.hpp"
 #include "core/progress.hpp"
@@ -116,6 +117,25 @@ std::string read_attr_string(hid_t obj, const char* name) {
   std::string buf(n, '\0');
   H5Aread(a.get(), ft.get(), buf.data());
   return std::string(buf.c_str());
+}
+
+// libhdf5 1.10.8 trusts a chunked layout whose chunk exceeds a fixed maximum
+// extent of the dataset (H5Pset_chunk refuses such a layout, so only a
+// corrupt file has one) and then copies past its buffers inside H5Dread
+// (found by fuzzing: tests/fuzz/regressions/hdf5/libhdf5-chunk-beyond-extent.h5).
+// Checked before every read.
+void check_chunk_layout(hid_t dset, hid_t space, const std::string& where) {
+  Handle dcpl = plist_h(H5Dget_create_plist(dset));
+  if (!dcpl.ok() || H5Pget_layout(dcpl.get()) != H5D_CHUNKED) return;
+  const int rank = H5Sget_simple_extent_ndims(space);
+  if (rank < 1 || rank > 32) throw InputError(where + ": corrupt dataspace (rank " + std::to_string(rank) + ")");
+  std::vector<hsize_t> chunk(static_cast<size_t>(rank)), maxd(static_cast<size_t>(rank));
+  if (H5Pget_chunk(dcpl.get(), rank, chunk.data()) != rank || H5Sget_simple_extent_dims(space, nullptr, maxd.data()) != rank)
+    throw InputError(where + ": corrupt chunk layout (chunk rank differs from the dataset's)");
+  for (size_t r = 0; r < chunk.size(); ++r)
+    if (chunk[r] == 0 || (maxd[r] != H5S_UNLIMITED && chunk[r] > maxd[r]))
+      throw InputError(where + ": corrupt chunk layout (chunk dimension " + std::to_string(chunk[r]) +
+                       " exceeds the dataset's maximum " + std::to_string(maxd[r]) + ")");
 }
 
 // HDF5 prints its error stack to stderr by default; our errors are one line,
@@ -291,6 +311,7 @@ AnyVolume H5Reader::read_volume(const std::string& dataset, bool progress) const
   else throw InputError(where + ": element type is not uint8/uint16/uint32/float32");
   Handle sp = space_h(H5Dget_space(d.get()));
   const int rank = H5Sget_simple_extent_ndims(sp.get());
+  check_chunk_layout(d.get(), sp.get(), where);
   if (rank != 3 && rank != 2) throw InputError(where + ": dataset has rank " + std::to_string(rank) + ", expected 3 (z, y, x)");
   hsize_t dims[3] = {1, 1, 1};
   H5Sget_simple_extent_dims(sp.get(), rank == 3 ? dims : dims + 1, nullptr);
@@ -344,6 +365,7 @@ Table H5Reader::read_table(const std::string& group) const {
     if (!d.ok()) throw InputError(where + ": column '" + n + "' missing");
     Handle sp = space_h(H5Dget_space(d.get()));
     if (H5Sget_simple_extent_ndims(sp.get()) != 1) throw InputError(where + "/" + n + ": column is not 1-D");
+    check_chunk_layout(d.get(), sp.get(), where + "/" + n);
     const hssize_t rows = H5Sget_simple_extent_npoints(sp.get());
     check_allocation(rows * 8, where + "/" + n);
     Handle ft = type_h(H5Dget_type(d.get()));

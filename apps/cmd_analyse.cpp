@@ -41,6 +41,7 @@ int run_analyse(const Opts& o) {
 
   tg::app::PsdJob psd;
   psd.in = {mea.out[0]};
+  psd.names = {(fs::path(o.out) / "particles.csv").string()};  // where it will be, not the temporary folder
   psd.out = (d / "psd.csv").string();
   tg::app::run_psd(psd);
 

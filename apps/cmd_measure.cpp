@@ -194,6 +194,7 @@ namespace tg::app {
 
 int run_psd(PsdJob o) {
   if (o.sieves.empty()) o.sieves = measure::default_sieves_mm();
+  if (o.names.size() != o.in.size()) o.names = o.in;
   std::sort(o.sieves.begin(), o.sieves.end());
   if (o.fr_bins.empty()) o.fr_bins = measure::fr_thresholds();
   if (o.ar_bins.empty()) o.ar_bins = measure::ar_thresholds();
@@ -264,7 +265,7 @@ int run_psd(PsdJob o) {
   lng.add("passing_dmed_pct", pmed);
   lng.add("passing_deq_pct", peq);
   sum.add("stage", [&] { std::vector<double> v; for (size_t k = 0; k < stages.size(); ++k) v.push_back(double(k + 1)); return v; }());
-  sum.add_text("file", o.in);
+  sum.add_text("file", o.names);
   sum.add("particles", n);
   sum.add("volume_mm3", mass);
   sum.add("d10_mm", d10);
@@ -286,7 +287,7 @@ int run_psd(PsdJob o) {
              "Br", "Br*");
   for (size_t k = 0; k < stages.size(); ++k)
     fmt::print("{:>5} {:>9} {:>8.4f} {:>8.4f} {:>6.3f} {:>8.4f} {:>8.4f}  {}\n", k + 1, n[k], d50[k], d10[k], cu[k],
-               brh[k], bre[k], o.in[k]);
+               brh[k], bre[k], o.names[k]);
   fmt::print("wrote {} and {}\n", o.out, summary);
   return 0;
 }

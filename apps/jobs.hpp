@@ -38,6 +38,7 @@ int run_measure(const MeasureJob& job);
 // tomograin psd: particle tables of one or more stages -> gradings and summaries.
 struct PsdJob {
   std::vector<std::string> in;
+  std::vector<std::string> names;  // shown in the summary's "file" column; empty = the input paths
   std::string out, summary;
   std::vector<double> sieves, fr_bins, ar_bins;
   bool exclude_below = false, exclude_border = false;

@@ -64,8 +64,10 @@ void block_lines(float* base, int64_t n, int64_t step, int64_t count, double w, 
 }  // namespace
 
 namespace detail {
+namespace {
 
-void edt_line(const float* f, int64_t n, double w, float* d, int64_t* v, double* z) {
+// The envelope on one run of samples (indices relative to the run).
+void envelope(const float* f, int64_t n, double w, float* d, int64_t* v, double* z) {
   const double inf = std::numeric_limits<double>::infinity();
   int64_t k = -1;
   for (int64_t q = 0; q < n; ++q) {
@@ -95,6 +97,31 @@ void edt_line(const float* f, int64_t n, double w, float* d, int64_t* v, double*
     while (z[k + 1] < x) ++k;
     const double dx = x - w * double(v[k]);
     d[p] = float(dx * dx + double(f[v[k]]));
+  }
+}
+
+}  // namespace
+
+void edt_line(const float* f, int64_t n, double w, float* d, int64_t* v, double* z) {
+  // Zeros (void voxels) cut the line into independent runs: for p between
+  // two zeros q1 < p < q2, a site r outside [q1, q2] is never nearer than
+  // the zero on its side ((p - r)^2 w^2 + f(r) >= (p - q1)^2 w^2). So each
+  // run of non-zero samples is solved with its bounding zeros only, and the
+  // zeros (about 40 % of a granular scan) cost nothing. Same result, shorter
+  // envelopes (measured: the whole transform 8 % faster; the gathering of
+  // columns and the memory traffic cost as much as the envelopes).
+  int64_t p = 0;
+  while (p < n) {
+    if (f[p] == 0) {
+      d[p++] = 0;
+      continue;
+    }
+    int64_t end = p;  // [p, end) is a run of non-zero samples
+    while (end < n && f[end] != 0) ++end;
+    const int64_t lo = p > 0 ? p - 1 : p, hi = end < n ? end + 1 : end;  // with the bounding zeros
+    envelope(f + lo, hi - lo, w, d + lo, v, z);
+    if (end < n) d[end] = 0;
+    p = end < n ? end + 1 : end;
   }
 }
 

@@ -40,7 +40,6 @@ void Engine::rebuild() {
   const int64_t np = fresh.pairs();
   std::vector<double> xi(3 * np, 0.0);
   std::vector<int64_t> pi(np);
-  std::vector<uint8_t> touching(np, 0);  // carried with ξ: a pair that separates later must reset it
   const int64_t old_n = static_cast<int64_t>(list_.offsets.size()) - 1;
   // Carry tangential histories over: both lists are sorted (i, then j).
 #pragma omp parallel for schedule(static) if (n >= opt_.parallel_min_items)
@@ -53,7 +52,6 @@ void Engine::rebuild() {
       if (it != e && *it == fresh.j[k]) {
         const int64_t o = it - list_.j.begin();
         for (int c = 0; c < 3; ++c) xi[3 * k + c] = xi_[3 * o + c];
-        touching[k] = touching_[o];
       }
     }
   }
@@ -61,7 +59,7 @@ void Engine::rebuild() {
   xi_ = std::move(xi);
   pi_ = std::move(pi);
   slot_.assign(np, PairData{});
-  touching_ = std::move(touching);
+  touching_.assign(np, 0);
   bad_.assign(std::max(np, n), 0);
   wall_f_.assign(3 * n, 0.0);
   // Incidence lists in ascending pair order: the fixed gather order.
@@ -194,7 +192,10 @@ void Engine::compute_pair_forces() {
     const double rs = p.r[i] + p.r[j];
     const double d2 = dot(d, d);
     if (d2 >= rs * rs) {
-      if (touching_[k]) {  // just separated: forget the history (most listed pairs never touch: no writes)
+      // Just separated (touching at the last step, or holding a history, as
+      // after a restart or a rebuild): forget it. Most listed pairs never
+      // touch, and are not written every step.
+      if (touching_[k] || xi_[3 * k] != 0 || xi_[3 * k + 1] != 0 || xi_[3 * k + 2] != 0) {
         touching_[k] = 0;
         xi_[3 * k] = xi_[3 * k + 1] = xi_[3 * k + 2] = 0;
         slot_[k] = PairData{};

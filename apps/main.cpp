@@ -2,6 +2,7 @@
 //   0 success; 2 bad input or usage (one line naming the file and problem);
 //   1 internal error.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 
@@ -14,8 +15,18 @@ std::vector<Command>& registry() {
   return r;
 }
 void add_voxel_option(CLI::App* sub, double& voxel_um) {
+  // Own check: CLI::PositiveNumber prints the largest double in full.
   sub->add_option("--voxel-um", voxel_um, "Voxel size in micrometres (overrides the file's own)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            try {
+              const double x = std::stod(v);
+              if (x > 0 && std::isfinite(x)) return {};
+            } catch (...) {
+            }
+            return "must be a positive number of micrometres, got " + v;
+          },
+          "POSITIVE"));
 }
 }  // namespace tg::app
 

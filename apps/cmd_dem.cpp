@@ -122,11 +122,24 @@ static tg::app::Registrar reg{{"dem", 60, [](CLI::App& app, CLI::App*& sub) -> t
     }
     (void)oed;
     namespace fs = std::filesystem;
-    fs::create_directories(o->out);
-    if (!o->restart) fs::copy_file(o->config, fs::path(o->out) / "config.toml", fs::copy_options::overwrite_existing);
-    tg::dem::RunControl c;
-    c.restart = o->restart;
-    const tg::dem::OedometerSummary r = tg::dem::run_oedometer(s, o->out, c);
+    // Bad input found while setting up (packing, physics) leaves no run
+    // folder behind; a run that has begun its history keeps everything.
+    const bool fresh = !o->restart && !fs::exists(o->out);
+    auto run = [&] {
+      fs::create_directories(o->out);
+      if (!o->restart) fs::copy_file(o->config, fs::path(o->out) / "config.toml", fs::copy_options::overwrite_existing);
+      tg::dem::RunControl c;
+      c.restart = o->restart;
+      return tg::dem::run_oedometer(s, o->out, c);
+    };
+    tg::dem::OedometerSummary r;
+    try {
+      r = run();
+    } catch (const tg::InputError&) {
+      std::error_code ec;
+      if (fresh && !fs::exists(fs::path(o->out) / "history.csv")) fs::remove_all(o->out, ec);
+      throw;
+    }
     std::printf("oedometer: %lld spheres, H0 %.4f mm, porosity %.2f %%, dt %.3g s (critical %.3g s), %lld steps\n"
                 "  strain %.2f %%, top stress %.4g MPa, wall %.1f s, %.3g particle-steps/s (%d threads)\n",
                 static_cast<long long>(r.spheres), r.initial_height_m * 1e3, 100 * r.initial_porosity, r.time_step,

@@ -88,7 +88,7 @@ struct EngineOptions {
   // Loops shorter than this run on one thread: below a few thousand items
   // the OpenMP fork/barrier costs more than the work (and results do not
   // depend on it either way).
-  int64_t parallel_min_items = 2048;
+  int64_t parallel_min_items = 512;
   Walls walls;
 };
 

@@ -16,6 +16,7 @@
 #include "core/progress.hpp"
 #include "core/table.hpp"
 #include "dem/checkpoint.hpp"
+#include "dem/neighbor_grid.hpp"
 #include "dem/packing_io.hpp"
 #include "dem/snapshot.hpp"
 #include "dem/time_step.hpp"
@@ -24,6 +25,7 @@ namespace tg::dem {
 
 OedometerSetup read_oedometer_config(Config& cfg, const std::filesystem::path& base_dir) {
   OedometerSetup s;
+  s.source = cfg.source();
   EngineOptions& e = s.engine;
   e.material.shear_modulus_Pa = cfg.get("material.shear_modulus_Pa", e.material.shear_modulus_Pa);
   e.material.poisson_ratio = cfg.get("material.poisson_ratio", e.material.poisson_ratio);
@@ -88,6 +90,19 @@ OedometerSetup read_oedometer_config(Config& cfg, const std::filesystem::path& b
   cfg.require(b.strength.d0_m >= 0, "breakage.d0_m", "must be >= 0 (0 = mean grain diameter)");
   cfg.require(b.time_step_safety > 0 && b.time_step_safety <= 1, "breakage.time_step_safety", "must be in (0, 1]");
 
+  // Physics in range here, where the key and the file are known.
+  cfg.require(e.material.shear_modulus_Pa > 0, "material.shear_modulus_Pa", "must be positive");
+  cfg.require(e.material.poisson_ratio > -1 && e.material.poisson_ratio < 0.5, "material.poisson_ratio",
+              "must be in (-1, 0.5)");
+  cfg.require(e.material.density_kg_m3 > 0, "material.density_kg_m3", "must be positive");
+  cfg.require(e.friction >= 0, "contact.friction", "must be >= 0");
+  cfg.require(e.restitution > 0 && e.restitution <= 1, "contact.restitution", "must be in (0, 1]");
+  cfg.require(e.local_damping >= 0 && e.local_damping < 1, "contact.local_damping", "must be in [0, 1)");
+  cfg.require(e.walls.cylinder_radius > 0, "walls.cylinder_radius_m", "must be positive");
+  cfg.require(e.walls.platen_friction >= 0, "walls.platen_friction", "must be >= 0");
+  cfg.require(e.walls.cylinder_friction >= 0, "walls.cylinder_friction", "must be >= 0");
+  cfg.require(e.skin >= 0, "run.neighbour_skin_m", "must be >= 0");
+  cfg.require(e.overlap_limit > 0, "run.overlap_limit", "must be positive");
   cfg.require(e.time_step >= 0, "run.time_step_s", "must be >= 0 (0 = automatic)");
   cfg.require(s.time_step_safety > 0 && s.time_step_safety <= 1, "run.time_step_safety", "must be in (0, 1]");
   cfg.require(s.reference_overlap > 0 && s.reference_overlap < 1, "run.reference_overlap", "must be in (0, 1)");
@@ -161,7 +176,8 @@ struct History {
 
 OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::path& rundir, const RunControl& c) {
   namespace fs = std::filesystem;
-  fs::create_directories(rundir / "snapshots");
+  // The run folder is made only once the input has passed every check:
+  // a bad packing or config leaves nothing behind.
   if (s.threads > 0) omp_set_num_threads(s.threads);
   const double R = s.engine.walls.cylinder_radius, area = std::numbers::pi * R * R;
   const fs::path ckpt = rundir / "checkpoint.bin";
@@ -178,6 +194,7 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
     if (eo.time_step == 0) eo.time_step = s.time_step_safety * ct.dt_critical;
     sum.critical_time_step = ct.dt_critical;
     eng.emplace(resume_engine(st, eo));
+    fs::create_directories(rundir / "snapshots");
     hist.read_until(rundir / "history.csv", eng->step_count());
   } else {
     Particles p;
@@ -195,18 +212,35 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
         throw InputError((s.packing_csv.empty() ? std::string("pluviated packing") : s.packing_csv) + ": sphere " +
                          std::to_string(i) + " crosses the cylinder (radius " + fmt17(R) + " m) or the bottom platen");
     }
-    write_packing_csv(p, rundir / "packing_initial.csv");
+    {
+      // Overlaps beyond the engine's limit would stop the run at its first
+      // step: name the spheres and the file now.
+      const PairListCSR pl = build_pairs_grid(p, 0.0);
+      for (int64_t i = 0; i + 1 < static_cast<int64_t>(pl.offsets.size()); ++i)
+        for (int64_t k = pl.offsets[i]; k < pl.offsets[i + 1]; ++k) {
+          const int64_t j = pl.j[k];
+          const double d = std::sqrt(std::pow(p.x[j] - p.x[i], 2) + std::pow(p.y[j] - p.y[i], 2) + std::pow(p.z[j] - p.z[i], 2));
+          const double ov = (p.r[i] + p.r[j] - d) / std::min(p.r[i], p.r[j]);
+          if (ov > eo.overlap_limit)
+            throw InputError((s.packing_csv.empty() ? std::string("pluviated packing") : s.packing_csv) + ": spheres " +
+                             std::to_string(i) + " and " + std::to_string(j) + " (rows " + std::to_string(i + 2) + " and " +
+                             std::to_string(j + 2) + ") overlap by " + fmt17(ov) + " of the smaller radius (limit run.overlap_limit = " +
+                             fmt17(eo.overlap_limit) + ")");
+        }
+    }
     double por = 0;
     packing_height_porosity(p, R, scene.h0, por);
     const CriticalTimeStep ct = critical_time_step(p, eo.material, {s.reference_overlap});
     sum.critical_time_step = ct.dt_critical * std::sqrt(s.mass_scaling);
     if (eo.time_step == 0) eo.time_step = s.time_step_safety * sum.critical_time_step;
     if (eo.time_step > sum.critical_time_step)
-      throw InputError("run.time_step_s = " + fmt17(eo.time_step) + " s exceeds the critical step " +
+      throw InputError(s.source + ": run.time_step_s = " + fmt17(eo.time_step) + " s exceeds the critical step " +
                        fmt17(sum.critical_time_step) + " s of this packing");
     eo.walls.top_z = scene.h0;
     eo.walls.top_vz = -s.platen_speed;
     eng.emplace(std::move(p), eo);
+    fs::create_directories(rundir / "snapshots");
+    write_packing_csv(eng->particles(), rundir / "packing_initial.csv");
     // The run record: every choice that changes the physics.
     std::ostringstream js;
     js << "{\n  \"spheres\": " << eng->particles().size() << ",\n  \"initial_height_m\": " << fmt17(scene.h0)

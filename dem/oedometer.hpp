@@ -46,6 +46,7 @@ struct OedometerSetup {
   int64_t history_every = 1000;    // steps between history rows
   int64_t checkpoint_every = 200000;  // steps between checkpoints
   int threads = 0;                 // 0 = OpenMP default
+  std::string source = "config";   // the config file, for messages
   // Sequential breakage (issue 7, dem/breakage/): on by default as in Table 1.
   // strength.d0_m = 0 means "the mean grain diameter of the packing"; the
   // bond moduli are taken from the material.

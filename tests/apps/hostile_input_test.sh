@@ -15,15 +15,6 @@ trap 'rm -rf "$W"' EXIT
 cd "$W"
 fails=0; passes=0; known_count=0
 declare -A KNOWN=(
-  ["packing with overlapping spheres"]="message names neither file nor spheres' origin; leaves out_run"
-  ["packing sphere escaping the cylinder"]="leaves out_run"
-  ["packing without r_m column"]="leaves out_run"
-  ["packing with NaN radius"]="leaves out_run"
-  ["packing with negative radius"]="leaves out_run"
-  ["Poisson ratio above 0.5"]="message names neither file nor key; leaves out_run"
-  ["negative shear modulus"]="message names neither file nor key; leaves out_run"
-  ["negative friction"]="message names neither file nor key; leaves out_run"
-  ["time step above the critical step"]="message does not name the file; leaves out_run"
 )
 
 # expect_bad NAME PATTERN -- COMMAND...
@@ -106,7 +97,9 @@ expect_bad "NaN density" "c.toml: material.density_kg_m3 must be a finite number
 mk '[oedometer]\ntarget_strain = 2'
 expect_bad "strain out of range" "c.toml: oedometer.target_strain must be in (0, 0.9)" -- "$TG" dem oedometer c.toml -o out_run
 mk '[material]\npoisson_ratio = 0.6\n[oedometer]\ntarget_strain = 0.01\nsnapshot_strains = [0.0]'
-expect_bad "Poisson ratio above 0.5" "oisson" -- "$TG" dem oedometer c.toml -o out_run
+expect_bad "Poisson ratio above 0.5" "c.toml: material.poisson_ratio must be in (-1, 0.5)" -- "$TG" dem oedometer c.toml -o out_run
+mk '[material]\npoisson_ratio = 0.5'
+expect_bad "Poisson ratio of 0.5" "c.toml: material.poisson_ratio must be in (-1, 0.5)" -- "$TG" dem oedometer c.toml -o out_run
 mk '[material]\nshear_modulus_Pa = -2.2e9'
 expect_bad "negative shear modulus" "c.toml: material.shear_modulus_Pa" -- "$TG" dem oedometer c.toml -o out_run
 mk '[contact]\nfriction = -1'

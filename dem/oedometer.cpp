@@ -268,23 +268,25 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
     rec.commit();
   }
   Engine& e = *eng;
-  for (int64_t i = 0; i < e.particles().size(); ++i) vsolid += 4.0 / 3.0 * std::numbers::pi * std::pow(e.particles().r[i], 3);
+  // The initial grains: the packing now, or packing_initial.csv on a restart
+  // (by then splits have replaced some). Their volume is the reference of the
+  // porosity, summed in the same order either way, so a restart reproduces it
+  // bit for bit.
+  const Particles restart_p0 = c.restart ? read_packing_csv(rundir / "packing_initial.csv", eo.material.density_kg_m3) : Particles{};
+  const Particles& p0 = c.restart ? restart_p0 : e.particles();
+  for (int64_t i = 0; i < p0.size(); ++i) vsolid += 4.0 / 3.0 * std::numbers::pi * std::pow(p0.r[i], 3);
   std::optional<breakage::BreakageModel> brk;
   if (s.breakage) {
     breakage::BreakageOptions bo = s.breakage_options;
     bo.bond.youngs_modulus_Pa = eo.material.youngs_modulus();
     bo.bond.shear_modulus_Pa = eo.material.shear_modulus_Pa;
-    if (bo.strength.d0_m == 0) {  // mean diameter of the initial grains (from packing_initial.csv on restart)
-      const Particles p0 = c.restart ? read_packing_csv(rundir / "packing_initial.csv", eo.material.density_kg_m3) : e.particles();
+    if (bo.strength.d0_m == 0) {  // mean diameter of the initial grains
       double sum_d = 0;
       for (int64_t i = 0; i < p0.size(); ++i) sum_d += 2 * p0.r[i];
       bo.strength.d0_m = sum_d / static_cast<double>(p0.size());
     }
     brk.emplace(e, bo);
-    if (c.restart) {
-      brk->restore(scene.breakage_state);
-      vsolid += brk->record().volume_lost_m3;  // vsolid above summed the surviving spheres
-    }
+    if (c.restart) brk->restore(scene.breakage_state);
     hist.add_breakage_columns();
     if (c.restart) {  // re-read with the breakage columns
       hist = History{};

@@ -126,13 +126,10 @@ def same_h5(a, b):
     return diffs
 
 
-# Known, reported defect (not in this test's code): after a restart that
-# follows a split, dem/oedometer.cpp rebuilds the solid volume as
-# sum(surviving spheres) + volume lost instead of the initial sum, so the
-# porosity column differs in its last 1-2 ulp (the physics state, snapshots and
-# checkpoint stay bit-identical). Allowed here at 1e-15 relative, and only in
-# that column, until the fix lands; then this map becomes empty.
-KNOWN_HISTORY_DEVIATIONS = {"porosity": 1e-15}
+# Columns allowed to differ (column -> max relative difference). Empty: the
+# porosity's 1-2 ulp gap after a restart (solid volume rebuilt from the
+# surviving spheres + volume lost) was fixed by summing packing_initial.csv.
+KNOWN_HISTORY_DEVIATIONS = {}
 
 
 def compare_history(a, b, nrows):

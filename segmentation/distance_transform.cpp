@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
@@ -9,125 +10,120 @@
 #include "core/errors.hpp"
 
 namespace tg {
-namespace {
-
-constexpr float kInf = std::numeric_limits<float>::infinity();
-constexpr int64_t kBlock = 16;  // columns gathered together: 16 floats = one 64-byte cache line
-
-// Pass x: squared distance along each row to the nearest void voxel.
-void pass_x(const Volume<uint8_t>& solid, Volume<float>& out, double wx) {
-  const Shape s = solid.shape();
-  const int64_t rows = s.nz * s.ny, nx = s.nx;
-  const double w2 = wx * wx;
-#pragma omp parallel for schedule(static)
-  for (int64_t r = 0; r < rows; ++r) {
-    const uint8_t* m = solid.data() + r * nx;
-    float* d = out.data() + r * nx;
-    // Left sweep: distance (voxels) to the last void at or before i.
-    int64_t last = -1;
-    for (int64_t i = 0; i < nx; ++i) {
-      if (m[i] == 0) last = i;
-      d[i] = last < 0 ? kInf : float(i - last);
-    }
-    // Right sweep, then square with the spacing.
-    last = -1;
-    for (int64_t i = nx - 1; i >= 0; --i) {
-      if (m[i] == 0) last = i;
-      double best = d[i];
-      if (last >= 0) best = std::min(best, double(last - i));
-      d[i] = std::isinf(best) ? kInf : float(best * best * w2);
-    }
-  }
-}
-
-// Runs edt_line on `count` lines of length n gathered from `base` with
-// line stride `step` (between samples) and column offsets 0..count-1.
-struct LineScratch {
-  std::vector<float> in, out;
-  std::vector<int64_t> v;
-  std::vector<double> z;
-  explicit LineScratch(int64_t n)
-      : in(size_t(n * kBlock)), out(size_t(n)), v(size_t(n)), z(size_t(n + 1)) {}
-};
-
-void block_lines(float* base, int64_t n, int64_t step, int64_t count, double w, LineScratch& sc) {
-  for (int64_t p = 0; p < n; ++p) {
-    const float* src = base + p * step;
-    for (int64_t b = 0; b < count; ++b) sc.in[size_t(b * n + p)] = src[b];
-  }
-  for (int64_t b = 0; b < count; ++b) {
-    detail::edt_line(sc.in.data() + b * n, n, w, sc.out.data(), sc.v.data(), sc.z.data());
-    for (int64_t p = 0; p < n; ++p) base[p * step + b] = sc.out[size_t(p)];
-  }
-}
-
-}  // namespace
 
 namespace detail {
-namespace {
 
-// The envelope on one run of samples (indices relative to the run).
-void envelope(const float* f, int64_t n, double w, float* d, int64_t* v, double* z) {
-  const double inf = std::numeric_limits<double>::infinity();
-  int64_t k = -1;
-  for (int64_t q = 0; q < n; ++q) {
-    if (std::isinf(f[q])) continue;
-    const double fq = double(f[q]) + (w * double(q)) * (w * double(q));
-    if (k < 0) {
-      k = 0, v[0] = q, z[0] = -inf, z[1] = inf;
-      continue;
+void edt_line(const float* f, float* d, int64_t n, int64_t stride, double w, EnvelopeSite* st) {
+  if (n <= 0) return;
+  // Sites with f = +inf (a row without any void in the passes before) get
+  // g = kBig instead of +inf: their intersections with finite sites come out
+  // at about -+1e290 (pushed last, popped by the next finite site, never the
+  // nearest while a finite site exists) and inf - inf = NaN never arises, so
+  // the loop needs no isinf test. The output adds the stored f = +inf, so a
+  // line of such sites only still gives +inf.
+  constexpr double kBig = 1e290;
+  const double w2 = w * w, inv_w2 = 1.0 / w2;
+
+  // Writes d on positions [a, b) from the envelope st[0..k].
+  auto emit = [&](int64_t a, int64_t b, int64_t k) {
+    st[k + 1].zn = 1, st[k + 1].zd = 0;  // takes over at +inf
+    int64_t j = 0;
+    for (int64_t p = a; p < b; ++p) {
+      const double x = double(p);
+      while (st[j + 1].zn < x * st[j + 1].zd) ++j;
+      const double dx = x - st[j].v;
+      d[p * stride] = float(dx * dx * w2 + st[j].f);
     }
-    double s;
-    for (;;) {
-      const double vk = double(v[k]);
-      s = (fq - (double(f[v[k]]) + (w * vk) * (w * vk))) / (2.0 * w * (double(q) - vk));
-      if (s > z[k]) break;
-      --k;  // z[0] = -inf, so k never drops below 0
-    }
-    ++k;
-    v[k] = q, z[k] = s, z[k + 1] = inf;
-  }
-  if (k < 0) {
-    std::fill(d, d + n, kInf);
-    return;
-  }
-  k = 0;
-  for (int64_t p = 0; p < n; ++p) {
-    const double x = w * double(p);
-    while (z[k + 1] < x) ++k;
-    const double dx = x - w * double(v[k]);
-    d[p] = float(dx * dx + double(f[v[k]]));
-  }
-}
+  };
 
-}  // namespace
-
-void edt_line(const float* f, int64_t n, double w, float* d, int64_t* v, double* z) {
+  // Voxel units: with g(q) = f(q) / w^2 + q^2 the parabolas of v < q meet at
+  // s = (g(q) - g(v)) / (2 (q - v)), one subtraction and one division per
+  // push, and the test s > z is done without the division.
+  //
   // Zeros (void voxels) cut the line into independent runs: for p between
   // two zeros q1 < p < q2, a site r outside [q1, q2] is never nearer than
-  // the zero on its side ((p - r)^2 w^2 + f(r) >= (p - q1)^2 w^2). So each
-  // run of non-zero samples is solved with its bounding zeros only, and the
-  // zeros (about 40 % of a granular scan) cost nothing. Same result, shorter
-  // envelopes (measured: the whole transform 8 % faster; the gathering of
-  // columns and the memory traffic cost as much as the envelopes).
-  int64_t p = 0;
-  while (p < n) {
-    if (f[p] == 0) {
-      d[p++] = 0;
+  // the zero on its side ((p - r)^2 w^2 + f(r) >= (p - q1)^2 w^2). So at
+  // each zero the positions since the last one are written from the
+  // envelope, which then restarts with that zero alone: short envelopes,
+  // and runs of zeros (about 40 % of a granular scan) cost one test each.
+  const double f0 = f[0];
+  st[0] = {0.0, std::min(f0 * inv_w2, kBig), f0, -1, 0};
+  int64_t k = 0, start = 0;  // envelope st[0..k]; positions < start are written
+  if (f0 == 0) d[0] = 0, start = 1;
+  for (int64_t q = 1; q < n; ++q) {
+    const double fq = f[q * stride], x = double(q);
+    if (fq == 0 && start == q) {  // a zero right after a zero: nothing to write
+      st[0] = {x, x * x, 0.0, -1, 0};
+      k = 0, d[q * stride] = 0, start = q + 1;
       continue;
     }
-    int64_t end = p;  // [p, end) is a run of non-zero samples
-    while (end < n && f[end] != 0) ++end;
-    const int64_t lo = p > 0 ? p - 1 : p, hi = end < n ? end + 1 : end;  // with the bounding zeros
-    envelope(f + lo, hi - lo, w, d + lo, v, z);
-    if (end < n) d[end] = 0;
-    p = end < n ? end + 1 : end;
+    const double gq = std::min(fq * inv_w2 + x * x, kBig);
+    double num, den;
+    for (;;) {  // st[0] takes over at -inf, so k never drops below 0
+      num = gq - st[k].g, den = 2.0 * (x - st[k].v);
+      if (num * st[k].zd > st[k].zn * den) break;
+      --k;
+    }
+    ++k;
+    st[k] = {x, gq, fq, num, den};
+    if (fq == 0) {
+      emit(start, q, k);
+      st[0] = {x, x * x, 0.0, -1, 0};
+      k = 0, d[q * stride] = 0, start = q + 1;
+    }
   }
+  emit(start, n, k);
 }
 
 }  // namespace detail
 
-void squared_distance_transform(const Volume<uint8_t>& solid, Volume<float>& out, const EdtOptions& opt) {
+namespace {
+
+constexpr int64_t kBlock = 16;  // columns gathered together: 16 floats = one 64-byte cache line
+
+// Pass x on one row: squared distance to the nearest void voxel of the row.
+void row_x(const uint8_t* m, float* d, int64_t nx, double w2) {
+  // Distances in voxels counted in float (exact up to 2^24; +inf + 1 stays
+  // +inf when no void came yet), selects instead of branches.
+  float run = std::numeric_limits<float>::infinity();
+  for (int64_t i = 0; i < nx; ++i) d[i] = run = m[i] == 0 ? 0.f : run + 1.f;
+  run = std::numeric_limits<float>::infinity();
+  for (int64_t i = nx - 1; i >= 0; --i) {
+    run = m[i] == 0 ? 0.f : run + 1.f;
+    const double t = std::min(d[i], run);
+    d[i] = float(t * t * w2);
+  }
+}
+
+struct BlockScratch {
+  std::vector<float> block;
+  std::vector<detail::EnvelopeSite> sites;
+  explicit BlockScratch(int64_t n) : block(size_t(n * kBlock)), sites(size_t(n + 1)) {}
+};
+
+// Passes y and z on `count` <= kBlock neighbouring lines of n samples:
+// sample p of line b is base[p * step + b]. The block is copied row by row
+// (each copy one cache line of the volume), the envelopes run in place in
+// the copy at stride kBlock, and the rows are copied back; the last pass
+// takes the square root on the way back, saving a sweep over the volume.
+// (Gathering each line into its own contiguous buffer was a transpose that
+// touched every row 2 x 16 times, at strides of 1 KiB - 1 MiB that alias in
+// the cache.)
+void block_lines(float* base, int64_t n, int64_t step, int64_t count, double w, bool take_sqrt, BlockScratch& sc) {
+  float* blk = sc.block.data();
+  for (int64_t p = 0; p < n; ++p) std::memcpy(blk + p * kBlock, base + p * step, size_t(count) * sizeof(float));
+  for (int64_t b = 0; b < count; ++b) detail::edt_line(blk + b, blk + b, n, kBlock, w, sc.sites.data());
+  for (int64_t p = 0; p < n; ++p) {
+    float* dst = base + p * step;
+    const float* src = blk + p * kBlock;
+    if (take_sqrt)
+      for (int64_t b = 0; b < count; ++b) dst[b] = std::sqrt(src[b]);
+    else
+      std::memcpy(dst, src, size_t(count) * sizeof(float));
+  }
+}
+
+void transform(const Volume<uint8_t>& solid, Volume<float>& out, const EdtOptions& opt, bool take_sqrt) {
   for (double w : opt.spacing)
     if (!(w > 0) || !std::isfinite(w))
       throw UsageError("distance transform: voxel spacing must be positive and finite (got " + std::to_string(w) + ")");
@@ -136,48 +132,50 @@ void squared_distance_transform(const Volume<uint8_t>& solid, Volume<float>& out
   out.set_geometry(solid.geometry());
   if (s.empty()) return;
 
-  pass_x(solid, out, opt.spacing[2]);
-
-  // Pass y: in each slice, blocks of 16 columns (consecutive i).
+  const int64_t nz = s.nz, ny = s.ny, nx = s.nx, sz = s.slice_voxels();
+  const int64_t blocks = (nx + kBlock - 1) / kBlock;
+  // Passes x and y slice by slice: the slice pass x writes is still in
+  // cache when pass y reads it (one trip through memory instead of two).
   {
-    const int64_t ny = s.ny, nx = s.nx;
-    const int64_t blocks = (nx + kBlock - 1) / kBlock;
-    const double wy = opt.spacing[1];
+    const double wx2 = opt.spacing[2] * opt.spacing[2], wy = opt.spacing[1];
+    const bool last = take_sqrt && nz == 1;
 #pragma omp parallel
     {
-      LineScratch sc(ny);
+      BlockScratch sc(ny);
 #pragma omp for schedule(static)
-      for (int64_t k = 0; k < s.nz; ++k)
+      for (int64_t k = 0; k < nz; ++k) {
+        for (int64_t j = 0; j < ny; ++j) row_x(solid.data() + k * sz + j * nx, out.data() + k * sz + j * nx, nx, wx2);
         for (int64_t b = 0; b < blocks; ++b) {
           const int64_t i0 = b * kBlock, cnt = std::min(kBlock, nx - i0);
-          block_lines(out.data() + s.index(k, 0, i0), ny, nx, cnt, wy, sc);
+          block_lines(out.data() + k * sz + i0, ny, nx, cnt, wy, last, sc);
         }
+      }
     }
   }
   // Pass z: for each y row, blocks of 16 columns along z.
-  if (s.nz > 1) {
-    const int64_t nz = s.nz, nx = s.nx, sz = s.slice_voxels();
-    const int64_t blocks = (nx + kBlock - 1) / kBlock;
+  if (nz > 1) {
     const double wz = opt.spacing[0];
 #pragma omp parallel
     {
-      LineScratch sc(nz);
+      BlockScratch sc(nz);
 #pragma omp for schedule(static)
-      for (int64_t j = 0; j < s.ny; ++j)
+      for (int64_t j = 0; j < ny; ++j)
         for (int64_t b = 0; b < blocks; ++b) {
           const int64_t i0 = b * kBlock, cnt = std::min(kBlock, nx - i0);
-          block_lines(out.data() + s.index(0, j, i0), nz, sz, cnt, wz, sc);
+          block_lines(out.data() + j * nx + i0, nz, sz, cnt, wz, take_sqrt, sc);
         }
     }
   }
 }
 
+}  // namespace
+
+void squared_distance_transform(const Volume<uint8_t>& solid, Volume<float>& out, const EdtOptions& opt) {
+  transform(solid, out, opt, false);
+}
+
 void distance_transform(const Volume<uint8_t>& solid, Volume<float>& out, const EdtOptions& opt) {
-  squared_distance_transform(solid, out, opt);
-  float* d = out.data();
-  const int64_t n = out.size();
-#pragma omp parallel for schedule(static)
-  for (int64_t i = 0; i < n; ++i) d[i] = std::sqrt(d[i]);
+  transform(solid, out, opt, true);
 }
 
 }  // namespace tg

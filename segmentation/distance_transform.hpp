@@ -51,10 +51,19 @@ void squared_distance_transform(const Volume<uint8_t>& solid, Volume<float>& out
 void distance_transform(const Volume<uint8_t>& solid, Volume<float>& out, const EdtOptions& opt = {});
 
 namespace detail {
-// Lower envelope of parabolas on one line of n samples with spacing w:
+// One parabola of a lower envelope, in voxel units along its line: root v,
+// g = f(v) / w^2 + v^2, f = f(v) (kept for the output), and the abscissa
+// zn / zd (zd >= 0) where it takes over from the parabola below it on the
+// stack; -1 / 0 stands for -infinity and 1 / 0 for +infinity.
+struct EnvelopeSite {
+  double v, g, f, zn, zd;
+};
+
+// Lower envelope of parabolas on one line of n samples with spacing w, read
+// from f and written to d at `stride` floats between samples (d may be f):
 // d[p] = min_q (w (p - q))^2 + f[q] over q with finite f (all +inf if none).
-// Scratch: v (n entries), z (n + 1 entries). d may not alias f.
-void edt_line(const float* f, int64_t n, double w, float* d, int64_t* v, double* z);
+// Scratch: n + 1 sites.
+void edt_line(const float* f, float* d, int64_t n, int64_t stride, double w, EnvelopeSite* sites);
 }  // namespace detail
 
 }  // namespace tg

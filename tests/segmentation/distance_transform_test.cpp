@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include "core/errors.hpp"
 
@@ -97,18 +98,80 @@ TEST(DistanceTransform, BallCentreDepth) {
   EXPECT_NEAR(d(12, 12, 12), std::sqrt(101.0), 1e-5);
 }
 
+// The line kernel against its definition, min over finite f[q] of
+// (w (p - q))^2 + f[q], on lines with +inf samples (rows without void),
+// zeros cutting the line, none at all, or only +inf; read and written at a
+// stride, in place, as passes y and z use it.
+void expect_line_matches_definition(const std::vector<float>& f, double w) {
+  const int64_t n = int64_t(f.size()), stride = 3;
+  std::vector<float> buf(size_t(n * stride), -1.f);
+  for (int64_t p = 0; p < n; ++p) buf[size_t(p * stride)] = f[size_t(p)];
+  std::vector<detail::EnvelopeSite> sites(size_t(n + 1));
+  detail::edt_line(buf.data(), buf.data(), n, stride, w, sites.data());
+  for (int64_t p = 0; p < n; ++p) {
+    double best = std::numeric_limits<double>::infinity();
+    for (int64_t q = 0; q < n; ++q)
+      if (!std::isinf(f[size_t(q)])) best = std::min(best, w * w * double((p - q) * (p - q)) + f[size_t(q)]);
+    const float got = buf[size_t(p * stride)];
+    if (std::isinf(best)) {
+      ASSERT_TRUE(std::isinf(got)) << "p " << p;
+    } else {
+      ASSERT_NEAR(got, best, 1e-6 * best + 1e-9) << "p " << p;
+    }
+    ASSERT_EQ(buf[size_t(p * stride + 1)], -1.f);  // the neighbouring column is untouched
+  }
+}
+
 TEST(DistanceTransform, LineKernelAgainstDefinition) {
   const float inf = std::numeric_limits<float>::infinity();
-  const float f[] = {inf, 4.f, inf, inf, 0.f, inf, 9.f};
-  float d[7];
-  int64_t v[7];
-  double z[8];
-  detail::edt_line(f, 7, 1.5, d, v, z);
-  for (int p = 0; p < 7; ++p) {
-    double best = std::numeric_limits<double>::infinity();
-    for (int q = 0; q < 7; ++q)
-      if (!std::isinf(f[q])) best = std::min(best, 2.25 * (p - q) * (p - q) + f[q]);
-    EXPECT_NEAR(d[p], best, 1e-5);
+  expect_line_matches_definition({inf, 4.f, inf, inf, 0.f, inf, 9.f}, 1.5);
+  expect_line_matches_definition({inf, inf, inf}, 1.0);              // no finite site: +inf
+  expect_line_matches_definition({inf, inf, 7.f, inf, inf}, 0.5);    // one finite site, no zero
+  expect_line_matches_definition({0.f, 0.f, 3.f, 0.f, 0.f}, 2.0);    // zeros next to zeros
+  expect_line_matches_definition({5.f}, 1.0);
+  // Random lines: zeros, +inf and finite values of pass-x-like size.
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> kind(0, 9), val(1, 400);
+  for (double w : {1.0, 0.5, 3.0})
+    for (int t = 0; t < 200; ++t) {
+      std::vector<float> f(size_t(1 + t % 60));
+      const int p_zero = t % 4, p_inf = (t / 4) % 4;  // from none to many
+      for (auto& x : f) {
+        const int c = kind(rng);
+        x = c < p_zero ? 0.f : c < p_zero + p_inf ? inf : float(val(rng));
+      }
+      expect_line_matches_definition(f, w);
+    }
+}
+
+TEST(DistanceTransform, SolidRowsAndBorderRuns) {
+  // Rows and whole slices with no void (+inf after pass x) inside a mixed
+  // volume, and solid runs that touch the volume border in every direction.
+  auto m = Volume<uint8_t>::filled(Shape{12, 13, 17}, 1);
+  m(3, 4, 5) = 0, m(3, 4, 6) = 0, m(9, 11, 1) = 0, m(0, 12, 16) = 0;
+  expect_matches_brute(m, {1, 1, 1});
+  expect_matches_brute(m, {3, 1, 0.5});  // strong anisotropy
+  for (int64_t j = 0; j < 13; ++j)       // a void plane: runs on both sides end at the border
+    for (int64_t i = 0; i < 17; ++i) m(6, j, i) = 0;
+  expect_matches_brute(m, {0.5, 3, 1});
+}
+
+TEST(DistanceTransform, MatchesBruteForceStrongAnisotropy) {
+  unsigned seed = 40;
+  for (auto w : {std::array<double, 3>{3.0, 1.0, 0.5}, {0.5, 1.0, 3.0}, {1.0, 7.0, 0.2}})
+    for (double p : {0.003, 0.02, 0.2}) expect_matches_brute(random_mask(Shape{13, 17, 23}, p, seed++), w);
+}
+
+TEST(DistanceTransform, DistanceIsRootOfSquaredAndThinVolumes) {
+  // distance_transform takes the root in its last pass: in pass z, or in
+  // pass y for a single slice.
+  for (Shape s : {Shape{9, 10, 37}, Shape{1, 10, 37}, Shape{5, 1, 1}, Shape{1, 1, 20}}) {
+    const auto m = random_mask(s, 0.05, 3);
+    Volume<float> sq, d;
+    squared_distance_transform(m, sq, {{1.0, 2.0, 0.7}});
+    distance_transform(m, d, {{1.0, 2.0, 0.7}});
+    for (int64_t i = 0; i < m.size(); ++i) ASSERT_EQ(d[i], std::sqrt(sq[i])) << s.str() << " voxel " << i;
+    expect_matches_brute(m, {1.0, 2.0, 0.7});
   }
 }
 

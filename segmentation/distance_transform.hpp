@@ -13,21 +13,35 @@
 //   D(k,j,i) = min over (k',j',i') of wz^2(k-k')^2 + wy^2(j-j')^2 + wx^2(i-i')^2
 // restricted to void voxels, so it is computed by three 1-D passes. Pass x
 // is a two-sided sweep (distance to the nearest void voxel of the row).
-// Passes y and z compute, on each line, the lower envelope of the parabolas
-// p -> (w (p - q))^2 + f(q) rooted at every site q with finite f, in O(n):
-// a stack of parabolas and the abscissae z[] where each takes over. Sites
-// with f = +inf are skipped (the paper's algorithm would form inf - inf).
-// Deviations from the paper: spacing w on each axis (the intersection is
-// s = ((f(q) + (w q)^2) - (f(v) + (w v)^2)) / (2 w (q - v)) in physical
-// units), and the envelope is built in double then stored as float.
+// Passes y and z compute, on each line, d(p) = min over q of
+// (w (p - q))^2 + f(q) (f from the passes before), in one of two ways,
+// chosen per block of 16 neighbouring lines:
+// - Windows (most blocks of a granular scan): the nearest q lies within
+//   sqrt(f(p)) / w of p, since d(p) <= f(p); the minimum is taken directly
+//   over that window, 16 lines at once in SIMD, in float (exact for integer
+//   squared distances below 2^24, i.e. isotropic voxels in volumes up to
+//   ~2300 per side; otherwise within 1-2 float roundings).
+// - Lower envelope of the parabolas rooted at every site q with finite f
+//   (the paper's algorithm, O(n)), where windows would be wide (rows
+//   without void, large grains): a stack of parabolas and the abscissae
+//   where each takes over. Deviations from the paper: spacing w on each
+//   axis, voxel units along the line (g(q) = f(q) / w^2 + q^2, the
+//   intersection of v < q is (g(q) - g(v)) / (2 (q - v))), intersections
+//   compared by cross-multiplication (no division), sites with f = +inf
+//   kept finite but never nearest (no inf - inf), lines cut at zeros;
+//   built in double, stored as float.
 //
-// Parallelism: OpenMP over independent lines, schedule(static); a line's
-// result does not depend on which thread computes it. Passes y and z gather
+// Parallelism: OpenMP over independent blocks, schedule(static); a line's
+// result does not depend on which thread computes it. Passes y and z copy
 // 16 neighbouring columns at once so each memory read uses a full cache
-// line instead of one float of it.
+// line instead of one float of it. Pass x runs slice by slice just before
+// pass y (the slice is still in cache), and distance_transform takes the
+// square root in the last pass.
 //
-// Cost: O(N) time, 3 passes; no memory beyond the float output (4 B/voxel)
-// and per-thread line scratch.
+// Cost: O(N) time for the envelopes, O(N r) for the windows (r: the local
+// depth in voxels, bounded by the choice between the two); 3 passes
+// (measured at 256^3 on one core: 25 -> 90 Mvox/s with the windows); no
+// memory beyond the float output (4 B/voxel) and per-thread block scratch.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -64,6 +78,16 @@ struct EnvelopeSite {
 // d[p] = min_q (w (p - q))^2 + f[q] over q with finite f (all +inf if none).
 // Scratch: n + 1 sites.
 void edt_line(const float* f, float* d, int64_t n, int64_t stride, double w, EnvelopeSite* sites);
+
+// Passes y and z work on blocks of kEdtBlock lines stored row by row:
+// sample p of line b at [p * kEdtBlock + b].
+constexpr int64_t kEdtBlock = 16;
+
+// The same minimum as edt_line on a block of lines, taken directly over the
+// window |q - p| <= r_p of each row (out may not alias in); computed in
+// float. Returns false, writing nothing to out, when the windows would cost
+// more than the envelopes (see the .cpp). Scratch: n radii, n costs.
+bool edt_block_window(const float* in, float* out, int64_t n, double w, int64_t* radius, float* cost);
 }  // namespace detail
 
 }  // namespace tg

@@ -175,6 +175,67 @@ TEST(DistanceTransform, DistanceIsRootOfSquaredAndThinVolumes) {
   }
 }
 
+// The windowed kernel of passes y and z against the definition, line by
+// line of a block: zeros, +inf and finite values, windows reaching the line
+// ends, anisotropic spacing; and its refusal when windows would be wide.
+TEST(DistanceTransform, BlockWindowAgainstDefinition) {
+  const float inf = std::numeric_limits<float>::infinity();
+  constexpr int64_t B = detail::kEdtBlock;
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> kind(0, 9), val(1, 60);
+  for (double w : {1.0, 0.5, 3.0, 0.7})
+    for (int64_t n : {1, 2, 7, 40, 130}) {
+      std::vector<float> in(size_t(n * B)), out(size_t(n * B), -1.f), cost(static_cast<size_t>(n));
+      std::vector<int64_t> radius(static_cast<size_t>(n));
+      for (auto& x : in) {
+        const int c = kind(rng);
+        x = c < 3 ? 0.f : c < 4 && n < 50 ? inf : float(val(rng)) * float(w * w);
+      }
+      // Finite values up to 60 w^2: windows of radius 7 at most, accepted.
+      ASSERT_TRUE(detail::edt_block_window(in.data(), out.data(), n, w, radius.data(), cost.data()));
+      for (int64_t b = 0; b < B; ++b)
+        for (int64_t p = 0; p < n; ++p) {
+          double best = std::numeric_limits<double>::infinity();
+          for (int64_t q = 0; q < n; ++q)
+            best = std::min(best, w * w * double((p - q) * (p - q)) + in[size_t(q * B + b)]);
+          const float got = out[size_t(p * B + b)];
+          if (std::isinf(best)) {
+            ASSERT_TRUE(std::isinf(got));
+          } else {
+            // float arithmetic: two roundings at most
+            ASSERT_NEAR(got, best, 3e-7 * best) << "w " << w << " n " << n << " line " << b << " p " << p;
+          }
+        }
+    }
+  // A block with a +inf row on a long line (no void anywhere along it) is
+  // refused: its window would be the whole line at every row.
+  const int64_t n = 300;
+  std::vector<float> in(size_t(n * B), 1.f), out(size_t(n * B), -1.f), cost(static_cast<size_t>(n));
+  std::vector<int64_t> radius(static_cast<size_t>(n));
+  for (int64_t b = 0; b < B; ++b) in[size_t(b)] = 0.f;
+  for (int64_t p = 0; p < n; ++p) in[size_t(p * B + 5)] = inf;
+  EXPECT_FALSE(detail::edt_block_window(in.data(), out.data(), n, 1.0, radius.data(), cost.data()));
+  for (float x : out) ASSERT_EQ(x, -1.f);  // refused: nothing written
+  for (int64_t p = 1; p < n; ++p) in[size_t(p * B + 5)] = 1.f;  // the line has a void again
+  in[size_t(5)] = 0.f;
+  ASSERT_TRUE(detail::edt_block_window(in.data(), out.data(), n, 1.0, radius.data(), cost.data()));
+  EXPECT_EQ(out[size_t(5)], 0.f);
+  EXPECT_EQ(out[size_t(7 * B + 5)], 1.f);
+}
+
+TEST(DistanceTransform, LongLinesMixWindowsAndEnvelopes) {
+  // Lines along z of 230 voxels: blocks with sparse voids or none along a
+  // line take the envelopes, blocks in the dense half the windows; a partial
+  // block of 2 lines at the end of each row.
+  Volume<uint8_t> m = random_mask(Shape{230, 5, 18}, 0.0015, 21);
+  for (int64_t k = 0; k < 60; ++k)
+    for (int64_t j = 0; j < 5; ++j)
+      for (int64_t i = 0; i < 18; ++i)
+        if ((k * 7 + j * 3 + i) % 5 == 0) m(k, j, i) = 0;
+  expect_matches_brute(m, {1, 1, 1});
+  expect_matches_brute(m, {0.5, 1, 3});
+}
+
 TEST(DistanceTransform, RejectsBadSpacing) {
   Volume<float> d;
   EXPECT_THROW(distance_transform(Volume<uint8_t>::filled(Shape{1, 1, 1}, 1), d, {{0.0, 1.0, 1.0}}), UsageError);

@@ -90,11 +90,11 @@ void edt_line(const float* f, float* d, int64_t n, int64_t stride, double w, Env
 // without void: +inf; large grains) the envelopes win, so the block falls
 // back to them when the windows' total length exceeds kWindowBudget rows
 // per row (about where the two cost the same, measured).
-bool edt_block_window(const float* in, float* out, int64_t n, double w, int64_t* radius, float* cost) {
+bool edt_block_window(const float* in, float* out, int64_t n, int64_t stride, double w, int64_t* radius, float* cost) {
   int64_t total = 0;
   for (int64_t p = 0; p < n; ++p) {
     float m = 0;
-    for (int64_t b = 0; b < kEdtBlock; ++b) m = std::max(m, in[p * kEdtBlock + b]);
+    for (int64_t b = 0; b < kEdtBlock; ++b) m = std::max(m, in[p * stride + b]);
     // A little over the bound (1e-9) so that rounding never cuts a window short.
     const double r = std::sqrt(double(m)) / w * (1 + 1e-9);
     radius[p] = r < double(n) ? int64_t(r) : n;  // +inf: n
@@ -107,15 +107,15 @@ bool edt_block_window(const float* in, float* out, int64_t n, double w, int64_t*
   for (int64_t k = 0; k <= rmax; ++k) cost[k] = float(w * w * double(k * k));
   for (int64_t p = 0; p < n; ++p) {
     float acc[kEdtBlock];
-    for (int64_t b = 0; b < kEdtBlock; ++b) acc[b] = in[p * kEdtBlock + b];
+    for (int64_t b = 0; b < kEdtBlock; ++b) acc[b] = in[p * stride + b];
     const int64_t lo = std::max<int64_t>(0, p - radius[p]), hi = std::min(n - 1, p + radius[p]);
     for (int64_t q = lo; q <= hi; ++q) {
       const float c = cost[q > p ? q - p : p - q];
-      const float* row = in + q * kEdtBlock;
+      const float* row = in + q * stride;
 #pragma omp simd  // GCC vectorises the min only when told it may
       for (int64_t b = 0; b < kEdtBlock; ++b) acc[b] = std::min(acc[b], row[b] + c);
     }
-    std::memcpy(out + p * kEdtBlock, acc, sizeof acc);
+    std::memcpy(out + p * stride, acc, sizeof acc);
   }
   return true;
 }
@@ -124,7 +124,7 @@ bool edt_block_window(const float* in, float* out, int64_t n, double w, int64_t*
 
 namespace {
 
-constexpr int64_t kBlock = detail::kEdtBlock;  // columns gathered together: 16 floats = one 64-byte cache line
+constexpr int64_t kBlock = detail::kEdtBlock;  // columns solved together: 16 floats = one 64-byte cache line
 
 // Pass x on one row: squared distance to the nearest void voxel of the row.
 void row_x(const uint8_t* m, float* d, int64_t nx, double w2) {
@@ -140,42 +140,45 @@ void row_x(const uint8_t* m, float* d, int64_t nx, double w2) {
   }
 }
 
-struct BlockScratch {
-  std::vector<float> block, result, cost;
+// Passes y and z work on a slab: the n samples along the pass of all nx
+// columns, as n rows of the volume copied whole (sequential reads; copying
+// 64-byte pieces of rows a slice apart, as before, took as long as pass z's
+// windows). The kernels take 16 columns at a time. Rows are padded to a
+// multiple of 16 columns (zeros: void lines, ignored) plus one cache line,
+// so that rows 2^k bytes apart do not all fall in the same cache sets.
+struct Slab {
+  int64_t n, nx, width;
+  std::vector<float> in, out, cost;
   std::vector<int64_t> radius;
   std::vector<detail::EnvelopeSite> sites;
-  explicit BlockScratch(int64_t n)
-      : block(size_t(n * kBlock)), result(size_t(n * kBlock)), cost(size_t(n)), radius(size_t(n)), sites(size_t(n + 1)) {}
-};
+  Slab(int64_t n_, int64_t nx_)
+      : n(n_), nx(nx_), width((nx_ + kBlock - 1) / kBlock * kBlock + kBlock),
+        in(size_t(n * width)), out(size_t(n * width)), cost(size_t(n)), radius(size_t(n)), sites(size_t(n + 1)) {}
+  float* row(int64_t p) { return in.data() + p * width; }
 
-// Passes y and z on `count` <= kBlock neighbouring lines of n samples:
-// sample p of line b is base[p * step + b]. The block is copied row by row
-// (each copy one cache line of the volume), solved by windows or, where
-// they would be wide, by envelopes in place in the copy, and the rows are
-// copied back; the last pass takes the square root on the way back, saving
-// a sweep over the volume. (Gathering each line into its own contiguous
-// buffer was a transpose that touched every row 2 x 16 times, at strides of
-// 1 KiB - 1 MiB that alias in the cache.)
-void block_lines(float* base, int64_t n, int64_t step, int64_t count, double w, bool take_sqrt, BlockScratch& sc) {
-  float* blk = sc.block.data();
-  for (int64_t p = 0; p < n; ++p) {
-    std::memcpy(blk + p * kBlock, base + p * step, size_t(count) * sizeof(float));
-    std::fill(blk + p * kBlock + count, blk + (p + 1) * kBlock, 0.f);  // a partial block: void lines
+  // in -> out, block by block: windows, or envelopes where they would be wide.
+  void solve(double w) {
+    for (int64_t i0 = 0; i0 < nx; i0 += kBlock) {
+      const float* f = in.data() + i0;
+      float* d = out.data() + i0;
+      if (detail::edt_block_window(f, d, n, width, w, radius.data(), cost.data())) continue;
+      for (int64_t b = 0; b < std::min(kBlock, nx - i0); ++b) detail::edt_line(f + b, d + b, n, width, w, sites.data());
+    }
   }
-  const float* res = sc.result.data();
-  if (!detail::edt_block_window(blk, sc.result.data(), n, w, sc.radius.data(), sc.cost.data())) {
-    for (int64_t b = 0; b < count; ++b) detail::edt_line(blk + b, blk + b, n, kBlock, w, sc.sites.data());
-    res = blk;
+
+  // Results to n rows of the volume `step` floats apart; the last pass takes
+  // the square root on the way, saving a sweep over the volume.
+  void store(float* base, int64_t step, bool take_sqrt) const {
+    for (int64_t p = 0; p < n; ++p) {
+      const float* src = out.data() + p * width;
+      float* dst = base + p * step;
+      if (take_sqrt)
+        for (int64_t i = 0; i < nx; ++i) dst[i] = std::sqrt(src[i]);
+      else
+        std::memcpy(dst, src, size_t(nx) * sizeof(float));
+    }
   }
-  for (int64_t p = 0; p < n; ++p) {
-    float* dst = base + p * step;
-    const float* src = res + p * kBlock;
-    if (take_sqrt)
-      for (int64_t b = 0; b < count; ++b) dst[b] = std::sqrt(src[b]);
-    else
-      std::memcpy(dst, src, size_t(count) * sizeof(float));
-  }
-}
+};
 
 void transform(const Volume<uint8_t>& solid, Volume<float>& out, const EdtOptions& opt, bool take_sqrt) {
   for (double w : opt.spacing)
@@ -187,37 +190,34 @@ void transform(const Volume<uint8_t>& solid, Volume<float>& out, const EdtOption
   if (s.empty()) return;
 
   const int64_t nz = s.nz, ny = s.ny, nx = s.nx, sz = s.slice_voxels();
-  const int64_t blocks = (nx + kBlock - 1) / kBlock;
-  // Passes x and y slice by slice: the slice pass x writes is still in
-  // cache when pass y reads it (one trip through memory instead of two).
+  // Passes x and y slice by slice: pass x writes the slab pass y reads (the
+  // volume is written once for both).
   {
     const double wx2 = opt.spacing[2] * opt.spacing[2], wy = opt.spacing[1];
     const bool last = take_sqrt && nz == 1;
 #pragma omp parallel
     {
-      BlockScratch sc(ny);
+      Slab slab(ny, nx);
 #pragma omp for schedule(static)
       for (int64_t k = 0; k < nz; ++k) {
-        for (int64_t j = 0; j < ny; ++j) row_x(solid.data() + k * sz + j * nx, out.data() + k * sz + j * nx, nx, wx2);
-        for (int64_t b = 0; b < blocks; ++b) {
-          const int64_t i0 = b * kBlock, cnt = std::min(kBlock, nx - i0);
-          block_lines(out.data() + k * sz + i0, ny, nx, cnt, wy, last, sc);
-        }
+        for (int64_t j = 0; j < ny; ++j) row_x(solid.data() + k * sz + j * nx, slab.row(j), nx, wx2);
+        slab.solve(wy);
+        slab.store(out.data() + k * sz, nx, last);
       }
     }
   }
-  // Pass z: for each y row, blocks of 16 columns along z.
+  // Pass z: for each y, the slab of rows (k, y, 0..nx) over all k.
   if (nz > 1) {
     const double wz = opt.spacing[0];
 #pragma omp parallel
     {
-      BlockScratch sc(nz);
+      Slab slab(nz, nx);
 #pragma omp for schedule(static)
-      for (int64_t j = 0; j < ny; ++j)
-        for (int64_t b = 0; b < blocks; ++b) {
-          const int64_t i0 = b * kBlock, cnt = std::min(kBlock, nx - i0);
-          block_lines(out.data() + j * nx + i0, nz, sz, cnt, wz, take_sqrt, sc);
-        }
+      for (int64_t j = 0; j < ny; ++j) {
+        for (int64_t k = 0; k < nz; ++k) std::memcpy(slab.row(k), out.data() + k * sz + j * nx, size_t(nx) * sizeof(float));
+        slab.solve(wz);
+        slab.store(out.data() + j * nx, sz, take_sqrt);
+      }
     }
   }
 }

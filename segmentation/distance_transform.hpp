@@ -31,17 +31,18 @@
 //   kept finite but never nearest (no inf - inf), lines cut at zeros;
 //   built in double, stored as float.
 //
-// Parallelism: OpenMP over independent blocks, schedule(static); a line's
-// result does not depend on which thread computes it. Passes y and z copy
-// 16 neighbouring columns at once so each memory read uses a full cache
-// line instead of one float of it. Pass x runs slice by slice just before
-// pass y (the slice is still in cache), and distance_transform takes the
-// square root in the last pass.
+// Parallelism: OpenMP over slices (passes x, y) and over y (pass z),
+// schedule(static); a line's result does not depend on which thread
+// computes it. Passes y and z copy the rows they need whole into a
+// per-thread slab (sequential memory access) and solve 16 columns at a time.
+// Pass x runs slice by slice into the slab pass y reads, and
+// distance_transform takes the square root in the last pass.
 //
 // Cost: O(N) time for the envelopes, O(N r) for the windows (r: the local
 // depth in voxels, bounded by the choice between the two); 3 passes
-// (measured at 256^3 on one core: 25 -> 90 Mvox/s with the windows); no
-// memory beyond the float output (4 B/voxel) and per-thread block scratch.
+// (measured at 256^3 on one core: 25 -> ~115 Mvox/s, see
+// bench/segmentation/RESULTS.md); no memory beyond the float output
+// (4 B/voxel) and per-thread slabs (8 B x the larger of ny nx, nz nx).
 #pragma once
 #include <array>
 #include <cstdint>
@@ -80,14 +81,14 @@ struct EnvelopeSite {
 void edt_line(const float* f, float* d, int64_t n, int64_t stride, double w, EnvelopeSite* sites);
 
 // Passes y and z work on blocks of kEdtBlock lines stored row by row:
-// sample p of line b at [p * kEdtBlock + b].
+// sample p of line b at [p * stride + b], stride >= kEdtBlock.
 constexpr int64_t kEdtBlock = 16;
 
 // The same minimum as edt_line on a block of lines, taken directly over the
 // window |q - p| <= r_p of each row (out may not alias in); computed in
 // float. Returns false, writing nothing to out, when the windows would cost
 // more than the envelopes (see the .cpp). Scratch: n radii, n costs.
-bool edt_block_window(const float* in, float* out, int64_t n, double w, int64_t* radius, float* cost);
+bool edt_block_window(const float* in, float* out, int64_t n, int64_t stride, double w, int64_t* radius, float* cost);
 }  // namespace detail
 
 }  // namespace tg

@@ -192,7 +192,7 @@ TEST(DistanceTransform, BlockWindowAgainstDefinition) {
         x = c < 3 ? 0.f : c < 4 && n < 50 ? inf : float(val(rng)) * float(w * w);
       }
       // Finite values up to 60 w^2: windows of radius 7 at most, accepted.
-      ASSERT_TRUE(detail::edt_block_window(in.data(), out.data(), n, w, radius.data(), cost.data()));
+      ASSERT_TRUE(detail::edt_block_window(in.data(), out.data(), n, B, w, radius.data(), cost.data()));
       for (int64_t b = 0; b < B; ++b)
         for (int64_t p = 0; p < n; ++p) {
           double best = std::numeric_limits<double>::infinity();
@@ -214,11 +214,11 @@ TEST(DistanceTransform, BlockWindowAgainstDefinition) {
   std::vector<int64_t> radius(static_cast<size_t>(n));
   for (int64_t b = 0; b < B; ++b) in[size_t(b)] = 0.f;
   for (int64_t p = 0; p < n; ++p) in[size_t(p * B + 5)] = inf;
-  EXPECT_FALSE(detail::edt_block_window(in.data(), out.data(), n, 1.0, radius.data(), cost.data()));
+  EXPECT_FALSE(detail::edt_block_window(in.data(), out.data(), n, B, 1.0, radius.data(), cost.data()));
   for (float x : out) ASSERT_EQ(x, -1.f);  // refused: nothing written
   for (int64_t p = 1; p < n; ++p) in[size_t(p * B + 5)] = 1.f;  // the line has a void again
   in[size_t(5)] = 0.f;
-  ASSERT_TRUE(detail::edt_block_window(in.data(), out.data(), n, 1.0, radius.data(), cost.data()));
+  ASSERT_TRUE(detail::edt_block_window(in.data(), out.data(), n, B, 1.0, radius.data(), cost.data()));
   EXPECT_EQ(out[size_t(5)], 0.f);
   EXPECT_EQ(out[size_t(7 * B + 5)], 1.f);
 }

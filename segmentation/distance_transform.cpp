@@ -9,6 +9,10 @@
 
 #include "core/errors.hpp"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace tg {
 
 namespace detail {
@@ -140,6 +144,17 @@ void row_x(const uint8_t* m, float* d, int64_t nx, double w2) {
   }
 }
 
+// dst[i] = sqrt(src[i]). GCC keeps std::sqrt scalar (it may set errno),
+// and the scalar root was 10-15 % of the whole transform; SSE2's root is
+// the same correctly rounded IEEE operation, four at a time.
+void sqrt_row(const float* src, float* dst, int64_t n) {
+  int64_t i = 0;
+#if defined(__SSE2__)
+  for (; i + 4 <= n; i += 4) _mm_storeu_ps(dst + i, _mm_sqrt_ps(_mm_loadu_ps(src + i)));
+#endif
+  for (; i < n; ++i) dst[i] = std::sqrt(src[i]);
+}
+
 // Passes y and z work on a slab: the n samples along the pass of all nx
 // columns, as n rows of the volume copied whole (sequential reads; copying
 // 64-byte pieces of rows a slice apart, as before, took as long as pass z's
@@ -173,7 +188,7 @@ struct Slab {
       const float* src = out.data() + p * width;
       float* dst = base + p * step;
       if (take_sqrt)
-        for (int64_t i = 0; i < nx; ++i) dst[i] = std::sqrt(src[i]);
+        sqrt_row(src, dst, nx);
       else
         std::memcpy(dst, src, size_t(nx) * sizeof(float));
     }

@@ -123,7 +123,35 @@ std::string read_attr_string(hid_t obj, const char* name) {
 // extent of the dataset (H5Pset_chunk refuses such a layout, so only a
 // corrupt file has one) and then copies past its buffers inside H5Dread
 // (found by fuzzing: tests/fuzz/regressions/hdf5/libhdf5-chunk-beyond-extent.h5).
+// It also reads an unfiltered chunk whose stored size is smaller than the
+// chunk as if it were whole (heap over-read in H5VM_memcpyvv, found by
+// fuzzing: tests/fuzz/known/hdf5/libhdf5-short-chunk-read-overflow.h5), so
+// each stored chunk's size is compared with the chunk's when there are no
+// filters. H5Dget_chunk_info walks the chunk index for each call, so this
+// is done for files of up to kMaxCheckedChunks chunks (ours have one chunk
+// per 16 slices; a 1220^3 scan has 77).
 // Checked before every read.
+constexpr hsize_t kMaxCheckedChunks = 4096;
+
+void check_chunk_sizes(hid_t dset, hid_t dcpl, hid_t space, const std::vector<hsize_t>& chunk, const std::string& where) {
+  if (H5Pget_nfilters(dcpl) != 0) return;  // compressed chunks have any stored size
+  Handle ft = type_h(H5Dget_type(dset));
+  hsize_t bytes = ft.ok() ? H5Tget_size(ft.get()) : 0;
+  for (hsize_t c : chunk) bytes *= c;
+  hsize_t n = 0;
+  if (H5Dget_num_chunks(dset, space, &n) < 0 || n > kMaxCheckedChunks) return;
+  for (hsize_t i = 0; i < n; ++i) {
+    unsigned mask = 0;
+    haddr_t addr = 0;
+    hsize_t size = 0;
+    if (H5Dget_chunk_info(dset, space, i, nullptr, &mask, &addr, &size) < 0)
+      throw InputError(where + ": corrupt chunk index (chunk " + std::to_string(i) + " cannot be read)");
+    if (size != bytes)
+      throw InputError(where + ": corrupt chunk " + std::to_string(i) + " (stored " + std::to_string(size) +
+                       " bytes, an uncompressed chunk has " + std::to_string(bytes) + ")");
+  }
+}
+
 void check_chunk_layout(hid_t dset, hid_t space, const std::string& where) {
   Handle dcpl = plist_h(H5Dget_create_plist(dset));
   if (!dcpl.ok() || H5Pget_layout(dcpl.get()) != H5D_CHUNKED) return;
@@ -136,6 +164,7 @@ void check_chunk_layout(hid_t dset, hid_t space, const std::string& where) {
     if (chunk[r] == 0 || (maxd[r] != H5S_UNLIMITED && chunk[r] > maxd[r]))
       throw InputError(where + ": corrupt chunk layout (chunk dimension " + std::to_string(chunk[r]) +
                        " exceeds the dataset's maximum " + std::to_string(maxd[r]) + ")");
+  check_chunk_sizes(dset, dcpl.get(), space, chunk, where);
 }
 
 // HDF5 prints its error stack to stderr by default; our errors are one line,

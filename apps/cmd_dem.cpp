@@ -63,7 +63,10 @@ static tg::app::Registrar reg{{"dem", 60, [](CLI::App& app, CLI::App*& sub) -> t
       "random non-overlapping insertion in a Ø15 mm x 30 mm cylinder, settling under gravity until the\n"
       "kinetic energy is below pluviation.kinetic_energy_tol_J, with friction\n"
       "pluviation.deposition_friction (default 0: frictionless deposition, dense). The grain count fills\n"
-      "pluviation.target_height_m (12.25 mm) at pluviation.target_porosity (44.5 %).\n"
+      "pluviation.target_height_m (12.25 mm) at pluviation.target_porosity (44.5 %). A deposit that\n"
+      "settles higher is pressed down to that height by the top platen (pluviation.press_speed_m_s\n"
+      "0.02 m/s; it stops early above press_max_stress_Pa, 10 kPa), held until at rest and released,\n"
+      "as in the study (off: pluviation.press_to_target_height = false).\n"
       "Prints count, height and porosity reached; writes CSV x_m,y_m,z_m,r_m (metres, axis z, bottom z = 0).\n\n"
       "Example:\n  tomograin dem pack dem/examples/oedometer.toml -o packing.csv");
   pack->add_option("config", o->config, "TOML config (same keys as `dem oedometer`)")->required();
@@ -118,6 +121,14 @@ static tg::app::Registrar reg{{"dem", 60, [](CLI::App& app, CLI::App*& sub) -> t
       std::printf("pluviated %lld grains: height %.4f mm, porosity %.2f %%, settled %s after %.3f s (KE %.3g J)\n",
                   static_cast<long long>(r.particles.size()), r.height_m * 1e3, 100 * r.porosity,
                   r.settled ? "yes" : "NO", r.settle_time_s, r.kinetic_energy_J);
+      if (r.pressed && r.press_stop_stress_Pa == 0)
+        std::printf("  the free deposit (%.4f mm, porosity %.2f %%) was pressed to the target height\n",
+                    r.deposit_height_m * 1e3, 100 * r.deposit_porosity);
+      else if (r.pressed)
+        std::printf("  the free deposit (%.4f mm, porosity %.2f %%) was pressed until the platen stress reached\n"
+                    "  %.0f Pa (pluviation.press_max_stress_Pa), short of the target height %.4f mm\n",
+                    r.deposit_height_m * 1e3, 100 * r.deposit_porosity, r.press_stop_stress_Pa,
+                    s.pluviation.target_height_m * 1e3);
       return 0;
     }
     (void)oed;

@@ -57,6 +57,9 @@ OedometerSetup read_oedometer_config(Config& cfg, const std::filesystem::path& b
   p.seed = static_cast<uint64_t>(cfg.get("pluviation.seed", static_cast<int64_t>(p.seed)));
   p.time_step_safety = cfg.get("pluviation.time_step_safety", p.time_step_safety);
   p.deposition_friction = cfg.get("pluviation.deposition_friction", p.deposition_friction);
+  p.press_to_target_height = cfg.get("pluviation.press_to_target_height", p.press_to_target_height);
+  p.press_speed_m_s = cfg.get("pluviation.press_speed_m_s", p.press_speed_m_s);
+  p.press_max_stress_Pa = cfg.get("pluviation.press_max_stress_Pa", p.press_max_stress_Pa);
   p.kinetic_energy_tol_J = cfg.get("pluviation.kinetic_energy_tol_J", p.kinetic_energy_tol_J);
   p.max_time_s = cfg.get("pluviation.max_time_s", p.max_time_s);
   p.cylinder_radius_m = e.walls.cylinder_radius;
@@ -109,6 +112,8 @@ OedometerSetup read_oedometer_config(Config& cfg, const std::filesystem::path& b
   cfg.require(s.mass_scaling >= 1, "run.mass_scaling", "must be >= 1 (1 = none)");
   cfg.require(s.threads >= 0, "run.threads", "must be >= 0 (0 = all)");
   cfg.require(s.platen_speed > 0, "oedometer.platen_speed_m_s", "must be positive");
+  cfg.require(s.pluviation.press_speed_m_s > 0, "pluviation.press_speed_m_s", "must be positive");
+  cfg.require(s.pluviation.press_max_stress_Pa > 0, "pluviation.press_max_stress_Pa", "must be positive");
   cfg.require(s.target_strain > 0 && s.target_strain < 0.9, "oedometer.target_strain", "must be in (0, 0.9)");
   cfg.require(s.history_every > 0, "oedometer.history_every_steps", "must be positive");
   cfg.require(s.checkpoint_every > 0, "oedometer.checkpoint_every_steps", "must be positive");

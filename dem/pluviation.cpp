@@ -90,6 +90,34 @@ PluviationResult pluviate(const PluviationOptions& o, EngineOptions eo) {
     return false;
   };
   res.settled = settle(t_fall);
+  packing_height_porosity(e.particles(), o.cylinder_radius_m, res.deposit_height_m, res.deposit_porosity);
+  if (o.press_to_target_height && res.settled && res.deposit_height_m > o.target_height_m) {
+    if (!(o.press_speed_m_s > 0) || !std::isfinite(o.press_speed_m_s) || !(o.press_max_stress_Pa > 0))
+      throw InputError("pluviation: press speed and maximum press stress must be positive");
+    // Platen from the top of the highest grain down to the target height...
+    Walls& w = e.walls();
+    w.top_z = res.deposit_height_m;
+    w.top_vz = -o.press_speed_m_s;
+    const int64_t steps = static_cast<int64_t>(std::ceil((res.deposit_height_m - o.target_height_m) / (o.press_speed_m_s * eo.time_step)));
+    const int64_t every = 100;  // platen travel between stress checks: 100 dt v (~1 µm)
+    const double area = std::numbers::pi * o.cylinder_radius_m * o.cylinder_radius_m;
+    for (int64_t done = 0; done < steps; done += every) {
+      e.run(std::min(every, steps - done));
+      if (done % chunk < every) bar.update(e.time());
+      const double stress = e.wall_forces().top_z / area;
+      if (stress > o.press_max_stress_Pa) {
+        res.press_stop_stress_Pa = stress;
+        break;
+      }
+    }
+    // ...held there until the grains are at rest, then taken away.
+    w.top_vz = 0;
+    if (res.press_stop_stress_Pa == 0) w.top_z = o.target_height_m;
+    res.settled = settle(e.time());
+    w.top = false;
+    res.settled = res.settled && settle(e.time());
+    res.pressed = true;
+  }
   bar.finish();
   res.settle_time_s = e.time();
   res.particles = e.particles();

@@ -10,9 +10,12 @@
 // Count: grains are drawn until their solid volume reaches
 // (1 - n_target) π R² H_target, i.e. the grains that fill the study's
 // specimen (H 12.25 mm) at the target porosity (44.5 %, mid of 44–45 %).
-// The settled height then says how loose the deposit is; the oedometer
-// measures strain from the top of the highest grain, as the LIGGGHTS peer
-// does. Insertion: random sequential addition (uniform positions, rejected
+// The settled height then says how loose the deposit is. As in the study
+// (§4.2: "the height of the sample was set to 12.25 mm"), a deposit that
+// settles above the target height is then pressed down to it by the top
+// platen (slowly, grains still frictionless), held until at rest, and
+// released; the oedometer measures strain from the top of the highest grain
+// (as the LIGGGHTS peer does), so from 12.25 mm. Insertion: random sequential addition (uniform positions, rejected
 // on overlap with a wall or an earlier grain), O(n²) checks (n ~ 10³).
 #pragma once
 #include <cstdint>
@@ -36,6 +39,15 @@ struct PluviationOptions {
   // 12.42 mm / 45.2 % (μ 0.1: 12.77 mm / 46.7 %, the study's μ 0.5: 13.54 mm /
   // 49.7 %). The oedometer itself always uses [contact] friction.
   double deposition_friction = 0.0;
+  // Press a deposit higher than target_height_m down to it (then release).
+  // Off: the specimen is the free deposit (12.42 mm / 45.2 % for the study's
+  // 910 grains); on: 12.25 mm / 44.5 %, the study's height and porosity.
+  bool press_to_target_height = true;
+  double press_speed_m_s = 0.02;        // top platen speed while pressing
+  // Pressing stops early (the specimen stays higher than the target, which
+  // is reported) if the platen stress exceeds this: a target the grains can
+  // reach only by deforming is not forced.
+  double press_max_stress_Pa = 10e3;
   double kinetic_energy_tol_J = 1e-9;   // settled when KE below (LIGGGHTS peer: 1e-9)
   double max_time_s = 1.0;              // give up settling after this (reported)
   int64_t max_insert_tries = 100000000; // RSA attempts before InputError
@@ -45,7 +57,11 @@ struct PluviationResult {
   Particles particles;
   double height_m = 0;    // top of the highest grain
   double porosity = 0;    // 1 - V_solid / (π R² height)
-  double settle_time_s = 0;
+  double settle_time_s = 0;  // simulated time of the whole preparation
+  double deposit_height_m = 0;     // free deposit, before any pressing
+  double deposit_porosity = 0;
+  bool pressed = false;            // the deposit was pressed towards target_height_m
+  double press_stop_stress_Pa = 0; // platen stress when pressing stopped early (0: reached)
   double kinetic_energy_J = 0;
   bool settled = false;   // KE fell below the tolerance before max_time_s
 };

@@ -83,8 +83,67 @@ TEST(Pluviation, FrictionlessDepositionPacksDenserWithoutOverlap) {
   const PluviationResult rough = run(0.5), smooth = run(0.0);
   ASSERT_EQ(rough.particles.size(), smooth.particles.size());  // same grains
   for (int64_t i = 0; i < rough.particles.size(); ++i) ASSERT_EQ(rough.particles.r[i], smooth.particles.r[i]);
-  std::printf("porosity: mu 0.5 %.4f, mu 0 %.4f\n", rough.porosity, smooth.porosity);
-  EXPECT_LT(smooth.porosity, rough.porosity - 0.01);  // measured: 0.5733 vs 0.5470
+  std::printf("deposit porosity: mu 0.5 %.4f, mu 0 %.4f\n", rough.deposit_porosity, smooth.deposit_porosity);
+  EXPECT_LT(smooth.deposit_porosity, rough.deposit_porosity - 0.01);  // measured: 0.5733 vs 0.5470
+}
+
+// Pressing: the same grains (same count, radii and seed: the grain volume
+// (1 - n) H is kept while the target height changes) settle into the same
+// deposit, which the platen then presses a fifth of a grain diameter down
+// to the target; once released the specimen stands at the target height
+// (elastic rebound under the 10 kPa cap is far below a micrometre) with no
+// overlap beyond the elastic ones.
+TEST(Pluviation, PressesTheDepositDownToTheTargetHeight) {
+  PluviationOptions o;
+  o.cylinder_radius_m = 3.5e-3;
+  o.generation_height_m = 10e-3;
+  o.target_height_m = 4e-3;  // ~65 grains
+  o.max_time_s = 0.5;
+  o.press_to_target_height = false;
+  const PluviationResult free = pluviate(o, EngineOptions{});
+  ASSERT_TRUE(free.settled);
+  EXPECT_FALSE(free.pressed);
+  EXPECT_EQ(free.height_m, free.deposit_height_m);
+
+  PluviationOptions q = o;
+  q.press_to_target_height = true;
+  q.target_height_m = free.height_m - 0.2 * o.d50_m;
+  q.target_porosity = 1 - (1 - o.target_porosity) * o.target_height_m / q.target_height_m;
+  const PluviationResult pressed = pluviate(q, EngineOptions{});
+  ASSERT_EQ(pressed.particles.size(), free.particles.size());
+  for (int64_t i = 0; i < free.particles.size(); ++i) ASSERT_EQ(pressed.particles.r[i], free.particles.r[i]);
+  EXPECT_EQ(pressed.deposit_height_m, free.height_m);  // same deposit, bit for bit
+  EXPECT_TRUE(pressed.pressed);
+  EXPECT_TRUE(pressed.settled);
+  EXPECT_EQ(pressed.press_stop_stress_Pa, 0.0) << "stopped early";
+  std::printf("deposit %.4f mm / %.4f, pressed to %.4f mm: %.4f mm / %.4f\n", free.height_m * 1e3, free.porosity,
+              q.target_height_m * 1e3, pressed.height_m * 1e3, pressed.porosity);
+  EXPECT_NEAR(pressed.height_m, q.target_height_m, 1e-6);
+  EXPECT_LT(pressed.porosity, free.porosity);
+  const Particles& p = pressed.particles;
+  double worst = 0;
+  for (int64_t i = 0; i < p.size(); ++i)
+    for (int64_t j = i + 1; j < p.size(); ++j)
+      worst = std::max(worst, (p.r[i] + p.r[j] - std::hypot(p.x[i] - p.x[j], p.y[i] - p.y[j], p.z[i] - p.z[j])) /
+                                  std::min(p.r[i], p.r[j]));
+  EXPECT_LT(worst, 1e-3);
+}
+
+// A target the grains cannot reach without deforming (half the deposit's
+// height) is not forced: pressing stops at the stress cap, and the
+// specimen stays higher than the target, as reported.
+TEST(Pluviation, PressingStopsAtTheStressCap) {
+  PluviationOptions o;
+  o.cylinder_radius_m = 3.5e-3;
+  o.generation_height_m = 10e-3;
+  o.target_height_m = 2e-3;   // ~30 grains
+  o.target_porosity = 0.01;   // count for a near-solid 2 mm disc: ~2x the grains that fit below 2 mm
+  o.max_time_s = 0.5;
+  o.press_max_stress_Pa = 1e3;
+  const PluviationResult r = pluviate(o, EngineOptions{});
+  EXPECT_TRUE(r.pressed);
+  EXPECT_GT(r.press_stop_stress_Pa, 1e3);
+  EXPECT_GT(r.height_m, 1.5 * o.target_height_m);
 }
 
 }  // namespace

@@ -58,7 +58,7 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, Volume<uint32_t>& scratch, c
         border[L[s.index(k, j, i)]] = 1;
     }
   border[0] = 1;  // solid
-#pragma omp parallel
+#pragma omp parallel if (int64_t(cc.count) <= s.voxels() / 16)  // per-thread tables: see connected_components
   {
     std::vector<int64_t> mine(faces.size(), 0);
 #pragma omp for schedule(static)

@@ -48,29 +48,44 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
   uint32_t* L = labels.data();
   const uint8_t* m = solid.data();
   uint32_t maxl = 0;
+#pragma omp parallel for schedule(static) reduction(max : maxl)
   for (int64_t i = 0; i < n; ++i) maxl = std::max(maxl, L[i]);
   std::vector<int64_t> vol(size_t(maxl) + 1, 0);
-  for (int64_t i = 0; i < n; ++i) ++vol[L[i]];
 
-  // Interfaces: line voxels between exactly two labels, and direct faces.
+  // Volumes, and interfaces: line voxels between exactly two labels, and
+  // direct faces. Slices in parallel, each thread with its own tables,
+  // summed at the end (integer counts: the sums do not depend on the order;
+  // the pairs are visited in key order below).
   const seg::Neighbourhood nb(s, 26);
   std::unordered_map<uint64_t, int64_t> iface;
-  for (int64_t k = 0; k < s.nz; ++k)
-    for (int64_t j = 0; j < s.ny; ++j)
-      for (int64_t i = 0; i < s.nx; ++i) {
-        const int64_t idx = s.index(k, j, i);
-        const uint32_t a = L[idx];
-        if (a == 0) {
-          if (!m[idx]) continue;
-          uint32_t ls[3];
-          if (neighbour_labels(labels, nb, idx, ls) == 2) ++iface[pair_key(ls[0], ls[1])];
-          continue;
+#pragma omp parallel if (int64_t(maxl) <= n / 16)
+  {
+    std::vector<int64_t> my_vol(vol.size(), 0);
+    std::unordered_map<uint64_t, int64_t> my_iface;
+#pragma omp for schedule(static)
+    for (int64_t k = 0; k < s.nz; ++k)
+      for (int64_t j = 0; j < s.ny; ++j)
+        for (int64_t i = 0; i < s.nx; ++i) {
+          const int64_t idx = s.index(k, j, i);
+          const uint32_t a = L[idx];
+          ++my_vol[a];
+          if (a == 0) {
+            if (!m[idx]) continue;
+            uint32_t ls[3];
+            if (neighbour_labels(labels, nb, idx, ls) == 2) ++my_iface[pair_key(ls[0], ls[1])];
+            continue;
+          }
+          const uint32_t fw[3] = {i + 1 < s.nx ? L[idx + 1] : 0, j + 1 < s.ny ? L[idx + s.nx] : 0,
+                                  k + 1 < s.nz ? L[idx + s.slice_voxels()] : 0};
+          for (uint32_t b : fw)
+            if (b != 0 && b != a) ++my_iface[pair_key(a, b)];
         }
-        const uint32_t fw[3] = {i + 1 < s.nx ? L[idx + 1] : 0, j + 1 < s.ny ? L[idx + s.nx] : 0,
-                                k + 1 < s.nz ? L[idx + s.slice_voxels()] : 0};
-        for (uint32_t b : fw)
-          if (b != 0 && b != a) ++iface[pair_key(a, b)];
-      }
+#pragma omp critical
+    {
+      for (size_t l = 0; l < vol.size(); ++l) vol[l] += my_vol[l];
+      for (const auto& [key, area] : my_iface) iface[key] += area;
+    }
+  }
 
   MergeResult res;
   res.touching_pairs = int64_t(iface.size());
@@ -105,7 +120,10 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
     for (int t = 1; t < c; ++t) same = same && find(ls[t]) == r;
     if (same && c < 3) L[idx] = r;
   }
-  for (int64_t i = 0; i < n; ++i) L[i] = find(L[i]);
+  std::vector<uint32_t> root(parent.size());
+  for (uint32_t l = 0; l <= maxl; ++l) root[l] = find(l);
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < n; ++i) L[i] = root[L[i]];
   return res;
 }
 

@@ -49,7 +49,7 @@ struct PluviationOptions {
   // reach only by deforming is not forced.
   double press_max_stress_Pa = 10e3;
   double kinetic_energy_tol_J = 1e-9;   // settled when KE below (LIGGGHTS peer: 1e-9)
-  double max_time_s = 1.0;              // give up settling after this (reported)
+  double max_time_s = 1.0;              // give up a settling phase after this (reported)
   int64_t max_insert_tries = 100000000; // RSA attempts before InputError
 };
 
@@ -63,7 +63,7 @@ struct PluviationResult {
   bool pressed = false;            // the deposit was pressed towards target_height_m
   double press_stop_stress_Pa = 0; // platen stress when pressing stopped early (0: reached)
   double kinetic_energy_J = 0;
-  bool settled = false;   // KE fell below the tolerance before max_time_s
+  bool settled = false;   // KE fell below the tolerance within max_time_s (every phase)
 };
 
 double sigma_from_cu(double d50, double cu);

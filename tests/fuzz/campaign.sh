@@ -10,7 +10,8 @@
 #   tests/fuzz/campaign.sh build/fuzz /tmp/fuzz 1000000 600
 # Environment: FUZZ_NICE (default 19), FUZZ_TIMEOUT (seconds per input before
 # it counts as a hang, default 10; raise it if the campaign may be paused
-# with SIGSTOP while something else is timed, or the pause reads as a hang).
+# with SIGSTOP while something else is timed, or the pause reads as a hang),
+# FUZZ_FORK (parallel child processes of the one run, default 1).
 set -uo pipefail
 B=$(cd "$1" && pwd); OUT=$2; RUNS=${3:-1000000}; SECS=${4:-600}; shift 4 2>/dev/null || shift $#
 HARNESSES=${*:-csv toml raw_json hdf5 tiff}
@@ -24,7 +25,7 @@ for h in $HARNESSES; do
   t0=$(date +%s.%N)
   # fork mode: one child process runs the inputs, the parent merges coverage
   # and restarts it after a crash; -runs is then the total budget.
-  (cd "$OUT/$h" && nice -n "${FUZZ_NICE:-19}" "$B/tests/fuzz/fuzz_$h" -fork=1 -ignore_crashes=1 -ignore_ooms=1 -ignore_timeouts=1 \
+  (cd "$OUT/$h" && nice -n "${FUZZ_NICE:-19}" "$B/tests/fuzz/fuzz_$h" -fork="${FUZZ_FORK:-1}" -ignore_crashes=1 -ignore_ooms=1 -ignore_timeouts=1 \
      -runs="$RUNS" -max_total_time="$SECS" -timeout="${FUZZ_TIMEOUT:-10}" -rss_limit_mb=2048 -max_len=65536 \
      -print_final_stats=1 corpus >"$OUT/$h.log" 2>&1)
   t1=$(date +%s.%N)

@@ -255,4 +255,46 @@ TEST(VolumeIO, TiledTiffReads) {
   EXPECT_NEAR(v.geometry().voxel_size_m[2], 10e-6, 1e-12);
 }
 
+// Tiles may be larger than the page (writers with a fixed 256 x 256 tile):
+// read. A tile that would need more than 64 MiB and more than the page is a
+// corrupt header: refused before its buffer is allocated (fuzzing found a
+// 374-byte file asking for 7.3 GB; tests/fuzz/regressions/tiff/).
+TEST(VolumeIO, TiledTiffTileLargerThanPage) {
+  TempDir d;
+  auto write = [&](const std::string& p, uint32_t tile_w, uint32_t tile_h, bool with_data) {
+    TIFF* t = TIFFOpen(p.c_str(), "w");
+    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, 10u);
+    TIFFSetField(t, TIFFTAG_IMAGELENGTH, 3u);
+    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, 8);
+    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, 1);
+    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+    TIFFSetField(t, TIFFTAG_TILEWIDTH, tile_w);
+    TIFFSetField(t, TIFFTAG_TILELENGTH, tile_h);
+    if (with_data) {
+      std::vector<uint8_t> tile(size_t(tile_w) * tile_h, 0);
+      for (uint32_t y = 0; y < 3; ++y)
+        for (uint32_t x = 0; x < 10; ++x) tile[y * tile_w + x] = uint8_t(10 * y + x);
+      TIFFWriteTile(t, tile.data(), 0, 0, 0, 0);
+    } else {
+      std::vector<uint8_t> dummy(16, 0);
+      TIFFWriteRawTile(t, 0, dummy.data(), dummy.size());  // a short tile: the header is what matters
+    }
+    TIFFClose(t);
+  };
+  const std::string ok = d / "tile256.tif";
+  write(ok, 256, 256, true);
+  const auto v = read_volume_as<uint8_t>(ok);
+  ASSERT_EQ(v.shape(), (Shape{1, 3, 10}));
+  EXPECT_EQ(v(0, 2, 9), 29);
+  const std::string bad = d / "tile_huge.tif";
+  write(bad, 16384, 8192, false);  // 128 MiB per tile for a 30-byte page
+  try {
+    read_volume_as<uint8_t>(bad);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("16384 x 8192 tiles"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("tile_huge.tif"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace tg

@@ -55,6 +55,7 @@ cylinder_radius_m = 4.0e-3
 generation_height_m = 14.0e-3
 target_height_m = 6.0e-3
 max_time_s = 0.3
+press_to_target_height = false  # the free deposit: pressing is tested in tests/dem, not here
 [run]
 threads = 1
 """

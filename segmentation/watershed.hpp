@@ -33,8 +33,15 @@
 // reads only the u32 label word of each neighbour: flags in its top bits
 // (queued, line, volume border, so no index division for interior voxels;
 // void voxels are pre-marked queued) and the level byte only for voxels it
-// queues. Frontier entries are 4 B (8 B for volumes over 2^32 voxels),
-// freed level by level. Serial and deterministic.
+// queues. Frontier entries are 4 B (8 B for volumes over 2^32 voxels), in
+// blocks that flooded levels hand on to lower ones.
+//
+// Threads: each breadth-first round is shared by slabs of 8 slices, even
+// slabs at once and then odd ones, so neighbours in one round are decided
+// one after the other (lines stay one voxel thick) and the queue order is
+// fixed by the shape: the labels do not depend on the thread count.
+// 512^3 zeolite scan, 37.5 M solid voxels: 4.2 s serial (session 3), 2.0 s
+// on 2 threads with the SSE2 neighbour test and the shared blocks.
 #pragma once
 #include <cstdint>
 

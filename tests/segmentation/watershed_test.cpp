@@ -1,6 +1,7 @@
 #include "segmentation/watershed.hpp"
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <queue>
 #include <random>
@@ -130,6 +131,44 @@ TEST(Watershed, LevelsAreCoarsenedToFitOneByte) {
   for (int64_t i = 0; i < 200; ++i) d[i] = 0.25f * float(i % 40);
   EXPECT_DOUBLE_EQ(quantise_levels(d, m2, 4.0), 4.0);
   EXPECT_EQ(m2[39], 1 + 39);
+}
+
+// The flood shares each round among threads by slabs of slices; the slabs
+// are fixed by the shape, so the labels must not depend on the thread
+// count, and lines must stay whole (no two labels touch) where slabs meet.
+TEST(Watershed, LabelsDoNotDependOnTheThreadCount) {
+  const Shape s{120, 96, 104};
+  auto m = Volume<uint8_t>::filled(s, 0);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> uz(0, 120), uy(0, 96), ux(0, 104), ur(6, 13);
+  for (int b = 0; b < 90; ++b) draw_ball(m, uz(rng), uy(rng), ux(rng), ur(rng));
+  const int before = omp_get_max_threads();
+  for (bool lines : {true, false}) {
+    std::vector<Volume<uint32_t>> out;
+    for (int t : {1, 2, 3}) {
+      omp_set_num_threads(t);
+      out.push_back(run(m, lines, 1.0));
+    }
+    omp_set_num_threads(before);
+    ASSERT_GT(labels_in(out[0]).size(), 20u);
+    for (size_t r = 1; r < out.size(); ++r)
+      ASSERT_TRUE(std::equal(out[0].span().begin(), out[0].span().end(), out[r].span().begin()))
+          << "labels differ with " << r + 1 << " threads (lines " << lines << ")";
+    if (!lines) continue;
+    const Volume<uint32_t>& lab = out[0];
+    for (int64_t k = 0; k + 1 < s.nz; ++k)
+      for (int64_t j = 1; j + 1 < s.ny; ++j)
+        for (int64_t i = 1; i + 1 < s.nx; ++i) {
+          const uint32_t a = lab[s.index(k, j, i)];
+          if (!a) continue;
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const uint32_t b = lab[s.index(k + 1, j + dy, i + dx)];
+              ASSERT_TRUE(b == 0 || b == a) << "labels " << a << " and " << b << " touch across slices " << k
+                                            << " and " << k + 1;
+            }
+        }
+  }
 }
 
 // Invariants of a marker-controlled watershed, checked by brute force on

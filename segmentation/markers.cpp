@@ -3,6 +3,8 @@
 #include <cmath>
 #include <vector>
 
+#include <omp.h>
+
 #include "core/errors.hpp"
 #include "segmentation/neighbourhood.hpp"
 
@@ -45,42 +47,72 @@ uint32_t find_markers(const Volume<float>& dist, const Volume<uint8_t>& solid, V
     }
   };
 
+  // Candidates: solid voxels with no higher neighbour (plateaus of local
+  // maxima included), found in parallel and listed in index order (thread
+  // t has the t-th chunk of the static schedule). The caps are then grown
+  // serially from the candidates in that order, as the one serial scan
+  // did before (same markers, same numbering).
   const int64_t n = solid.size();
-  for (int64_t start = 0; start < n; ++start) {
-    if (!m[start] || (M[start] & kDecided)) continue;
-    const float top = d[start];
-    bool higher = false;
-    for_neighbours(start, [&](int64_t q) {
-      if (m[q] && d[q] > top) higher = true;
-      return !higher;
-    });
-    if (higher) continue;
-
-    // Flood the cap {d >= top - h} from `start`, stopping at a higher voxel.
-    const double floor_level = double(top) - opt.h;
-    queue.clear();
-    queue.push_back(start);
-    M[start] |= kVisited;
-    for (size_t head = 0; head < queue.size() && !higher; ++head)
-      for_neighbours(queue[head], [&](int64_t q) {
-        if (!m[q] || (M[q] & kVisited) || double(d[q]) < floor_level) return true;
-        if (d[q] > top) {
-          higher = true;
-          return false;
+  const int nthreads = omp_get_max_threads();
+  std::vector<std::vector<int64_t>> part(static_cast<size_t>(nthreads));
+#pragma omp parallel num_threads(nthreads)
+  {
+    auto& mine = part[size_t(omp_get_thread_num())];
+#pragma omp for schedule(static)
+    for (int64_t k = 0; k < s.nz; ++k)
+      for (int64_t j = 0; j < s.ny; ++j) {
+        const bool inner_row = k > 0 && j > 0 && k + 1 < s.nz && j + 1 < s.ny;
+        for (int64_t i = 0; i < s.nx; ++i) {
+          const int64_t idx = s.index(k, j, i);
+          if (!m[idx]) continue;
+          const float top = d[idx];
+          bool higher = false;
+          if (inner_row && i > 0 && i + 1 < s.nx) {
+            for (int q = 0; q < nb.count && !higher; ++q) {
+              const int64_t y = idx + nb.offset[size_t(q)];
+              higher = m[y] && d[y] > top;
+            }
+          } else {
+            for_neighbours(idx, [&](int64_t y) {
+              if (m[y] && d[y] > top) higher = true;
+              return !higher;
+            });
+          }
+          if (!higher) mine.push_back(idx);
         }
-        M[q] |= kVisited;
-        queue.push_back(q);
-        return true;
-      });
-    const uint32_t label = higher ? 0 : ++count;
-    if (count > kLabelMask) throw ResourceError("markers: more than 2^30 markers");
-    for (int64_t q : queue) {
-      uint32_t v = M[q] & ~kVisited;
-      if (d[q] == top) v |= kDecided;  // same height, same cap: same outcome
-      // A kept cap cannot overlap another kept cap (its dynamic would be < h),
-      // so a voxel is labelled at most once.
-      if (label) v = (v & kDecided) | label;
-      M[q] = v;
+      }
+  }
+  for (const auto& cand : part) {
+    for (const int64_t start : cand) {
+      if (M[start] & kDecided) continue;
+      const float top = d[start];
+      bool higher = false;
+      // Flood the cap {d >= top - h} from `start`, stopping at a higher voxel.
+      const double floor_level = double(top) - opt.h;
+      queue.clear();
+      queue.push_back(start);
+      M[start] |= kVisited;
+      for (size_t head = 0; head < queue.size() && !higher; ++head)
+        for_neighbours(queue[head], [&](int64_t q) {
+          if (!m[q] || (M[q] & kVisited) || double(d[q]) < floor_level) return true;
+          if (d[q] > top) {
+            higher = true;
+            return false;
+          }
+          M[q] |= kVisited;
+          queue.push_back(q);
+          return true;
+        });
+      const uint32_t label = higher ? 0 : ++count;
+      if (count > kLabelMask) throw ResourceError("markers: more than 2^30 markers");
+      for (int64_t q : queue) {
+        uint32_t v = M[q] & ~kVisited;
+        if (d[q] == top) v |= kDecided;  // same height, same cap: same outcome
+        // A kept cap cannot overlap another kept cap (its dynamic would be < h),
+        // so a voxel is labelled at most once.
+        if (label) v = (v & kDecided) | label;
+        M[q] = v;
+      }
     }
   }
 #pragma omp parallel for schedule(static)

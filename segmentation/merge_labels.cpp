@@ -7,6 +7,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include <omp.h>
+
 #include "core/errors.hpp"
 #include "segmentation/neighbourhood.hpp"
 
@@ -108,20 +110,29 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
   }
   if (res.merges == 0) return res;
 
-  // Line voxels whose neighbours all belong to one merged label join it.
-  // Reading a voxel already filled in this pass is harmless: it holds a root.
-  for (int64_t idx = 0; idx < n; ++idx) {
-    if (L[idx] != 0 || !m[idx]) continue;
-    uint32_t ls[3];
-    const int c = neighbour_labels(labels, nb, idx, ls);
-    if (c < 2) continue;
-    const uint32_t r = find(ls[0]);
-    bool same = true;
-    for (int t = 1; t < c; ++t) same = same && find(ls[t]) == r;
-    if (same && c < 3) L[idx] = r;
-  }
+  // Line voxels whose neighbours all belong to one merged label join it,
+  // decided from the labels as they were before any joined (slices in
+  // parallel; each thread lists its voxels, applied afterwards).
   std::vector<uint32_t> root(parent.size());
   for (uint32_t l = 0; l <= maxl; ++l) root[l] = find(l);
+  const int nthreads = omp_get_max_threads();
+  std::vector<std::vector<std::pair<int64_t, uint32_t>>> join(static_cast<size_t>(nthreads));
+#pragma omp parallel num_threads(nthreads)
+  {
+    auto& mine = join[size_t(omp_get_thread_num())];
+#pragma omp for schedule(static)
+    for (int64_t k = 0; k < s.nz; ++k)
+      for (int64_t idx = k * s.slice_voxels(); idx < (k + 1) * s.slice_voxels(); ++idx) {
+        if (L[idx] != 0 || !m[idx]) continue;
+        uint32_t ls[3];
+        const int c = neighbour_labels(labels, nb, idx, ls);
+        if (c < 2 || c == 3) continue;
+        const uint32_t r = root[ls[0]];
+        if (root[ls[1]] == r) mine.emplace_back(idx, r);
+      }
+  }
+  for (const auto& mine : join)
+    for (const auto& [idx, r] : mine) L[idx] = r;
 #pragma omp parallel for schedule(static)
   for (int64_t i = 0; i < n; ++i) L[i] = root[L[i]];
   return res;

@@ -102,22 +102,53 @@ class Round {
   Round(const Shape& s, int64_t slab_slices, int64_t slabs)
       : slice_(s.slice_voxels()), inv_(1.0 / double(s.slice_voxels())), slab_(slab_slices),
         start_(size_t(s.nz) + 1), slab_start_(size_t(slabs) + 1) {}
-  // spans(f) calls f(pointer, count) for each span, in queue order; m is
-  // the total count.
-  template <class Spans>
-  void sort(Spans&& spans, size_t m) {
-    std::fill(start_.begin(), start_.end(), 0);
-    spans([&](const Index* p, size_t c) {
-      for (const Index* e = p + c; p != e; ++p) ++start_[size_t(slice(*p)) + 1];
-    });
-    for (size_t k = 1; k < start_.size(); ++k) start_[k] += start_[k - 1];
-    const size_t slabs = slab_start_.size() - 1;
-    for (size_t p = 0; p < slabs; ++p) slab_start_[p] = start_[p * size_t(slab_)];
-    slab_start_[slabs] = int64_t(m);
+  using Spans = std::vector<std::pair<const Index*, size_t>>;
+  // Sorts the entries of the spans (in queue order; m in all) into the
+  // buffer. Large rounds are counted and scattered by threads, each on a
+  // contiguous share of the entries; a stable sort has one result, so the
+  // thread count does not change it.
+  void sort(const Spans& spans, size_t m) {
+    const int64_t nz = int64_t(start_.size()) - 1;
     if (buf_.size() < m) buf_.resize(m);
-    spans([&](const Index* p, size_t c) {
-      for (const Index* e = p + c; p != e; ++p) buf_[size_t(start_[size_t(slice(*p))]++)] = *p;
-    });
+    const int threads = m >= (size_t(1) << 16) ? omp_get_max_threads() : 1;
+    count_.assign(size_t(threads) * size_t(nz), 0);
+#pragma omp parallel num_threads(threads)
+    {
+      const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+      const size_t lo = m * size_t(t) / size_t(nt), hi = m * size_t(t + 1) / size_t(nt);
+      int64_t* c = count_.data() + size_t(t) * size_t(nz);
+      // Calls f(entry) for the entries at positions [lo, hi).
+      auto share = [&](auto&& f) {
+        size_t pos = 0;
+        for (const auto& [p, len] : spans) {
+          const size_t a = std::max(pos, lo), b = std::min(pos + len, hi);
+          for (size_t i = a; i < b; ++i) f(p[i - pos]);
+          pos += len;
+          if (pos >= hi) break;
+        }
+      };
+      share([&](Index x) { ++c[slice(x)]; });
+#pragma omp barrier
+#pragma omp single
+      {
+        // Start of (slice k, share u): all of slices < k, then shares < u of slice k.
+        int64_t run = 0;
+        for (int64_t k = 0; k < nz; ++k) {
+          start_[size_t(k)] = run;
+          for (int u = 0; u < nt; ++u) {
+            int64_t& cu = count_[size_t(u) * size_t(nz) + size_t(k)];
+            const int64_t here = cu;
+            cu = run;
+            run += here;
+          }
+        }
+        start_[size_t(nz)] = run;
+        const size_t slabs = slab_start_.size() - 1;
+        for (size_t p = 0; p < slabs; ++p) slab_start_[p] = start_[p * size_t(slab_)];
+        slab_start_[slabs] = int64_t(m);
+      }
+      share([&](Index x) { buf_[size_t(c[slice(x)]++)] = x; });
+    }
   }
   // The entries of slab p: [slab_begin(p), slab_begin(p + 1)).
   const Index* slab_begin(int64_t p) const { return buf_.data() + slab_start_[size_t(p)]; }
@@ -132,7 +163,7 @@ class Round {
   int64_t slice_;
   double inv_;
   int64_t slab_;
-  std::vector<int64_t> start_, slab_start_;
+  std::vector<int64_t> start_, slab_start_, count_;
   std::vector<Index> buf_;
 };
 
@@ -326,6 +357,7 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
   const int64_t nslab = std::max<int64_t>(1, s.nz / kSlab);  // the last slab takes the rest
   std::vector<Queued> out{size_t(nslab)};
   Round<Index> round(s, kSlab, nslab);
+  typename Round<Index>::Spans spans;
   // Software prefetch of the 3x3 rows around the voxel kAhead places down
   // the queue, labels and levels: the hardware cannot guess these addresses.
   constexpr int64_t kAhead = 12;
@@ -362,7 +394,9 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
     // on one core and thickened the lines: median grain volume error -1.1 %
     // instead of -1.0 %. Tried and dropped for the slabs above.)
     size_t m = b.size();
-    round.sort([&](auto&& f) { b.for_each_span(f); }, m);
+    spans.clear();
+    b.for_each_span([&](const Index* p, size_t c) { spans.emplace_back(p, c); });
+    round.sort(spans, m);
     b.release(pool);
     while (m) {
       for (int64_t phase = 0; phase < 2; ++phase) {
@@ -375,7 +409,11 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
         o.later.clear();
         m += o.now.size();
       }
-      if (m) round.sort([&](auto&& f) { for (const Queued& o : out) f(o.now.data(), o.now.size()); }, m);
+      if (m) {
+        spans.clear();
+        for (const Queued& o : out) spans.emplace_back(o.now.data(), o.now.size());
+        round.sort(spans, m);
+      }
       for (Queued& o : out) o.now.clear();
     }
   }

@@ -58,8 +58,19 @@ void Engine::rebuild() {
   list_ = std::move(fresh);
   xi_ = std::move(xi);
   pi_ = std::move(pi);
+  // R* and m* of each pair, read by the contact loop every step (radii and
+  // masses change only with a rebuild: see request_rebuild()).
+  reff_.resize(np);
+  meff_.resize(np);
+  for (int64_t k = 0; k < np; ++k) {
+    const int64_t i = pi_[k], j = list_.j[k];
+    reff_[k] = p_.r[i] * p_.r[j] / (p_.r[i] + p_.r[j]);
+    meff_[k] = p_.m[i] * p_.m[j] / (p_.m[i] + p_.m[j]);
+  }
   slot_.assign(np, PairData{});
   touching_.assign(np, 0);
+  for (int64_t k = 0; k < np; ++k)
+    if (xi_[3 * k] != 0 || xi_[3 * k + 1] != 0 || xi_[3 * k + 2] != 0) touching_[k] = kHistoryOnly;
   bad_.assign(std::max(np, n), 0);
   wall_f_.assign(3 * n, 0.0);
   // Incidence lists in ascending pair order: the fixed gather order.
@@ -182,51 +193,65 @@ void Engine::set_time_step(double dt) {
 // and torques into the same slot here.
 void Engine::compute_pair_forces() {
   const int64_t np = list_.pairs();
-  const Particles& p = p_;
   const double dt = opt_.time_step, lim = opt_.overlap_limit;
+  // Local, non-aliased views: the compiler keeps them in registers instead
+  // of reloading them after every store into the pair arrays.
+  const int64_t* __restrict pi = pi_.data();
+  const int64_t* __restrict pj = list_.j.data();
+  const double *__restrict x = p_.x.data(), *__restrict y = p_.y.data(), *__restrict z = p_.z.data();
+  const double *__restrict vx = p_.vx.data(), *__restrict vy = p_.vy.data(), *__restrict vz = p_.vz.data();
+  const double *__restrict wx = p_.wx.data(), *__restrict wy = p_.wy.data(), *__restrict wz = p_.wz.data();
+  const double* __restrict r = p_.r.data();
+  const double *__restrict reff = reff_.data(), *__restrict meff = meff_.data();
+  double* __restrict xi = xi_.data();
+  PairData* __restrict slot = slot_.data();
+  uint8_t* __restrict touching = touching_.data();
+  uint8_t* __restrict badk = bad_.data();
+  const HertzMindlin law = law_pp_;
   int bad = 0;
 #pragma omp parallel for schedule(static) reduction(| : bad) if (np >= opt_.parallel_min_items)
   for (int64_t k = 0; k < np; ++k) {
-    const int64_t i = pi_[k], j = list_.j[k];
-    const Vec3 d{p.x[j] - p.x[i], p.y[j] - p.y[i], p.z[j] - p.z[i]};
-    const double rs = p.r[i] + p.r[j];
+    const int64_t i = pi[k], j = pj[k];
+    const Vec3 d{x[j] - x[i], y[j] - y[i], z[j] - z[i]};
+    const double rs = r[i] + r[j];
     const double d2 = dot(d, d);
     if (d2 >= rs * rs) {
       // Just separated (touching at the last step, or holding a history, as
       // after a restart or a rebuild): forget it. Most listed pairs never
       // touch, and are not written every step.
-      if (touching_[k] || xi_[3 * k] != 0 || xi_[3 * k + 1] != 0 || xi_[3 * k + 2] != 0) {
-        touching_[k] = 0;
-        xi_[3 * k] = xi_[3 * k + 1] = xi_[3 * k + 2] = 0;
-        slot_[k] = PairData{};
+      if (touching[k]) {
+        touching[k] = kNotTouching;
+        xi[3 * k] = xi[3 * k + 1] = xi[3 * k + 2] = 0;
+        slot[k] = PairData{};
       }
       continue;
     }
     const double dist = std::sqrt(d2);
     const double delta = rs - dist;
-    if (!(dist > 0) || delta > lim * std::min(p.r[i], p.r[j])) {
-      bad_[k] = 1;
+    if (!(dist > 0) || delta > lim * std::min(r[i], r[j])) {
+      badk[k] = 1;
       bad = 1;
-      touching_[k] = 0;
-      slot_[k] = PairData{};
+      touching[k] = kNotTouching;
+      slot[k] = PairData{};
       continue;
     }
     const Vec3 nrm = (1.0 / dist) * d;
-    const double ai = p.r[i] - 0.5 * delta, aj = p.r[j] - 0.5 * delta;
-    const Vec3 wi{p.wx[i], p.wy[i], p.wz[i]}, wj{p.wx[j], p.wy[j], p.wz[j]};
-    const Vec3 vci = Vec3{p.vx[i], p.vy[i], p.vz[i]} + cross(wi, ai * nrm);
-    const Vec3 vcj = Vec3{p.vx[j], p.vy[j], p.vz[j]} + cross(wj, -aj * nrm);
-    ContactGeometry g{nrm, delta, p.r[i] * p.r[j] / rs, p.m[i] * p.m[j] / (p.m[i] + p.m[j]), vcj - vci};
-    Vec3 h{xi_[3 * k], xi_[3 * k + 1], xi_[3 * k + 2]};
-    const ContactForce cf = hertz_mindlin_force(law_pp_, g, dt, h);
-    xi_[3 * k] = h.x;
-    xi_[3 * k + 1] = h.y;
-    xi_[3 * k + 2] = h.z;
+    const double ai = r[i] - 0.5 * delta, aj = r[j] - 0.5 * delta;
+    const Vec3 wi{wx[i], wy[i], wz[i]}, wj{wx[j], wy[j], wz[j]};
+    const Vec3 vci = Vec3{vx[i], vy[i], vz[i]} + cross(wi, ai * nrm);
+    const Vec3 vcj = Vec3{vx[j], vy[j], vz[j]} + cross(wj, -aj * nrm);
+    ContactGeometry g{nrm, delta, reff[k], meff[k], vcj - vci};
+    Vec3 h{xi[3 * k], xi[3 * k + 1], xi[3 * k + 2]};
+    const ContactForce cf = hertz_mindlin_force(law, g, dt, h);
+    xi[3 * k] = h.x;
+    xi[3 * k + 1] = h.y;
+    xi[3 * k + 2] = h.z;
     const Vec3 nf = cross(nrm, cf.force_on_j);
     const Vec3 ti = -ai * nf, tj = -aj * nf;
-    slot_[k] = PairData{cf.force_on_j.x, cf.force_on_j.y, cf.force_on_j.z, ti.x, ti.y, ti.z, tj.x, tj.y, tj.z};
-    touching_[k] = 1;
+    slot[k] = PairData{cf.force_on_j.x, cf.force_on_j.y, cf.force_on_j.z, ti.x, ti.y, ti.z, tj.x, tj.y, tj.z};
+    touching[k] = kTouching;
   }
+  const Particles& p = p_;
   if (bad) {
     for (int64_t k = 0; k < np; ++k)
       if (bad_[k]) {
@@ -386,7 +411,7 @@ double Engine::elastic_energy() const {
 
 int64_t Engine::contact_count() const {
   int64_t c = 0;
-  for (uint8_t t : touching_) c += t;
+  for (uint8_t t : touching_) c += t == kTouching;
   return c;
 }
 
@@ -418,6 +443,7 @@ void Engine::restore(double time, int64_t steps, const PairHistory& h) {
       throw InputError("checkpoint: contact " + std::to_string(i) + "-" + std::to_string(h.j[q]) + " is not a neighbour pair");
     const int64_t k = it - list_.j.begin();
     for (int c = 0; c < 3; ++c) xi_[3 * k + c] = h.xi[3 * q + c];
+    touching_[k] = kHistoryOnly;
   }
 }
 

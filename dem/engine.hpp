@@ -146,7 +146,7 @@ class Engine {
   int64_t pair_count() const { return list_.pairs(); }
   int64_t pair_i(int64_t k) const { return pi_[k]; }
   int64_t pair_j(int64_t k) const { return list_.j[k]; }
-  bool pair_touching(int64_t k) const { return touching_[k] != 0; }
+  bool pair_touching(int64_t k) const { return touching_[k] == kTouching; }
   const PairData& pair_force(int64_t k) const { return slot_[k]; }
   // Sphere s's wall reactions: force on the bottom platen (z), on the top
   // platen (z) and outward radial force on the cylinder, N.
@@ -190,8 +190,13 @@ class Engine {
   PairListCSR list_;
   std::vector<int64_t> pi_;        // i of each pair
   std::vector<double> xi_;         // tangential history, 3 per pair
+  std::vector<double> reff_, meff_;  // R* and m* per pair, set by rebuild()
   std::vector<PairData> slot_;     // this step's force
-  std::vector<uint8_t> touching_;  // pair in contact this step
+  // Per pair: kTouching (in contact this step), kHistoryOnly (not known to
+  // touch but may hold a tangential history or a force: after a rebuild or a
+  // restart) or kNotTouching (nothing stored: a separated pair costs one test).
+  enum : uint8_t { kNotTouching = 0, kTouching = 1, kHistoryOnly = 2 };
+  std::vector<uint8_t> touching_;
   // Incidence CSR: for sphere s, entries (pair << 1 | is_j), ascending pair.
   std::vector<int64_t> inc_off_, inc_;
   // Positions at the last rebuild (skin criterion).

@@ -28,6 +28,7 @@ HertzMindlin make_hertz_mindlin(const Material& a, const Material& b, double fri
   const double ea = a.youngs_modulus(), eb = b.youngs_modulus();
   law.e_star = 1.0 / ((1 - a.poisson_ratio * a.poisson_ratio) / ea + (1 - b.poisson_ratio * b.poisson_ratio) / eb);
   law.g_star = 1.0 / ((2 - a.poisson_ratio) / a.shear_modulus_Pa + (2 - b.poisson_ratio) / b.shear_modulus_Pa);
+  law.damp_t_over_n = std::sqrt(4 * law.g_star / law.e_star);
   law.friction = friction;
   if (restitution < 1) {
     const double le = std::log(restitution);

@@ -47,6 +47,9 @@ struct HertzMindlin {
   double g_star = 0;     // effective shear modulus G*, Pa
   double friction = 0;   // Coulomb μ
   double damp_beta = 0;  // |β| of the restitution coefficient (0 = no viscous damping)
+  // ct / cn = sqrt(kt / kn) = sqrt(4 G* / E*): the tangential dashpot from
+  // the normal one without a second square root per contact.
+  double damp_t_over_n = 0;
 
   double normal_force(double delta, double r_eff) const {
     return 4.0 / 3.0 * e_star * std::sqrt(r_eff) * delta * std::sqrt(delta);
@@ -86,7 +89,7 @@ inline ContactForce hertz_mindlin_force(const HertzMindlin& law, const ContactGe
   const double vn = dot(g.v_rel, g.n);  // < 0 while approaching
   // Tsuji dashpot: c = 2 sqrt(5/6) |β| sqrt(k m*); 2 sqrt(5/6) = 1.8257...
   const double cn = law.damp_beta > 0 ? 1.8257418583505538 * law.damp_beta * std::sqrt(kn * g.m_eff) : 0.0;
-  const double ct = law.damp_beta > 0 ? 1.8257418583505538 * law.damp_beta * std::sqrt(kt * g.m_eff) : 0.0;
+  const double ct = cn * law.damp_t_over_n;
   double fn = 2.0 / 3.0 * kn * g.delta - cn * vn;  // 4/3 E* sqrt(R*) δ^{3/2} = 2/3 kn δ
   if (fn < 0) fn = 0;
 

@@ -89,6 +89,7 @@ void Engine::rebuild() {
   x0_ = p_.x;
   y0_ = p_.y;
   z0_ = p_.z;
+  update_inverse_masses();
   force_rebuild_ = false;
   ++rebuilds_;
 }
@@ -130,28 +131,61 @@ std::vector<int64_t> Engine::remove_spheres(const std::vector<uint8_t>& remove) 
   return map;
 }
 
+void Engine::update_inverse_masses() {
+  const int64_t n = p_.size();
+  inv_m_.resize(n);
+  inv_i_.resize(n);
+  for (int64_t s = 0; s < n; ++s) {
+    inv_m_[s] = 1.0 / p_.m[s];
+    inv_i_[s] = 1.0 / p_.inertia[s];
+  }
+}
+
 void Engine::step() {
   const int64_t n = p_.size();
   const double dt = opt_.time_step, half = 0.5 * dt;
   Particles& p = p_;
-  // Velocity Verlet: half kick, drift, forces, half kick.
-  const auto half_kick = [&](int64_t s) {
-    const double im = half / p.m[s], ii = half / p.inertia[s];
-    p.vx[s] += im * p.fx[s];
-    p.vy[s] += im * p.fy[s];
-    p.vz[s] += im * p.fz[s];
-    p.wx[s] += ii * p.tx[s];
-    p.wy[s] += ii * p.ty[s];
-    p.wz[s] += ii * p.tz[s];
+  // 1/m and 1/I are kept between steps (four divisions per sphere and step
+  // were a tenth of the run); edits to the spheres come with
+  // request_rebuild(), which refreshes them before the next kick.
+  const auto fresh_masses = [&] {
+    if (force_rebuild_ || static_cast<int64_t>(inv_m_.size()) != p.size()) update_inverse_masses();
   };
-#pragma omp parallel for schedule(static) if (n >= opt_.parallel_min_items)
-  for (int64_t s = 0; s < n; ++s) {
-    if (p.flags[s] & kFlagFixed) continue;
-    half_kick(s);
-    p.x[s] += dt * p.vx[s];
-    p.y[s] += dt * p.vy[s];
-    p.z[s] += dt * p.vz[s];
-  }
+  fresh_masses();
+  // Velocity Verlet: half kick, drift, forces, half kick. Local,
+  // non-aliased views of the arrays, as in the contact loop.
+  const auto half_kick = [&](int64_t from, int64_t to, bool drift) {
+    const double *__restrict im = inv_m_.data(), *__restrict ii = inv_i_.data();
+    const double *__restrict fx = p.fx.data(), *__restrict fy = p.fy.data(), *__restrict fz = p.fz.data();
+    const double *__restrict tx = p.tx.data(), *__restrict ty = p.ty.data(), *__restrict tz = p.tz.data();
+    double *__restrict vx = p.vx.data(), *__restrict vy = p.vy.data(), *__restrict vz = p.vz.data();
+    double *__restrict wx = p.wx.data(), *__restrict wy = p.wy.data(), *__restrict wz = p.wz.data();
+    double *__restrict x = p.x.data(), *__restrict y = p.y.data(), *__restrict z = p.z.data();
+    const uint32_t* __restrict flags = p.flags.data();
+    for (int64_t s = from; s < to; ++s) {
+      if (flags[s] & kFlagFixed) continue;
+      const double hm = half * im[s], hi = half * ii[s];
+      vx[s] += hm * fx[s];
+      vy[s] += hm * fy[s];
+      vz[s] += hm * fz[s];
+      wx[s] += hi * tx[s];
+      wy[s] += hi * ty[s];
+      wz[s] += hi * tz[s];
+      if (drift) {
+        x[s] += dt * vx[s];
+        y[s] += dt * vy[s];
+        z[s] += dt * vz[s];
+      }
+    }
+  };
+  // Blocks of spheres per thread (static: the same spheres whatever the
+  // team size; each sphere's update is independent anyway).
+  const auto kick_all = [&](int64_t count, bool drift) {
+    const int64_t blocks = (count + 255) / 256;
+#pragma omp parallel for schedule(static) if (count >= opt_.parallel_min_items)
+    for (int64_t b = 0; b < blocks; ++b) half_kick(b * 256, std::min(count, (b + 1) * 256), drift);
+  };
+  kick_all(n, true);
   opt_.walls.top_z += dt * opt_.walls.top_vz;
 
   // Skin criterion: max displacement since the last build > skin/2.
@@ -171,9 +205,8 @@ void Engine::step() {
 
   compute_forces();
 
-#pragma omp parallel for schedule(static) if (n >= opt_.parallel_min_items)
-  for (int64_t s = 0; s < n; ++s)
-    if (!(p.flags[s] & kFlagFixed)) half_kick(s);
+  fresh_masses();  // the force hook (breakage) may have edited spheres
+  kick_all(p.size(), false);
   time_ += dt;
   ++steps_;
 }

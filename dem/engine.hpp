@@ -174,6 +174,7 @@ class Engine {
   void rebuild();
   void compute_forces();
   void compute_pair_forces();
+  void update_inverse_masses();
   void gather_forces();
   [[noreturn]] void explode(const std::string& what) const;
 
@@ -191,6 +192,7 @@ class Engine {
   std::vector<int64_t> pi_;        // i of each pair
   std::vector<double> xi_;         // tangential history, 3 per pair
   std::vector<double> reff_, meff_;  // R* and m* per pair, set by rebuild()
+  std::vector<double> inv_m_, inv_i_;  // 1/m and 1/I per sphere (see step())
   std::vector<PairData> slot_;     // this step's force
   // Per pair: kTouching (in contact this step), kHistoryOnly (not known to
   // touch but may hold a tangential history or a force: after a rebuild or a

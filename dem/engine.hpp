@@ -175,6 +175,9 @@ class Engine {
   void compute_forces();
   void compute_pair_forces();
   void update_inverse_masses();
+  // Whether a loop over `items` runs on the OpenMP team (enough items, and
+  // more than one thread).
+  bool parallel(int64_t items) const;
   void gather_forces();
   [[noreturn]] void explode(const std::string& what) const;
 

@@ -237,6 +237,13 @@ void Engine::step() {
 }
 
 void Engine::compute_forces() {
+  // One thread: the contact loop adds each pair's force to its two spheres
+  // as it goes. Each sphere still receives its pairs in ascending pair
+  // order, after its weight, as the gather does (which also adds the
+  // exact zeros of the separated pairs: x + 0 = x here, as the sums never
+  // hold -0), so both ways give the same bits; the gather pass over every
+  // listed pair is saved.
+  scatter_ = !parallel(list_.pairs()) && !parallel(p_.size());
   compute_pair_forces();
   gather_forces();
   if (force_hook_) force_hook_(*this);
@@ -266,6 +273,19 @@ void Engine::compute_pair_forces() {
   uint8_t* __restrict touching = touching_.data();
   uint8_t* __restrict badk = bad_.data();
   const HertzMindlin law = law_pp_;
+  double* __restrict acc = nullptr;  // per sphere f then t (scatter_)
+  if (scatter_) {
+    const int64_t n = p_.size();
+    acc_.resize(6 * n);
+    acc = acc_.data();
+    const double g = opt_.gravity_z;
+    for (int64_t s = 0; s < n; ++s) {
+      double* a = acc + 6 * s;
+      a[0] = a[1] = 0;
+      a[2] = p_.m[s] * g;
+      a[3] = a[4] = a[5] = 0;
+    }
+  }
   const int bad = for_each_or(np, parallel(np), [&](int64_t k) {
     const int64_t i = pi[k], j = pj[k];
     const Vec3 d{x[j] - x[i], y[j] - y[i], z[j] - z[i]};
@@ -305,6 +325,21 @@ void Engine::compute_pair_forces() {
     const Vec3 ti = -ai * nf, tj = -aj * nf;
     slot[k] = PairData{cf.force_on_j.x, cf.force_on_j.y, cf.force_on_j.z, ti.x, ti.y, ti.z, tj.x, tj.y, tj.z};
     touching[k] = kTouching;
+    if (acc) {
+      double *a = acc + 6 * i, *b = acc + 6 * j;
+      a[0] -= cf.force_on_j.x;
+      a[1] -= cf.force_on_j.y;
+      a[2] -= cf.force_on_j.z;
+      a[3] += ti.x;
+      a[4] += ti.y;
+      a[5] += ti.z;
+      b[0] += cf.force_on_j.x;
+      b[1] += cf.force_on_j.y;
+      b[2] += cf.force_on_j.z;
+      b[3] += tj.x;
+      b[4] += tj.y;
+      b[5] += tj.z;
+    }
     return 0;
   });
   const Particles& p = p_;
@@ -348,14 +383,20 @@ void Engine::gather_forces() {
   const double lim = opt_.overlap_limit;
   const int bad = for_each_or(n, parallel(n), [&](int64_t s) {
     Vec3 f{0, 0, p.m[s] * g}, t{};
-    for (int64_t e = inc_off_[s]; e < inc_off_[s + 1]; ++e) {
-      const PairData& d = slot_[inc_[e] >> 1];
-      if (inc_[e] & 1) {
-        f = f + Vec3{d.fx, d.fy, d.fz};
-        t = t + Vec3{d.tjx, d.tjy, d.tjz};
-      } else {
-        f = f - Vec3{d.fx, d.fy, d.fz};
-        t = t + Vec3{d.tix, d.tiy, d.tiz};
+    if (scatter_) {
+      const double* a = acc_.data() + 6 * s;
+      f = {a[0], a[1], a[2]};
+      t = {a[3], a[4], a[5]};
+    } else {
+      for (int64_t e = inc_off_[s]; e < inc_off_[s + 1]; ++e) {
+        const PairData& d = slot_[inc_[e] >> 1];
+        if (inc_[e] & 1) {
+          f = f + Vec3{d.fx, d.fy, d.fz};
+          t = t + Vec3{d.tjx, d.tjy, d.tjz};
+        } else {
+          f = f - Vec3{d.fx, d.fy, d.fz};
+          t = t + Vec3{d.tix, d.tiy, d.tiz};
+        }
       }
     }
     double fb = 0, ft = 0, fc = 0;

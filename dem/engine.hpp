@@ -196,6 +196,8 @@ class Engine {
   std::vector<double> xi_;         // tangential history, 3 per pair
   std::vector<double> reff_, meff_;  // R* and m* per pair, set by rebuild()
   std::vector<double> inv_m_, inv_i_;  // 1/m and 1/I per sphere (see step())
+  bool scatter_ = false;               // one thread: forces summed in the contact loop
+  std::vector<double> acc_;            // their sums, f then t per sphere
   std::vector<PairData> slot_;     // this step's force
   // Per pair: kTouching (in contact this step), kHistoryOnly (not known to
   // touch but may hold a tangential history or a force: after a rebuild or a

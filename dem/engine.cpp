@@ -361,7 +361,8 @@ void Engine::compute_pair_forces() {
 namespace {
 // One sphere–wall contact; n points from the sphere into the wall. Returns
 // the force on the wall; updates the sphere's force/torque and history.
-inline Vec3 wall_contact(const HertzMindlin& law, const Particles& p, int64_t s, Vec3 n, double delta, Vec3 v_wall,
+// Always inlined: up to three calls per sphere and step in the gather (2 %).
+__attribute__((always_inline)) inline Vec3 wall_contact(const HertzMindlin& law, const Particles& p, int64_t s, Vec3 n, double delta, Vec3 v_wall,
                          double dt, double* hx, double* hy, double* hz, Vec3& f, Vec3& t) {
   const double a = p.r[s] - 0.5 * delta;
   const Vec3 vc = Vec3{p.vx[s], p.vy[s], p.vz[s]} + cross(Vec3{p.wx[s], p.wy[s], p.wz[s]}, a * n);

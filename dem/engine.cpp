@@ -178,6 +178,14 @@ void Engine::step() {
   fresh_masses();
   // Velocity Verlet: half kick, drift, forces, half kick. Local,
   // non-aliased views of the arrays, as in the contact loop.
+  // Skin criterion, checked as the spheres drift: a rebuild when one moved
+  // more than skin/2 since the last build (or its position is not finite).
+  // Spheres appended since the last build (breakage) have no x0_ entry: the
+  // size test below rebuilds then; never read past x0_.
+  const int64_t n_built = std::min<int64_t>(n, static_cast<int64_t>(x0_.size()));
+  const double lim2 = 0.25 * opt_.skin * opt_.skin;
+  // Returns, for the first kick, 1 if a sphere moved beyond the skin, 3 if
+  // a position is not finite (an OR needs no ordered reduction).
   const auto half_kick = [&](int64_t from, int64_t to, bool drift) {
     const double *__restrict im = inv_m_.data(), *__restrict ii = inv_i_.data();
     const double *__restrict fx = p.fx.data(), *__restrict fy = p.fy.data(), *__restrict fz = p.fz.data();
@@ -185,46 +193,41 @@ void Engine::step() {
     double *__restrict vx = p.vx.data(), *__restrict vy = p.vy.data(), *__restrict vz = p.vz.data();
     double *__restrict wx = p.wx.data(), *__restrict wy = p.wy.data(), *__restrict wz = p.wz.data();
     double *__restrict x = p.x.data(), *__restrict y = p.y.data(), *__restrict z = p.z.data();
+    const double *__restrict x0 = x0_.data(), *__restrict y0 = y0_.data(), *__restrict z0 = z0_.data();
     const uint32_t* __restrict flags = p.flags.data();
+    int moved = 0;
     for (int64_t s = from; s < to; ++s) {
-      if (flags[s] & kFlagFixed) continue;
-      const double hm = half * im[s], hi = half * ii[s];
-      vx[s] += hm * fx[s];
-      vy[s] += hm * fy[s];
-      vz[s] += hm * fz[s];
-      wx[s] += hi * tx[s];
-      wy[s] += hi * ty[s];
-      wz[s] += hi * tz[s];
-      if (drift) {
-        x[s] += dt * vx[s];
-        y[s] += dt * vy[s];
-        z[s] += dt * vz[s];
+      if (!(flags[s] & kFlagFixed)) {
+        const double hm = half * im[s], hi = half * ii[s];
+        vx[s] += hm * fx[s];
+        vy[s] += hm * fy[s];
+        vz[s] += hm * fz[s];
+        wx[s] += hi * tx[s];
+        wy[s] += hi * ty[s];
+        wz[s] += hi * tz[s];
+        if (drift) {
+          x[s] += dt * vx[s];
+          y[s] += dt * vy[s];
+          z[s] += dt * vz[s];
+        }
+      }
+      if (drift && s < n_built) {
+        const double dx = x[s] - x0[s], dy = y[s] - y0[s], dz = z[s] - z0[s];
+        const double d2 = dx * dx + dy * dy + dz * dz;
+        if (!(d2 <= lim2)) moved |= std::isfinite(d2) ? 1 : 3;
       }
     }
+    return moved;
   };
   // Blocks of spheres per thread (static: the same spheres whatever the
   // team size; each sphere's update is independent anyway).
   const auto kick_all = [&](int64_t count, bool drift) {
-    for_each_or((count + 255) / 256, parallel(count), [&](int64_t b) __attribute__((always_inline)) {
-      half_kick(b * 256, std::min(count, (b + 1) * 256), drift);
-      return 0;
+    return for_each_or((count + 255) / 256, parallel(count), [&](int64_t b) __attribute__((always_inline)) {
+      return half_kick(b * 256, std::min(count, (b + 1) * 256), drift);
     });
   };
-  kick_all(n, true);
+  const int moved = kick_all(n, true);
   opt_.walls.top_z += dt * opt_.walls.top_vz;
-
-  // Skin criterion: max displacement since the last build > skin/2.
-  // Spheres appended since the last build (breakage) have no x0_ entry: the
-  // size test below rebuilds then; never read past x0_.
-  const int64_t n_built = std::min<int64_t>(n, static_cast<int64_t>(x0_.size()));
-  // Beyond half the skin (or not finite), per sphere: an OR needs no
-  // ordered reduction.
-  const double lim2 = 0.25 * opt_.skin * opt_.skin;
-  const int moved = for_each_or(n_built, parallel(n), [&](int64_t s) __attribute__((always_inline)) {
-    const double dx = p.x[s] - x0_[s], dy = p.y[s] - y0_[s], dz = p.z[s] - z0_[s];
-    const double d2 = dx * dx + dy * dy + dz * dz;
-    return d2 <= lim2 ? 0 : std::isfinite(d2) ? 1 : 3;
-  });
   if (force_rebuild_ || n != static_cast<int64_t>(x0_.size()) || moved) {
     if (moved & 2) explode("a sphere position became non-finite");
     rebuild();

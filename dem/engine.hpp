@@ -18,7 +18,10 @@
 // pairs in a fixed order (ascending pair index), then adds its wall contacts
 // and gravity. (3) Wall reaction forces are summed serially over spheres.
 // Every sum therefore has the same operands in the same order for any thread
-// count.
+// count. On one thread, (1) adds each pair's force to its two spheres as it
+// goes: each sphere gets the same operands in the same order as from (2),
+// so the bits are the same and (2) skips its pass over the pair slots
+// (tests compare 1- and 2-thread histories byte for byte).
 //
 // Walls: bottom platen z = 0 (fixed), top platen z = top_z moving at top_vz
 // (velocity-controlled; its reaction force is recorded), inner surface of a

@@ -170,8 +170,8 @@ void Engine::step() {
   const double dt = opt_.time_step, half = 0.5 * dt;
   Particles& p = p_;
   // 1/m and 1/I are kept between steps (four divisions per sphere and step
-  // were a tenth of the run); edits to the spheres come with
-  // request_rebuild(), which refreshes them before the next kick.
+  // cost 2 % of a run); edits to the spheres come with request_rebuild(),
+  // which refreshes them before the next kick.
   const auto fresh_masses = [&] {
     if (force_rebuild_ || static_cast<int64_t>(inv_m_.size()) != p.size()) update_inverse_masses();
   };

@@ -172,14 +172,11 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
   const int64_t n = s.voxels();
   // Void voxels are pre-marked (never queued, seen as "queued, unlabelled"),
   // markers queued at their level in index order.
-  struct Part {
-    std::vector<Index> markers;
-  };
   const int nthreads = omp_get_max_threads();
-  std::vector<Part> part(static_cast<size_t>(nthreads));
+  std::vector<std::vector<Index>> part(static_cast<size_t>(nthreads));  // markers per thread
 #pragma omp parallel num_threads(nthreads)
   {
-    Part& pt = part[size_t(omp_get_thread_num())];
+    std::vector<Index>& mine = part[size_t(omp_get_thread_num())];
     // Static schedule: thread t has the t-th chunk, so the parts taken in
     // thread order list the markers in index order.
 #pragma omp for schedule(static)
@@ -187,15 +184,15 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
       if (!lev[i]) {
         L[i] = (L[i] & kBorder) | kQueued;
       } else if (L[i] & kLabelMask) {
-        pt.markers.push_back(Index(i));
+        mine.push_back(Index(i));
         L[i] |= kQueued;
       }
     }
   }
   BlockPool<Index> pool;
   std::array<Bucket<Index>, 256> bucket;
-  for (const Part& pt : part)
-    for (const Index i : pt.markers) bucket[lev[i]].push(i, pool);
+  for (const auto& mine : part)
+    for (const Index i : mine) bucket[lev[i]].push(i, pool);
   part.clear();
   const int64_t sl = s.slice_voxels(), nx = s.nx;
 #if defined(__SSE2__)

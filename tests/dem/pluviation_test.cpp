@@ -10,6 +10,16 @@
 namespace tg::dem {
 namespace {
 
+// A Ø7 mm cell filled to 4 mm (~65 grains): small enough for a unit test.
+PluviationOptions small_cell() {
+  PluviationOptions o;
+  o.cylinder_radius_m = 3.5e-3;
+  o.generation_height_m = 10e-3;
+  o.target_height_m = 4e-3;
+  o.max_time_s = 0.5;
+  return o;
+}
+
 TEST(Pluviation, SigmaFromUniformityCoefficient) {
   // D60/D10 of N(μ, σ) with the quantiles z60 = 0.2533, z10 = -1.2816.
   const double s = sigma_from_cu(1.36e-3, 1.07);
@@ -58,11 +68,7 @@ TEST(Pluviation, SmallSpecimenSettles) {
 // arches that friction does), and both packings stay free of overlaps
 // (settled overlaps are elastic, < 1e-3 r).
 TEST(Pluviation, FrictionlessDepositionPacksDenserWithoutOverlap) {
-  PluviationOptions o;
-  o.cylinder_radius_m = 3.5e-3;
-  o.generation_height_m = 10e-3;
-  o.target_height_m = 4e-3;  // ~65 grains
-  o.max_time_s = 0.5;
+  PluviationOptions o = small_cell();
   auto run = [&](double mu) {
     PluviationOptions q = o;
     q.deposition_friction = mu;
@@ -94,11 +100,7 @@ TEST(Pluviation, FrictionlessDepositionPacksDenserWithoutOverlap) {
 // (elastic rebound under the 10 kPa cap is far below a micrometre) with no
 // overlap beyond the elastic ones.
 TEST(Pluviation, PressesTheDepositDownToTheTargetHeight) {
-  PluviationOptions o;
-  o.cylinder_radius_m = 3.5e-3;
-  o.generation_height_m = 10e-3;
-  o.target_height_m = 4e-3;  // ~65 grains
-  o.max_time_s = 0.5;
+  PluviationOptions o = small_cell();
   o.press_to_target_height = false;
   const PluviationResult free = pluviate(o, EngineOptions{});
   ASSERT_TRUE(free.settled);

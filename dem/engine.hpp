@@ -150,6 +150,8 @@ class Engine {
   int64_t pair_i(int64_t k) const { return pi_[k]; }
   int64_t pair_j(int64_t k) const { return list_.j[k]; }
   bool pair_touching(int64_t k) const { return touching_[k] == kTouching; }
+  // Valid inside the force hook and after a step of an engine that has one
+  // (or runs on several threads): without either, the slots are not kept.
   const PairData& pair_force(int64_t k) const { return slot_[k]; }
   // Sphere s's wall reactions: force on the bottom platen (z), on the top
   // platen (z) and outward radial force on the cylinder, N.
@@ -200,6 +202,7 @@ class Engine {
   std::vector<double> reff_, meff_;  // R* and m* per pair, set by rebuild()
   std::vector<double> inv_m_, inv_i_;  // 1/m and 1/I per sphere (see step())
   bool scatter_ = false;               // one thread: forces summed in the contact loop
+  bool keep_slots_ = true;             // slot_ written this step (see compute_forces())
   std::vector<double> acc_;            // their sums, f then t per sphere
   std::vector<PairData> slot_;     // this step's force
   // Per pair: kTouching (in contact this step), kHistoryOnly (not known to

@@ -1,19 +1,33 @@
-// A 3-vector of doubles for contact maths (no Eigen in the hot loop: a plain
-// aggregate keeps the pair kernel inlined and branch-free).
+// A 3-vector for contact maths (no Eigen in the hot loop: a plain aggregate
+// keeps the pair kernel inlined). The component type is a double, or a pair
+// of doubles (dem/lanes.hpp) when the contact loop computes two contacts at
+// once; Vec3 is the double one.
 #pragma once
 #include <cmath>
+#include <type_traits>
 
 namespace tg::dem {
 
-struct Vec3 {
-  double x = 0, y = 0, z = 0;
+template <class T>
+struct Vec3T {
+  T x{}, y{}, z{};
 };
-inline Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-inline Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-inline Vec3 operator-(Vec3 a) { return {-a.x, -a.y, -a.z}; }
-inline Vec3 operator*(double s, Vec3 a) { return {s * a.x, s * a.y, s * a.z}; }
-inline double dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline Vec3 cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+using Vec3 = Vec3T<double>;
+
+template <class T> inline Vec3T<T> operator+(Vec3T<T> a, Vec3T<T> b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+template <class T> inline Vec3T<T> operator-(Vec3T<T> a, Vec3T<T> b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+template <class T> inline Vec3T<T> operator-(Vec3T<T> a) { return {-a.x, -a.y, -a.z}; }
+// s * a for s of the component type, or a plain double applied to every lane.
+template <class T> inline Vec3T<T> operator*(std::type_identity_t<T> s, Vec3T<T> a) { return {s * a.x, s * a.y, s * a.z}; }
+template <class T>
+  requires(!std::is_same_v<T, double>)
+inline Vec3T<T> operator*(double s, Vec3T<T> a) {
+  return {s * a.x, s * a.y, s * a.z};
+}
+template <class T> inline T dot(Vec3T<T> a, Vec3T<T> b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+template <class T> inline Vec3T<T> cross(Vec3T<T> a, Vec3T<T> b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
 inline double norm(Vec3 a) { return std::sqrt(dot(a, a)); }
 
 }  // namespace tg::dem

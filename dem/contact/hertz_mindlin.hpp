@@ -29,7 +29,9 @@
 #pragma once
 #include <cmath>
 #include <numbers>
+#include <utility>
 
+#include "dem/lanes.hpp"
 #include "dem/vec3.hpp"
 
 namespace tg::dem {
@@ -66,32 +68,48 @@ struct HertzMindlin {
 HertzMindlin make_hertz_mindlin(const Material& a, const Material& b, double friction, double restitution);
 
 // The geometry of one touching contact, seen from body i towards body j.
-struct ContactGeometry {
-  Vec3 n;            // unit normal from i to j
-  double delta;      // overlap > 0, m
-  double r_eff;      // R*, m
-  double m_eff;      // m*, kg
-  Vec3 v_rel;        // velocity of j's contact point minus i's, m/s
+// T is double, or Lanes2 for two contacts at once (dem/lanes.hpp).
+template <class T>
+struct ContactGeometryT {
+  Vec3T<T> n;        // unit normal from i to j
+  T delta;           // overlap > 0, m
+  T r_eff;           // R*, m
+  T m_eff;           // m*, kg
+  Vec3T<T> v_rel;    // velocity of j's contact point minus i's, m/s
 };
+using ContactGeometry = ContactGeometryT<double>;
 
-struct ContactForce {
-  Vec3 force_on_j;  // force on j (on i: the opposite), N
-  double fn;        // normal force magnitude (>= 0), N
-  bool sliding;     // the Coulomb cap was active
+template <class T>
+struct ContactForceT {
+  Vec3T<T> force_on_j;                                   // force on j (on i: the opposite), N
+  T fn;                                                  // normal force magnitude (>= 0), N
+  decltype(std::declval<T>() > std::declval<T>()) sliding;  // the Coulomb cap was active
 };
+using ContactForce = ContactForceT<double>;
+
+template <class T, class M>
+inline Vec3T<T> select(M m, Vec3T<T> a, Vec3T<T> b) {
+  return {select(m, a.x, b.x), select(m, a.y, b.y), select(m, a.z, b.z)};
+}
 
 // Updates the tangential history `xi` (m, in place) and returns the force.
 // Precondition: g.delta > 0, g.n unit, law from make_hertz_mindlin().
-inline ContactForce hertz_mindlin_force(const HertzMindlin& law, const ContactGeometry& g, double dt, Vec3& xi) {
-  const double sq = std::sqrt(g.r_eff * g.delta);
-  const double kn = 2 * law.e_star * sq;
-  const double kt = 8 * law.g_star * sq;
-  const double vn = dot(g.v_rel, g.n);  // < 0 while approaching
+// Written with selects instead of branches, so that both lanes of a Lanes2
+// take their own way; a branch is kept where it skips work that the lanes
+// rarely need (the exact rescale, the Coulomb cap).
+template <class T>
+inline ContactForceT<T> hertz_mindlin_force(const HertzMindlin& law, const ContactGeometryT<T>& g, double dt, Vec3T<T>& xi) {
+  const T zero{}, one = zero + 1.0;
+  const T sq = lane_sqrt(g.r_eff * g.delta);
+  const T kn = 2 * law.e_star * sq;
+  const T kt = 8 * law.g_star * sq;
+  const T vn = dot(g.v_rel, g.n);  // < 0 while approaching
   // Tsuji dashpot: c = 2 sqrt(5/6) |β| sqrt(k m*); 2 sqrt(5/6) = 1.8257...
-  const double cn = law.damp_beta > 0 ? 1.8257418583505538 * law.damp_beta * std::sqrt(kn * g.m_eff) : 0.0;
-  const double ct = cn * law.damp_t_over_n;
-  double fn = 2.0 / 3.0 * kn * g.delta - cn * vn;  // 4/3 E* sqrt(R*) δ^{3/2} = 2/3 kn δ
-  if (fn < 0) fn = 0;
+  T cn = zero;
+  if (law.damp_beta > 0) cn = 1.8257418583505538 * law.damp_beta * lane_sqrt(kn * g.m_eff);
+  const T ct = cn * law.damp_t_over_n;
+  T fn = 2.0 / 3.0 * kn * g.delta - cn * vn;  // 4/3 E* sqrt(R*) δ^{3/2} = 2/3 kn δ
+  fn = select(fn < zero, zero, fn);
 
   // Keep ξ in the current tangent plane: drop its normal part, keep its
   // length (scale p by sqrt(ρ), ρ = |ξ|²/|p|²). The normal turns by ~1e-7 rad
@@ -99,29 +117,30 @@ inline ContactForce hertz_mindlin_force(const HertzMindlin& law, const ContactGe
   // with a remainder e³/16 below half an ulp of 1 for e <= 1e-5, i.e. the
   // square root to rounding, without its latency on the contact's chain of
   // dependent operations (it was 7 % of the contact loop).
-  const double xi_len2 = dot(xi, xi);
-  if (xi_len2 > 0) {
-    Vec3 p = xi - dot(xi, g.n) * g.n;
-    const double p_len2 = dot(p, p);
-    if (p_len2 > 0) {
-      const double rho = xi_len2 / p_len2, e = rho - 1;
-      xi = (e <= 1e-5 ? 1 + e * (0.5 - 0.125 * e) : std::sqrt(rho)) * p;
-    } else {
-      xi = Vec3{};
-    }
-  }
-  const Vec3 vt = g.v_rel - vn * g.n;
+  const T xi_len2 = dot(xi, xi);
+  const Vec3T<T> p = xi - dot(xi, g.n) * g.n;
+  const T p_len2 = dot(p, p);
+  const auto has = p_len2 > zero;  // else ξ is zero, along n (then dropped) or not finite (kept, caught later)
+  const T rho = xi_len2 / select(has, p_len2, one), e = rho - 1.0;
+  T scale = 1.0 + e * (0.5 - 0.125 * e);
+  const auto far = e > 1e-5;
+  if (any(far)) scale = select(far, lane_sqrt(rho), scale);
+  xi = select(has, scale * p, select(xi_len2 > zero, Vec3T<T>{}, xi));
+
+  const Vec3T<T> vt = g.v_rel - vn * g.n;
   xi = xi + dt * vt;
-  Vec3 ft = -1.0 * (kt * xi + ct * vt);
-  const double ft_len2 = dot(ft, ft);
-  const double cap = law.friction * fn;
-  bool sliding = false;
-  if (ft_len2 > cap * cap) {
-    sliding = true;
-    const double s = ft_len2 > 0 ? cap / std::sqrt(ft_len2) : 0.0;
-    ft = s * ft;
+  Vec3T<T> ft = -1.0 * (kt * xi + ct * vt);
+  const T ft_len2 = dot(ft, ft);
+  const T cap = law.friction * fn;
+  const auto sliding = ft_len2 > cap * cap;
+  if (any(sliding)) {
+    // Where sliding, |ft|² > cap² >= 0.
+    const Vec3T<T> fs = (cap / lane_sqrt(select(sliding, ft_len2, one))) * ft;
     // ξ consistent with the capped force: -kt ξ - ct vt = ft.
-    xi = kt > 0 ? (-1.0 / kt) * (ft + ct * vt) : Vec3{};
+    const auto stiff = kt > zero;
+    const Vec3T<T> xs = (-1.0 / select(stiff, kt, one)) * (fs + ct * vt);
+    ft = select(sliding, fs, ft);
+    xi = select(sliding, select(stiff, xs, Vec3T<T>{}), xi);
   }
   return {fn * g.n + ft, fn, sliding};
 }

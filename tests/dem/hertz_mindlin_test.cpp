@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "core/errors.hpp"
 
@@ -70,6 +71,72 @@ TEST(HertzMindlin, HistoryRotatesIntoTangentPlane) {
   hertz_mindlin_force(law, g, 1e-8, xi);
   EXPECT_NEAR(dot(xi, g.n), 0.0, 1e-24);
   EXPECT_NEAR(norm(xi), 1e-9, 1e-21);
+}
+
+// A normal that turns by 1e-4 rad: the history is rescaled by the series of
+// sqrt(|ξ|²/|p|²) (e ~ 1e-8), which must keep its length as the square root
+// does (to a few ulps) and leave it in the tangent plane.
+TEST(HertzMindlin, HistoryKeepsItsLengthWhenTheNormalTurnsSlightly) {
+  const Material m;
+  const HertzMindlin law = make_hertz_mindlin(m, m, 10.0, 1.0);
+  const double a = 1e-4;
+  const Vec3 n{std::sin(a), 0, std::cos(a)};
+  Vec3 xi{3e-9, -4e-9, 0};
+  const double len = norm(xi);
+  ContactGeometry g{n, 1e-6, 0.34e-3, 1e-6, {0, 0, 0}};
+  hertz_mindlin_force(law, g, 1e-8, xi);
+  EXPECT_NEAR(dot(xi, n), 0.0, 1e-24);
+  EXPECT_NEAR(norm(xi) / len, 1.0, 4e-16);
+}
+
+// The contact loop computes two contacts at once (Lanes2); each lane must
+// give the bits of the scalar law, over sticking, sliding, damped, tilted
+// and history-free contacts, whatever the other lane holds.
+TEST(HertzMindlin, TwoLanesGiveTheScalarBits) {
+  const Material m;
+  const HertzMindlin law = make_hertz_mindlin(m, m, 0.5, 0.5);  // damped
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto unit = [&] {
+    Vec3 v{u(rng), u(rng), u(rng)};
+    return (1.0 / norm(v)) * v;
+  };
+  auto contact = [&](int kind) {
+    ContactGeometry g{unit(), 1e-7 * (1.5 + u(rng)), 0.34e-3 * (1.2 + 0.2 * u(rng)), 1e-6 * (1.1 + 0.1 * u(rng)),
+                      Vec3{1e-2 * u(rng), 1e-2 * u(rng), 1e-2 * u(rng)}};
+    Vec3 xi{};
+    if (kind == 1) xi = 1e-9 * unit();                // small history: sticking
+    if (kind == 2) xi = 1e-6 * unit();                // large history: sliding
+    if (kind == 3) { xi = 1e-9 * unit(); xi = xi - dot(xi, g.n) * g.n; }  // already tangent
+    return std::pair{g, xi};
+  };
+  int sliding = 0;
+  for (int t = 0; t < 400; ++t) {
+    auto [ga, xa] = contact(t % 4);
+    auto [gb, xb] = contact((t / 4) % 4);
+    const auto L = [](double p, double q) { return Lanes2{p, q}; };
+    const auto V = [&](Vec3 p, Vec3 q) { return Vec3T<Lanes2>{L(p.x, q.x), L(p.y, q.y), L(p.z, q.z)}; };
+    ContactGeometryT<Lanes2> g2{V(ga.n, gb.n), L(ga.delta, gb.delta), L(ga.r_eff, gb.r_eff), L(ga.m_eff, gb.m_eff),
+                                V(ga.v_rel, gb.v_rel)};
+    Vec3T<Lanes2> x2 = V(xa, xb);
+    const ContactForceT<Lanes2> f2 = hertz_mindlin_force(law, g2, 1e-7, x2);
+    const ContactForce fa = hertz_mindlin_force(law, ga, 1e-7, xa), fb = hertz_mindlin_force(law, gb, 1e-7, xb);
+    for (int l = 0; l < 2; ++l) {
+      const ContactForce& f = l ? fb : fa;
+      const Vec3& x = l ? xb : xa;
+      ASSERT_EQ(f2.force_on_j.x[l], f.force_on_j.x) << t;
+      ASSERT_EQ(f2.force_on_j.y[l], f.force_on_j.y) << t;
+      ASSERT_EQ(f2.force_on_j.z[l], f.force_on_j.z) << t;
+      ASSERT_EQ(f2.fn[l], f.fn) << t;
+      ASSERT_EQ(x2.x[l], x.x) << t;
+      ASSERT_EQ(x2.y[l], x.y) << t;
+      ASSERT_EQ(x2.z[l], x.z) << t;
+      ASSERT_EQ(f2.sliding[l] != 0, f.sliding) << t;
+      sliding += f.sliding;
+    }
+  }
+  EXPECT_GT(sliding, 100);  // both regimes were exercised
+  EXPECT_LT(sliding, 700);
 }
 
 TEST(HertzMindlin, RejectsBadParameters) {

@@ -11,6 +11,10 @@
 namespace tg::dem {
 
 namespace {
+// Spheres per block of the kicks and the gather (the blocks, not the
+// spheres, are shared out among the threads).
+constexpr int64_t kSphereBlock = 64;
+
 // Runs body(i) for i in [0, n) and returns the OR of its results: on the
 // OpenMP team when `par`, else as a plain loop. Entering a parallel region
 // costs about 0.5 us even for a team of one (libgomp makes and frees a
@@ -93,19 +97,6 @@ void Engine::rebuild() {
     if (xi_[3 * k] != 0 || xi_[3 * k + 1] != 0 || xi_[3 * k + 2] != 0) touching_[k] = kHistoryOnly;
   bad_.assign(std::max(np, n), 0);
   wall_f_.assign(3 * n, 0.0);
-  // Incidence lists in ascending pair order: the fixed gather order.
-  inc_off_.assign(n + 1, 0);
-  for (int64_t k = 0; k < np; ++k) {
-    ++inc_off_[pi_[k] + 1];
-    ++inc_off_[list_.j[k] + 1];
-  }
-  for (int64_t s = 0; s < n; ++s) inc_off_[s + 1] += inc_off_[s];
-  inc_.assign(inc_off_[n], 0);
-  std::vector<int64_t> fill(inc_off_.begin(), inc_off_.end() - 1);
-  for (int64_t k = 0; k < np; ++k) {
-    inc_[fill[pi_[k]]++] = k << 1;
-    inc_[fill[list_.j[k]]++] = (k << 1) | 1;
-  }
   x0_ = p_.x;
   y0_ = p_.y;
   z0_ = p_.z;
@@ -222,8 +213,8 @@ void Engine::step() {
   // Blocks of spheres per thread (static: the same spheres whatever the
   // team size; each sphere's update is independent anyway).
   const auto kick_all = [&](int64_t count, bool drift) {
-    return for_each_or((count + 255) / 256, parallel(count), [&](int64_t b) __attribute__((always_inline)) {
-      return half_kick(b * 256, std::min(count, (b + 1) * 256), drift);
+    return for_each_or((count + kSphereBlock - 1) / kSphereBlock, parallel(count), [&](int64_t b) __attribute__((always_inline)) {
+      return half_kick(b * kSphereBlock, std::min(count, (b + 1) * kSphereBlock), drift);
     });
   };
   const int moved = kick_all(n, true);
@@ -242,17 +233,9 @@ void Engine::step() {
 }
 
 void Engine::compute_forces() {
-  // One thread: the contact loop adds each pair's force to its two spheres
-  // as it goes. Each sphere still receives its pairs in ascending pair
-  // order, after its weight, as the gather does (which also adds the
-  // exact zeros of the separated pairs: x + 0 = x here, as the sums never
-  // hold -0), so both ways give the same bits; the gather pass over every
-  // listed pair is saved.
-  scatter_ = !parallel(list_.pairs()) && !parallel(p_.size());
-  // The pair slots are read by the gather and by the force hook's model
-  // (breakage: contact statistics); a scene with neither, on one thread,
-  // does not write them (72 bytes a contact and step, 4 % of a run).
-  keep_slots_ = !scatter_ || static_cast<bool>(force_hook_);
+  // The pair slots are read by the force hook's model only (breakage:
+  // contact statistics); a scene without one does not write them.
+  keep_slots_ = static_cast<bool>(force_hook_);
   compute_pair_forces();
   gather_forces();
   if (force_hook_) force_hook_(*this);
@@ -283,19 +266,6 @@ void Engine::compute_pair_forces() {
   uint8_t* __restrict badk = bad_.data();
   const HertzMindlin law = law_pp_;
   const bool keep = keep_slots_;
-  double* __restrict acc = nullptr;  // per sphere f then t (scatter_)
-  if (scatter_) {
-    const int64_t n = p_.size();
-    acc_.resize(6 * n);
-    acc = acc_.data();
-    const double g = opt_.gravity_z;
-    for (int64_t s = 0; s < n; ++s) {
-      double* a = acc + 6 * s;
-      a[0] = a[1] = 0;
-      a[2] = p_.m[s] * g;
-      a[3] = a[4] = a[5] = 0;
-    }
-  }
   // The contact law runs on two pairs at once, one in each lane of a Lanes2:
   // it is a chain of dependent square roots and divisions, and two lanes
   // take two chains through each instruction. Pairs k0 < k1 (k1 == k0: lane
@@ -303,7 +273,7 @@ void Engine::compute_pair_forces() {
   // and is dropped; that pair has its state reset if it touched before.
   // Results are written lane 0 first, so each sphere still receives its
   // pairs in ascending pair order (the gather's order: same bits).
-  const auto two_pairs = [&](int64_t k0, int64_t k1) __attribute__((always_inline)) {
+  const auto two_pairs = [&](int64_t k0, int64_t k1, double* __restrict acc) __attribute__((always_inline)) {
     const int64_t i0 = pi[k0], j0 = pj[k0], i1 = pi[k1], j1 = pj[k1];
     const auto L = [](const double* __restrict a, int64_t u, int64_t v) { return Lanes2{a[u], a[v]}; };
     const Vec3T<Lanes2> d{L(x, j0, j1) - L(x, i0, i1), L(y, j0, j1) - L(y, i0, i1), L(z, j0, j1) - L(z, i0, i1)};
@@ -360,7 +330,7 @@ void Engine::compute_pair_forces() {
       xi[3 * k + 2] = h.z[l];
       if (keep) slot[k] = PairData{f.x, f.y, f.z, tik.x, tik.y, tik.z, tjk.x, tjk.y, tjk.z};
       touching[k] = kTouching;
-      if (acc) {
+      {
         double *a = acc + 6 * i, *c = acc + 6 * j;
         a[0] -= f.x;
         a[1] -= f.y;
@@ -384,8 +354,7 @@ void Engine::compute_pair_forces() {
   // touch. Both together take the one-core 10 % bench from 20.5-27.2 s to
   // 17.5-20.3 s (session 5; same bits as the one-pair loop).
   constexpr int64_t kBlock = 256;
-  const int bad = for_each_or((np + kBlock - 1) / kBlock, parallel(np), [&](int64_t blk) __attribute__((always_inline)) {
-    const int64_t kb = blk * kBlock, ke = std::min(np, kb + kBlock);
+  const auto block = [&](int64_t kb, int64_t ke, double* __restrict acc) __attribute__((always_inline)) {
     int32_t listed[kBlock];
     int m = 0;
     for (int64_t k = kb; k < ke; ++k) {
@@ -395,7 +364,26 @@ void Engine::compute_pair_forces() {
       m += int(!(dx * dx + dy * dy + dz * dz >= rs * rs)) | int(touching[k] != 0);  // NaN: listed
     }
     int failed = 0;
-    for (int q = 0; q < m; q += 2) failed |= two_pairs(kb + listed[q], kb + listed[q + 1 < m ? q + 1 : q]);
+    for (int q = 0; q < m; q += 2) failed |= two_pairs(kb + listed[q], kb + listed[q + 1 < m ? q + 1 : q], acc);
+    return failed;
+  };
+  // Each part of the pair list sums its forces and torques into its own
+  // per-sphere array (part 0 starts from the weights); the gather adds the
+  // parts in their order. The parts are fixed by the pair count alone.
+  const int64_t n = p_.size();
+  acc_.resize(size_t(kForceParts) * 6 * size_t(n));
+  const double g = opt_.gravity_z;
+  const int bad = for_each_or(kForceParts, parallel(np), [&](int64_t part) __attribute__((always_inline)) {
+    double* __restrict acc = acc_.data() + part * 6 * n;
+    for (int64_t s = 0; s < n; ++s) {
+      double* a = acc + 6 * s;
+      a[0] = a[1] = 0;
+      a[2] = part == 0 ? p_.m[s] * g : 0.0;
+      a[3] = a[4] = a[5] = 0;
+    }
+    const int64_t lo = np * part / kForceParts, hi = np * (part + 1) / kForceParts;
+    int failed = 0;
+    for (int64_t kb = lo; kb < hi; kb += kBlock) failed |= block(kb, std::min(hi, kb + kBlock), acc);
     return failed;
   });
   const Particles& p = p_;
@@ -436,25 +424,14 @@ void Engine::gather_forces() {
   const int64_t n = p_.size();
   Particles& p = p_;
   const Walls& w = opt_.walls;
-  const double dt = opt_.time_step, g = opt_.gravity_z, alpha = opt_.local_damping;
+  const double dt = opt_.time_step, alpha = opt_.local_damping;
   const double lim = opt_.overlap_limit;
-  const int bad = for_each_or(n, parallel(n), [&](int64_t s) __attribute__((always_inline)) {
-    Vec3 f{0, 0, p.m[s] * g}, t{};
-    if (scatter_) {
-      const double* a = acc_.data() + 6 * s;
-      f = {a[0], a[1], a[2]};
-      t = {a[3], a[4], a[5]};
-    } else {
-      for (int64_t e = inc_off_[s]; e < inc_off_[s + 1]; ++e) {
-        const PairData& d = slot_[inc_[e] >> 1];
-        if (inc_[e] & 1) {
-          f = f + Vec3{d.fx, d.fy, d.fz};
-          t = t + Vec3{d.tjx, d.tjy, d.tjz};
-        } else {
-          f = f - Vec3{d.fx, d.fy, d.fz};
-          t = t + Vec3{d.tix, d.tiy, d.tiz};
-        }
-      }
+  const auto one = [&](int64_t s) __attribute__((always_inline)) {
+    Vec3 f, t;
+    for (int part = 0; part < kForceParts; ++part) {
+      const double* a = acc_.data() + (part * n + s) * 6;
+      f = f + Vec3{a[0], a[1], a[2]};
+      t = t + Vec3{a[3], a[4], a[5]};
     }
     double fb = 0, ft = 0, fc = 0;
     const double r = p.r[s];
@@ -499,6 +476,13 @@ void Engine::gather_forces() {
     p.tz[s] = t.z;
     if (!std::isfinite(f.x + f.y + f.z + t.x + t.y + t.z)) bad_[s] = 2;
     return int(bad_[s] != 0);
+  };
+  // The kicks' blocks of spheres (kSphereBlock), so that each thread gathers
+  // the spheres it kicks: fewer of them change hands between the threads.
+  const int bad = for_each_or((n + kSphereBlock - 1) / kSphereBlock, parallel(n), [&](int64_t b) __attribute__((always_inline)) {
+    int any = 0;
+    for (int64_t s = b * kSphereBlock; s < std::min(n, (b + 1) * kSphereBlock); ++s) any |= one(s);
+    return any;
   });
   if (bad) {
     for (int64_t s = 0; s < n; ++s)

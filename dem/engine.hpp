@@ -201,17 +201,17 @@ class Engine {
   std::vector<double> xi_;         // tangential history, 3 per pair
   std::vector<double> reff_, meff_;  // R* and m* per pair, set by rebuild()
   std::vector<double> inv_m_, inv_i_;  // 1/m and 1/I per sphere (see step())
-  bool scatter_ = false;               // one thread: forces summed in the contact loop
   bool keep_slots_ = true;             // slot_ written this step (see compute_forces())
-  std::vector<double> acc_;            // their sums, f then t per sphere
+  // The pair list's parts, each summed into its own per-sphere array (f then
+  // t): two threads share the contact loop and nothing else of each other's.
+  static constexpr int kForceParts = 2;
+  std::vector<double> acc_;            // kForceParts x 6 per sphere
   std::vector<PairData> slot_;     // this step's force
   // Per pair: kTouching (in contact this step), kHistoryOnly (not known to
   // touch but may hold a tangential history or a force: after a rebuild or a
   // restart) or kNotTouching (nothing stored: a separated pair costs one test).
   enum : uint8_t { kNotTouching = 0, kTouching = 1, kHistoryOnly = 2 };
   std::vector<uint8_t> touching_;
-  // Incidence CSR: for sphere s, entries (pair << 1 | is_j), ascending pair.
-  std::vector<int64_t> inc_off_, inc_;
   // Positions at the last rebuild (skin criterion).
   std::vector<double> x0_, y0_, z0_;
   // Per-sphere wall reaction this step (bottom z, top z, cylinder radial).

@@ -369,10 +369,16 @@ void Engine::compute_pair_forces() {
   };
   // Each part of the pair list sums its forces and torques into its own
   // per-sphere array (part 0 starts from the weights); the gather adds the
-  // parts in their order. The parts are fixed by the pair count alone.
+  // parts in their order. A pair's part is fixed by its own i alone (rows
+  // of i in chunks of kRowChunk spheres, dealt out to the parts in turn),
+  // not by the list: the sums then do not depend on which pairs that do not
+  // touch the list holds (skin, rebuild times, a restart), as before.
   const int64_t n = p_.size();
   acc_.resize(size_t(kForceParts) * 6 * size_t(n));
   const double g = opt_.gravity_z;
+  const int64_t* off = list_.offsets.data();
+  const int64_t rows = static_cast<int64_t>(list_.offsets.size()) - 1;
+  constexpr int64_t kRowChunk = 64;
   const int bad = for_each_or(kForceParts, parallel(np), [&](int64_t part) __attribute__((always_inline)) {
     double* __restrict acc = acc_.data() + part * 6 * n;
     for (int64_t s = 0; s < n; ++s) {
@@ -381,9 +387,11 @@ void Engine::compute_pair_forces() {
       a[2] = part == 0 ? p_.m[s] * g : 0.0;
       a[3] = a[4] = a[5] = 0;
     }
-    const int64_t lo = np * part / kForceParts, hi = np * (part + 1) / kForceParts;
     int failed = 0;
-    for (int64_t kb = lo; kb < hi; kb += kBlock) failed |= block(kb, std::min(hi, kb + kBlock), acc);
+    for (int64_t c = part; c * kRowChunk < rows; c += kForceParts) {
+      const int64_t lo = off[c * kRowChunk], hi = off[std::min(rows, (c + 1) * kRowChunk)];
+      for (int64_t kb = lo; kb < hi; kb += kBlock) failed |= block(kb, std::min(hi, kb + kBlock), acc);
+    }
     return failed;
   });
   const Particles& p = p_;

@@ -55,13 +55,15 @@ cylinder_radius_m = 4.0e-3
 generation_height_m = 14.0e-3
 target_height_m = 6.0e-3
 max_time_s = 0.3
-press_to_target_height = false  # the free deposit: pressing is tested in tests/dem, not here
+press_to_target_height = true   # pressed to 6 mm: the free deposit's height varies with its
+                                # realisation (6.55-7.06 mm over seeds 1-5), and a loose one saw no
+                                # split before the end of the run (seen when the force sums changed order)
 [run]
 threads = 1
 """
 
 # Weak grains (sigma_t0 3 MPa instead of 12) so the first split comes at
-# ~2 % strain, well before the end; fragments (d < 0.7 mm) do not split again,
+# ~1-2 % strain, well before the end (4 %); fragments (d < 0.7 mm) do not split again,
 # which keeps the time step (and the test) short.
 RUN_CFG = """[walls]
 cylinder_radius_m = 4.0e-3
@@ -70,8 +72,8 @@ packing_csv = "pack.csv"
 [run]
 threads = 1
 [oedometer]
-target_strain = 0.06
-snapshot_strains = [0.0, 0.03, 0.06]
+target_strain = 0.04
+snapshot_strains = [0.0, 0.02, 0.04]
 history_every_steps = 200
 checkpoint_every_steps = 4000
 [breakage]

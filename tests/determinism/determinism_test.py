@@ -60,7 +60,9 @@ cylinder_radius_m = 4.0e-3
 generation_height_m = 14.0e-3
 target_height_m = 6.0e-3
 max_time_s = 0.3
-press_to_target_height = false  # the free deposit: pressing is tested in tests/dem, not here
+press_to_target_height = true   # pressed to 6 mm: the free deposit's height varies with its
+                                # realisation (6.55-7.06 mm over seeds 1-5), and a loose one saw no
+                                # split before the end of the run (seen when the force sums changed order)
 """
 
 OED_CFG = """[walls]
@@ -70,8 +72,8 @@ packing_csv = "pack.csv"
 [run]
 parallel_min_items = 100
 [oedometer]
-target_strain = 0.052
-snapshot_strains = [0.0, 0.02, 0.052]
+target_strain = 0.04
+snapshot_strains = [0.0, 0.02, 0.04]
 history_every_steps = 200
 [breakage]
 enabled = true
@@ -86,7 +88,7 @@ STEPS = [
     ("measure", ["measure", "labels.h5", "-o", "particles.csv", "-o", "particles.h5"]),
     ("psd", ["psd", "particles.csv", "-o", "psd.csv"]),
     ("dem oedometer", ["dem", "oedometer", "oed.toml", "-o", "oed"]),
-    ("voxelise", ["voxelise", "oed/snapshots/strain_05.20pct.h5", "-o", "vox.h5", "--voxel-um", "100", "--truth-table"]),
+    ("voxelise", ["voxelise", "oed/snapshots/strain_04.00pct.h5", "-o", "vox.h5", "--voxel-um", "100", "--truth-table"]),
 ]
 
 

@@ -14,6 +14,12 @@ namespace {
 // Spheres per block of the kicks and the gather (the blocks, not the
 // spheres, are shared out among the threads).
 constexpr int64_t kSphereBlock = 64;
+// A sphere's force and torque sums of one part (6 doubles) in a 64-byte
+// line of its own: one line a sphere a contact, not two for most.
+constexpr int64_t kAccStride = 8;
+inline double* align64(double* p) {
+  return reinterpret_cast<double*>((reinterpret_cast<uintptr_t>(p) + 63) & ~uintptr_t(63));
+}
 
 // Runs body(i) for i in [0, n) and returns the OR of its results: on the
 // OpenMP team when `par`, else as a plain loop. Entering a parallel region
@@ -331,7 +337,7 @@ void Engine::compute_pair_forces() {
       if (keep) slot[k] = PairData{f.x, f.y, f.z, tik.x, tik.y, tik.z, tjk.x, tjk.y, tjk.z};
       touching[k] = kTouching;
       {
-        double *a = acc + 6 * i, *c = acc + 6 * j;
+        double *a = acc + kAccStride * i, *c = acc + kAccStride * j;
         a[0] -= f.x;
         a[1] -= f.y;
         a[2] -= f.z;
@@ -374,15 +380,16 @@ void Engine::compute_pair_forces() {
   // not by the list: the sums then do not depend on which pairs that do not
   // touch the list holds (skin, rebuild times, a restart), as before.
   const int64_t n = p_.size();
-  acc_.resize(size_t(kForceParts) * 6 * size_t(n));
+  acc_.resize(size_t(kForceParts) * kAccStride * size_t(n) + 8);
+  double* const acc0 = align64(acc_.data());
   const double g = opt_.gravity_z;
   const int64_t* off = list_.offsets.data();
   const int64_t rows = static_cast<int64_t>(list_.offsets.size()) - 1;
   constexpr int64_t kRowChunk = 64;
   const int bad = for_each_or(kForceParts, parallel(np), [&](int64_t part) __attribute__((always_inline)) {
-    double* __restrict acc = acc_.data() + part * 6 * n;
+    double* __restrict acc = acc0 + part * kAccStride * n;
     for (int64_t s = 0; s < n; ++s) {
-      double* a = acc + 6 * s;
+      double* a = acc + kAccStride * s;
       a[0] = a[1] = 0;
       a[2] = part == 0 ? p_.m[s] * g : 0.0;
       a[3] = a[4] = a[5] = 0;
@@ -437,7 +444,7 @@ void Engine::gather_forces() {
   const auto one = [&](int64_t s) __attribute__((always_inline)) {
     Vec3 f, t;
     for (int part = 0; part < kForceParts; ++part) {
-      const double* a = acc_.data() + (part * n + s) * 6;
+      const double* a = align64(acc_.data()) + (part * n + s) * kAccStride;
       f = f + Vec3{a[0], a[1], a[2]};
       t = t + Vec3{a[3], a[4], a[5]};
     }

@@ -11,17 +11,24 @@
 // Velocity-dependent forces (dashpots, friction) use the half-step velocity,
 // as LAMMPS/LIGGGHTS do.
 //
-// Determinism with threads: forces are never scattered. (1) A parallel loop
-// over the pair list computes each pair's force and both torques into that
-// pair's own slot (and updates that pair's tangential history). (2) A
-// parallel loop over spheres gathers, for each sphere, the slots of its
-// pairs in a fixed order (ascending pair index), then adds its wall contacts
-// and gravity. (3) Wall reaction forces are summed serially over spheres.
-// Every sum therefore has the same operands in the same order for any thread
-// count. On one thread, (1) adds each pair's force to its two spheres as it
-// goes: each sphere gets the same operands in the same order as from (2),
-// so the bits are the same and (2) skips its pass over the pair slots
-// (tests compare 1- and 2-thread histories byte for byte).
+// Determinism with threads: forces are never summed in an order that the
+// thread count can change. (1) The pair list is cut into kForceParts parts
+// by the pairs' rows (i in chunks of 64 spheres, dealt to the parts in
+// turn); each part computes its pairs' forces and torques (and updates
+// their tangential histories) and sums them, in ascending pair order, into
+// a per-sphere array of its own, part 0 starting from the weights. The
+// parts run on the OpenMP team. (2) A parallel loop over spheres adds the
+// parts in order, then its wall contacts. (3) Wall reaction forces are
+// summed serially over spheres. Every sum therefore has the same operands
+// in the same order for any thread count; as the parts depend on the pairs'
+// indices only, not on which non-touching pairs the neighbour list holds,
+// the sums do not depend on the skin or on when the list was rebuilt either
+// (a restart continues bit for bit). Tests compare 1- and 2-thread histories
+// and runs with different skins byte for byte.
+//
+// The contact law runs on two pairs at once (SSE2 lanes, dem/lanes.hpp),
+// filled from a branch-free list of the touching pairs of each block;
+// lane arithmetic is the scalar law's, bit for bit.
 //
 // Walls: bottom platen z = 0 (fixed), top platen z = top_z moving at top_vz
 // (velocity-controlled; its reaction force is recorded), inner surface of a
@@ -31,12 +38,13 @@
 //
 // Extension points (breakage, issue 7):
 //  * contact loop: Engine::compute_pair_forces() is the single place where
-//    a pair's force is made; a bond law slots in there (a bonded pair gets
-//    its bond force added in the same slot, so the gather stays as is). The
-//    per-pair slot layout (PairData) is where per-pair state lives.
+//    a pair's force is made. With a force hook installed (breakage), each
+//    touching pair's force and torques are also kept in its slot (PairData)
+//    for the hook's model to read (pair_force()); without one they are not
+//    written.
 //  * per-sphere contact statistics (max contact force, average stress tensor
-//    σ_ij = 1/V Σ (x^c - x^p)_i F_j) are computed in the gather loop, which
-//    sees every contact of a sphere with its branch vector: add them there.
+//    σ_ij = 1/V Σ (x^c - x^p)_i F_j) are computed by the hook's model from
+//    the kept slots (dem/breakage/breakage.cpp).
 //  * sphere replacement: edit particles() (append_sphere/copy_sphere/resize),
 //    then call request_rebuild(); pair histories are carried over for pairs
 //    whose (i, j) indices survive and dropped otherwise — when indices are
@@ -150,8 +158,8 @@ class Engine {
   int64_t pair_i(int64_t k) const { return pi_[k]; }
   int64_t pair_j(int64_t k) const { return list_.j[k]; }
   bool pair_touching(int64_t k) const { return touching_[k] == kTouching; }
-  // Valid inside the force hook and after a step of an engine that has one
-  // (or runs on several threads): without either, the slots are not kept.
+  // Valid inside the force hook and after a step of an engine that has one:
+  // without a hook the slots are not kept.
   const PairData& pair_force(int64_t k) const { return slot_[k]; }
   // Sphere s's wall reactions: force on the bottom platen (z), on the top
   // platen (z) and outward radial force on the cylinder, N.

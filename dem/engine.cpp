@@ -230,20 +230,25 @@ void Engine::step() {
     rebuild();
   }
 
-  compute_forces();
-
-  fresh_masses();  // the force hook (breakage) may have edited spheres
-  kick_all(p.size(), false);
+  // Without a force hook the gather ends each sphere with its closing half
+  // kick (one pass over the spheres and one parallel region less a step);
+  // the hook (breakage) may edit forces and spheres, so it is kicked after.
+  const bool kick_in_gather = !force_hook_;
+  compute_forces(kick_in_gather);
+  if (!kick_in_gather) {
+    fresh_masses();
+    kick_all(p.size(), false);
+  }
   time_ += dt;
   ++steps_;
 }
 
-void Engine::compute_forces() {
+void Engine::compute_forces(bool kick) {
   // The pair slots are read by the force hook's model only (breakage:
   // contact statistics); a scene without one does not write them.
   keep_slots_ = static_cast<bool>(force_hook_);
   compute_pair_forces();
-  gather_forces();
+  gather_forces(kick);
   if (force_hook_) force_hook_(*this);
 }
 
@@ -435,11 +440,11 @@ __attribute__((always_inline)) inline Vec3 wall_contact(const HertzMindlin& law,
 }
 }  // namespace
 
-void Engine::gather_forces() {
+void Engine::gather_forces(bool kick) {
   const int64_t n = p_.size();
   Particles& p = p_;
   const Walls& w = opt_.walls;
-  const double dt = opt_.time_step, alpha = opt_.local_damping;
+  const double dt = opt_.time_step, half = 0.5 * dt, alpha = opt_.local_damping;
   const double lim = opt_.overlap_limit;
   const auto one = [&](int64_t s) __attribute__((always_inline)) {
     Vec3 f, t;
@@ -489,6 +494,15 @@ void Engine::gather_forces() {
     p.tx[s] = t.x;
     p.ty[s] = t.y;
     p.tz[s] = t.z;
+    if (kick && !(p.flags[s] & kFlagFixed)) {  // as step()'s closing half kick
+      const double hm = half * inv_m_[s], hi = half * inv_i_[s];
+      p.vx[s] += hm * f.x;
+      p.vy[s] += hm * f.y;
+      p.vz[s] += hm * f.z;
+      p.wx[s] += hi * t.x;
+      p.wy[s] += hi * t.y;
+      p.wz[s] += hi * t.z;
+    }
     if (!std::isfinite(f.x + f.y + f.z + t.x + t.y + t.z)) bad_[s] = 2;
     return int(bad_[s] != 0);
   };

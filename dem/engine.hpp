@@ -185,13 +185,14 @@ class Engine {
 
  private:
   void rebuild();
-  void compute_forces();
+  // Forces of this step; kick: each sphere also gets its closing half kick.
+  void compute_forces(bool kick);
   void compute_pair_forces();
   void update_inverse_masses();
   // Whether a loop over `items` runs on the OpenMP team (enough items, and
   // more than one thread).
   bool parallel(int64_t items) const;
-  void gather_forces();
+  void gather_forces(bool kick);
   [[noreturn]] void explode(const std::string& what) const;
 
   Particles p_;

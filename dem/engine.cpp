@@ -282,8 +282,8 @@ void Engine::compute_pair_forces() {
   // take two chains through each instruction. Pairs k0 < k1 (k1 == k0: lane
   // 1 unused). A lane whose pair does not touch computes on stand-in values
   // and is dropped; that pair has its state reset if it touched before.
-  // Results are written lane 0 first, so each sphere still receives its
-  // pairs in ascending pair order (the gather's order: same bits).
+  // Results are written lane 0 first, so each part's sums still take its
+  // pairs in ascending pair order.
   const auto two_pairs = [&](int64_t k0, int64_t k1, double* __restrict acc) __attribute__((always_inline)) {
     const int64_t i0 = pi[k0], j0 = pj[k0], i1 = pi[k1], j1 = pj[k1];
     const auto L = [](const double* __restrict a, int64_t u, int64_t v) { return Lanes2{a[u], a[v]}; };
@@ -362,8 +362,9 @@ void Engine::compute_pair_forces() {
   // Pairs in blocks: a first, branch-free pass over a block lists the pairs
   // that touch (or touched, to be reset) in ascending order, and the lanes
   // are filled from that list, so few lanes carry a pair that does not
-  // touch. Both together take the one-core 10 % bench from 20.5-27.2 s to
-  // 17.5-20.3 s (session 5; same bits as the one-pair loop).
+  // touch. Both together: a restart from 8 % strain on one thread, 6 125
+  // steps, median 1.31 -> 1.07 s (bench/dem/RESULTS.md, session 5; same
+  // bits as the one-pair loop).
   constexpr int64_t kBlock = 256;
   const auto block = [&](int64_t kb, int64_t ke, double* __restrict acc) __attribute__((always_inline)) {
     int32_t listed[kBlock];

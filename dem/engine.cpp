@@ -447,10 +447,11 @@ void Engine::gather_forces(bool kick) {
   const Walls& w = opt_.walls;
   const double dt = opt_.time_step, half = 0.5 * dt, alpha = opt_.local_damping;
   const double lim = opt_.overlap_limit;
+  const double* const acc0 = align64(acc_.data());  // the parts' sums (compute_pair_forces)
   const auto one = [&](int64_t s) __attribute__((always_inline)) {
     Vec3 f, t;
     for (int part = 0; part < kForceParts; ++part) {
-      const double* a = align64(acc_.data()) + (part * n + s) * kAccStride;
+      const double* a = acc0 + (part * n + s) * kAccStride;
       f = f + Vec3{a[0], a[1], a[2]};
       t = t + Vec3{a[3], a[4], a[5]};
     }

@@ -214,7 +214,7 @@ class Engine {
   // The pair list's parts, each summed into its own per-sphere array (f then
   // t): two threads share the contact loop and nothing else of each other's.
   static constexpr int kForceParts = 2;
-  std::vector<double> acc_;            // kForceParts x 6 per sphere
+  std::vector<double> acc_;            // per part and sphere: f, t in a 64-byte line (engine.cpp kAccStride)
   std::vector<PairData> slot_;     // this step's force
   // Per pair: kTouching (in contact this step), kHistoryOnly (not known to
   // touch but may hold a tangential history or a force: after a rebuild or a

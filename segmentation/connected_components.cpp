@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <limits>
 
+#include <omp.h>
+
 #include "core/errors.hpp"
 #include "segmentation/neighbourhood.hpp"
 
@@ -11,14 +13,12 @@ namespace {
 
 constexpr uint32_t kMaxLabel = std::numeric_limits<uint32_t>::max() - 1;
 
-struct UnionFind {
-  std::vector<uint32_t> parent{0};  // parent[0] is the background
-  uint32_t make() {
-    if (parent.size() > kMaxLabel)
-      throw ResourceError("connected components: more than 2^32 - 2 provisional labels");
-    parent.push_back(uint32_t(parent.size()));
-    return uint32_t(parent.size() - 1);
-  }
+// Union-find over run ids; the smaller root wins, so a root is the first
+// run of its set in raster order. parent[p] <= p always holds (roots only
+// ever point down, path halving only shortens), which the flattening uses.
+struct Runs {
+  std::vector<uint32_t> parent;  // then each run's final label
+  uint32_t count = 0;            // components
   uint32_t find(uint32_t a) {
     while (parent[a] != a) {
       parent[a] = parent[parent[a]];  // path halving
@@ -33,38 +33,112 @@ struct UnionFind {
   }
 };
 
-// Pass 1 for one foreground predicate; returns provisional labels.
+// A backward neighbour row of a run: (dz, dy) and how far past the run's
+// ends in x its voxels still touch the run (1 where a diagonal step in x is
+// part of the connectivity, else 0).
+struct BackRow {
+  int dz, dy, reach;
+};
+
+std::vector<BackRow> back_rows(int connectivity) {
+  if (connectivity == 6) return {{0, -1, 0}, {-1, 0, 0}};
+  if (connectivity == 18) return {{0, -1, 1}, {-1, 0, 1}, {-1, -1, 0}, {-1, 1, 0}};
+  return {{0, -1, 1}, {-1, -1, 1}, {-1, 0, 1}, {-1, 1, 1}};
+}
+
 template <class IsFg>
-void first_pass(const Volume<uint8_t>& mask, Volume<uint32_t>& labels, const seg::Neighbourhood& back, IsFg fg,
-                UnionFind& uf) {
+void label_runs(const Volume<uint8_t>& mask, Volume<uint32_t>& labels, int connectivity, IsFg fg, Runs& runs) {
   const Shape s = mask.shape();
+  const int64_t nx = s.nx, rows = s.nz * s.ny;
   const uint8_t* m = mask.data();
   uint32_t* L = labels.data();
-  for (int64_t k = 0; k < s.nz; ++k)
-    for (int64_t j = 0; j < s.ny; ++j) {
-      const int64_t row = s.index(k, j, 0);
-      for (int64_t i = 0; i < s.nx; ++i) {
-        const int64_t idx = row + i;
-        if (!fg(m[idx])) {
-          L[idx] = 0;
-          continue;
-        }
-        uint32_t lab = 0;
-        // Backward neighbours need k-1 >= 0, 0 <= j+dy < ny, 0 <= i+dx < nx.
-        const bool inside = k > 0 && j > 0 && i > 0 && j + 1 < s.ny && i + 1 < s.nx;
-        for (int n = 0; n < back.count; ++n) {
-          if (!inside) {
-            const seg::Step d = back.step[size_t(n)];
-            if (!s.contains(k + d.dz, j + d.dy, i + d.dx)) continue;
-          }
-          const uint32_t q = L[idx + back.offset[size_t(n)]];
-          if (q == 0) continue;
-          if (lab == 0) lab = q;
-          else if (q != lab) uf.unite(lab, q);
-        }
-        L[idx] = lab ? lab : uf.make();
-      }
+  // Runs per row, then each row's first id: ids are 1.. in raster order.
+  std::vector<int64_t> first(size_t(rows) + 1, 0);
+#pragma omp parallel for schedule(static)
+  for (int64_t r = 0; r < rows; ++r) {
+    const uint8_t* row = m + r * nx;
+    int64_t c = 0;
+    bool prev = false;
+    for (int64_t i = 0; i < nx; ++i) {
+      const bool f = fg(row[i]);
+      c += f && !prev;
+      prev = f;
     }
+    first[size_t(r) + 1] = c;
+  }
+  for (int64_t r = 0; r < rows; ++r) first[size_t(r) + 1] += first[size_t(r)];
+  const int64_t total = first[size_t(rows)];
+  if (total > int64_t(kMaxLabel)) throw ResourceError("connected components: more than 2^32 - 2 runs of voxels");
+  // Every voxel gets its run's id (0: background).
+#pragma omp parallel for schedule(static)
+  for (int64_t r = 0; r < rows; ++r) {
+    const uint8_t* row = m + r * nx;
+    uint32_t* out = L + r * nx;
+    uint32_t id = uint32_t(first[size_t(r)]);
+    bool prev = false;
+    for (int64_t i = 0; i < nx; ++i) {
+      const bool f = fg(row[i]);
+      id += f && !prev;
+      out[i] = f ? id : 0u;
+      prev = f;
+    }
+  }
+  runs.parent.resize(size_t(total) + 1);
+#pragma omp parallel for schedule(static)
+  for (int64_t p = 0; p <= total; ++p) runs.parent[size_t(p)] = uint32_t(p);
+
+  // Unites each run of row (k, j) with the runs it touches in its backward
+  // rows: those of its own slice (dz 0), of the slice below (dz -1), or both.
+  const auto back = back_rows(connectivity);
+  auto unite_row = [&](int64_t k, int64_t j, bool same_slice, bool below) {
+    const uint32_t* row = L + (k * s.ny + j) * nx;
+    for (int64_t a = 0; a < nx;) {
+      if (!row[a]) {
+        ++a;
+        continue;
+      }
+      int64_t b = a + 1;
+      while (b < nx && row[b]) ++b;
+      const uint32_t u = row[a];
+      for (const BackRow& br : back) {
+        if (br.dz == 0 ? !same_slice : !below) continue;
+        const int64_t kk = k + br.dz, jj = j + br.dy;
+        if (kk < 0 || jj < 0 || jj >= s.ny) continue;
+        const uint32_t* nrow = L + (kk * s.ny + jj) * nx;
+        const int64_t lo = std::max<int64_t>(0, a - br.reach), hi = std::min(nx, b + br.reach);
+        uint32_t last = 0;
+        for (int64_t i = lo; i < hi; ++i) {
+          const uint32_t q = nrow[i];
+          if (q && q != last) {
+            runs.unite(u, q);
+            last = q;
+          }
+        }
+      }
+      a = b;
+    }
+  };
+  // Slabs of slices in parallel: within a slab every run touched belongs to
+  // the slab, so the slabs' union-finds never share an entry. Each slab's
+  // links to the slice below it (the seams) follow, one slab after another.
+  // The sets, and so their roots (the first run of each), are the same for
+  // any split and any order.
+  const int64_t slabs = std::min<int64_t>(s.nz, 4 * int64_t(omp_get_max_threads()));
+  auto slab_begin = [&](int64_t p) { return s.nz * p / slabs; };
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int64_t p = 0; p < slabs; ++p)
+    for (int64_t k = slab_begin(p); k < slab_begin(p + 1); ++k)
+      for (int64_t j = 0; j < s.ny; ++j) unite_row(k, j, true, k > slab_begin(p));
+  for (int64_t p = 1; p < slabs; ++p)
+    for (int64_t j = 0; j < s.ny; ++j) unite_row(slab_begin(p), j, false, true);
+  // Each run's final number: in increasing order a run's parent is already
+  // numbered, and a root takes the next number.
+  uint32_t count = 0;
+  for (int64_t p = 1; p <= total; ++p) {
+    const uint32_t q = runs.parent[size_t(p)];
+    runs.parent[size_t(p)] = q == uint32_t(p) ? ++count : runs.parent[q];
+  }
+  runs.count = count;
 }
 
 }  // namespace
@@ -74,20 +148,12 @@ ComponentsResult connected_components(const Volume<uint8_t>& mask, Volume<uint32
   seg::check_connectivity(opt.connectivity);
   if (labels.shape() != mask.shape()) labels = Volume<uint32_t>(mask.shape(), mask.geometry());
   labels.set_geometry(mask.geometry());
-  const auto back = seg::Neighbourhood::backward(mask.shape(), opt.connectivity);
-  UnionFind uf;
-  if (opt.phase == Phase::nonzero) first_pass(mask, labels, back, [](uint8_t v) { return v != 0; }, uf);
-  else first_pass(mask, labels, back, [](uint8_t v) { return v == 0; }, uf);
+  Runs runs;
+  if (opt.phase == Phase::nonzero) label_runs(mask, labels, opt.connectivity, [](uint8_t v) { return v != 0; }, runs);
+  else label_runs(mask, labels, opt.connectivity, [](uint8_t v) { return v == 0; }, runs);
 
-  // Roots are the first label of their component, so increasing provisional
-  // order numbers the components in raster order of their first voxel.
-  const size_t P = uf.parent.size();
-  std::vector<uint32_t> final_of(P, 0);
-  uint32_t count = 0;
-  for (size_t p = 1; p < P; ++p) {
-    const uint32_t r = uf.find(uint32_t(p));
-    final_of[p] = (r == p) ? ++count : final_of[r];
-  }
+  const uint32_t count = runs.count;
+  const uint32_t* final_of = runs.parent.data();
   std::vector<int64_t> sizes(size_t(count) + 1, 0);
   uint32_t* L = labels.data();
   const int64_t n = labels.size();
@@ -121,28 +187,50 @@ RelabelResult relabel_consecutive(Volume<uint32_t>& labels, int64_t min_size) {
   uint32_t* L = labels.data();
   const int64_t n = labels.size();
   uint32_t maxl = 0;
+#pragma omp parallel for schedule(static) reduction(max : maxl)
   for (int64_t i = 0; i < n; ++i) maxl = std::max(maxl, L[i]);
-  std::vector<int64_t> size_of(size_t(maxl) + 1, 0);
-  for (int64_t i = 0; i < n; ++i) ++size_of[L[i]];
+  const size_t nl = size_t(maxl) + 1;
+  // Each thread counts its contiguous share of the voxels and lists the
+  // labels in the order they first appear in it; the shares taken in order
+  // give the raster order of first appearance. Serial when the labels are
+  // so many that per-thread tables would outweigh the volume.
+  const int threads = int64_t(maxl) <= n / 16 ? omp_get_max_threads() : 1;
+  std::vector<std::vector<int64_t>> size_of{size_t(threads)};
+  std::vector<std::vector<uint32_t>> order{size_t(threads)};
+#pragma omp parallel num_threads(threads)
+  {
+    const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+    std::vector<int64_t>& c = size_of[size_t(t)];
+    std::vector<uint32_t>& o = order[size_t(t)];
+    c.assign(nl, 0);
+    const int64_t lo = n * t / nt, hi = n * (t + 1) / nt;
+    for (int64_t i = lo; i < hi; ++i) {
+      const uint32_t l = L[i];
+      if (c[l]++ == 0) o.push_back(l);
+    }
+  }
+  for (size_t t = 1; t < size_of.size(); ++t)
+    for (size_t l = 0; l < nl; ++l) size_of[0][l] += size_of[t][l];
+  const std::vector<int64_t>& total = size_of[0];
   // New numbers in raster order of first appearance; 0 = dropped/background.
   constexpr uint32_t kUnset = std::numeric_limits<uint32_t>::max();
-  std::vector<uint32_t> to(size_t(maxl) + 1, kUnset);
+  std::vector<uint32_t> to(nl, kUnset);
   to[0] = 0;
   RelabelResult res;
   res.sizes.push_back(0);
-  for (int64_t i = 0; i < n; ++i) {
-    const uint32_t l = L[i];
-    if (to[l] == kUnset) {
-      if (size_of[l] >= min_size) {
+  for (const auto& o : order)
+    for (const uint32_t l : o) {
+      if (to[l] != kUnset) continue;
+      if (total[l] >= min_size) {
         to[l] = ++res.count;
-        res.sizes.push_back(size_of[l]);
+        res.sizes.push_back(total[l]);
       } else {
         to[l] = 0;
         ++res.dropped;
       }
     }
-    L[i] = to[l];
-  }
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < n; ++i) L[i] = to[L[i]];
   return res;
 }
 

@@ -1,22 +1,22 @@
 // Connected-component labelling of a binary volume (6, 18 or 26
 // connectivity), with consecutive labels and a size filter.
 //
-// Method: the classic two-pass algorithm with union-find (Rosenfeld and
-// Pfaltz 1966, "Sequential operations in digital picture processing",
-// J. ACM 13:471-494, doi:10.1145/321356.321357; union-find as in Wu, Otoo
-// and Suzuki 2009, doi:10.1007/s10044-008-0109-y). Pass 1 scans in raster
-// order, gives each foreground voxel the provisional label of an already
-// visited neighbour (the backward half of the neighbourhood: 3, 9 or 13
-// voxels) or a new one, and unites the labels it sees. The union keeps the
-// smaller label as root, so every root is the first label of its component
-// in raster order. Pass 2 replaces each label by its component's final
-// number. Final labels are 1..count, numbered in raster order of each
-// component's first voxel (independent of any thread count: the passes are
-// serial), 0 is background.
+// Method: two passes with union-find (Rosenfeld and Pfaltz 1966,
+// "Sequential operations in digital picture processing", J. ACM 13:471-494,
+// doi:10.1145/321356.321357) over runs of foreground voxels along x rather
+// than single voxels (as in He, Chao and Suzuki 2008, "A run-based two-scan
+// labeling algorithm", IEEE TIP 17:749-756, doi:10.1109/TIP.2008.919369).
+// Each run gets an id in raster order; each run is united with the runs it
+// touches in its backward rows (2 rows for 6-connectivity, 4 for 18 and
+// 26); the union keeps the smaller id as root, so every root is the first
+// run of its component in raster order. Slabs of slices are united in
+// parallel (no two slabs share a run), then the seams between them. Final
+// labels are 1..count, numbered in raster order of each component's first
+// voxel, whatever the thread count; 0 is background.
 //
-// Cost: O(N alpha(N)) time; memory is the u32 label volume (4 B/voxel) plus
-// 4 B per provisional label. Throws ResourceError if more than 2^32 - 2
-// provisional labels would be needed.
+// Cost: O(N alpha(R)) time, every pass parallel but the numbering of the R
+// runs; memory is the u32 label volume (4 B/voxel) plus 4 B per run.
+// Throws ResourceError if there are more than 2^32 - 2 runs.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -51,7 +51,8 @@ struct RelabelResult {
 };
 
 // Renumbers arbitrary labels to 1..count in raster order of first
-// appearance, setting labels with fewer than min_size voxels to 0. O(N).
+// appearance, setting labels with fewer than min_size voxels to 0. O(N),
+// in parallel (each thread lists the labels of its share in order).
 RelabelResult relabel_consecutive(Volume<uint32_t>& labels, int64_t min_size = 1);
 
 }  // namespace tg

@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <deque>
+#include <map>
 #include <random>
+
+#include <omp.h>
 
 #include "core/errors.hpp"
 
@@ -116,6 +119,53 @@ TEST(ConnectedComponents, EmptyFullAndInvalid) {
   EXPECT_EQ(r.sizes[1], 120);
   EXPECT_EQ(connected_components(Volume<uint8_t>(Shape{0, 0, 0}), lab).count, 0u);
   EXPECT_THROW(connected_components(Volume<uint8_t>::filled(Shape{1, 1, 1}, 1), lab, {8}), UsageError);
+}
+
+// Slabs of slices are labelled by threads and joined at their seams: any
+// thread count (1 to 5 threads: 4 to 20 slabs over 37 slices) must give the
+// oracle's labels, components that cross many seams included.
+TEST(ConnectedComponents, AnyThreadCountGivesTheOracle) {
+  const int before = omp_get_max_threads();
+  unsigned seed = 40;
+  for (int conn : {6, 18, 26})
+    for (double p : {0.3, 0.55}) {
+      const auto m = random_mask(Shape{37, 23, 29}, p, seed++);
+      uint32_t count = 0;
+      const auto want = flood_oracle(m, conn, false, count);
+      for (int threads : {1, 2, 3, 5}) {
+        omp_set_num_threads(threads);
+        Volume<uint32_t> lab;
+        const auto r = connected_components(m, lab, {conn, Phase::nonzero, 1});
+        ASSERT_EQ(r.count, count) << "conn " << conn << " threads " << threads;
+        for (int64_t i = 0; i < m.size(); ++i)
+          ASSERT_EQ(lab[i], want[size_t(i)]) << "conn " << conn << " threads " << threads << " voxel " << i;
+      }
+    }
+  omp_set_num_threads(before);
+}
+
+TEST(RelabelConsecutive, AnyThreadCountGivesRasterOrder) {
+  const int before = omp_get_max_threads();
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<uint32_t> pick(0, 300);
+  Volume<uint32_t> in(Shape{11, 13, 17});
+  for (auto& v : in.span()) v = pick(rng) < 40 ? 0u : pick(rng) * 7u;  // sparse, unordered labels
+  // Expected: a plain serial scan.
+  std::map<uint32_t, int64_t> size;
+  for (auto v : in.span()) ++size[v];
+  std::map<uint32_t, uint32_t> to{{0u, 0u}};
+  uint32_t next = 0;
+  for (auto v : in.span())
+    if (!to.count(v)) to[v] = size[v] >= 3 ? ++next : 0u;
+  for (int threads : {1, 2, 3}) {
+    omp_set_num_threads(threads);
+    Volume<uint32_t> lab = in.clone();
+    const auto r = relabel_consecutive(lab, 3);
+    ASSERT_EQ(r.count, next) << threads << " threads";
+    for (int64_t i = 0; i < lab.size(); ++i) ASSERT_EQ(lab[i], to[in[i]]) << threads << " threads, voxel " << i;
+    for (uint32_t l = 1; l <= r.count; ++l) EXPECT_GE(r.sizes[l], 3);
+  }
+  omp_set_num_threads(before);
 }
 
 TEST(RelabelConsecutive, RenumbersInRasterOrder) {

@@ -31,7 +31,9 @@
 // practice a small multiple of the solid voxel count (caps are balls of
 // radius ~h around each peak); memory: the u32 marker volume (two high
 // bits serve as flags during the search) and a queue the size of one cap.
-// Serial and deterministic: markers are numbered in raster order.
+// The candidates are found in parallel (26-connectivity: a separable
+// 3x3x3 maximum), the caps grown serially from them in raster order:
+// deterministic, markers numbered in raster order.
 #pragma once
 #include <cstdint>
 

@@ -2,7 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <deque>
+#include <random>
 #include <set>
+
+#include <omp.h>
 
 #include "core/errors.hpp"
 #include "fixtures.hpp"
@@ -58,6 +62,65 @@ TEST(Markers, EveryComponentGetsOneIncludingSingleVoxels) {
   EXPECT_EQ(markers_of(m, 2.0, mk), 3u);
   std::set<uint32_t> got{mk(0, 0, 0), mk(4, 4, 4), mk(8, 8, 2)};
   EXPECT_EQ(got, (std::set<uint32_t>{1, 2, 3}));  // raster order
+}
+
+// With h = 0 the markers are the regional maxima: plateaus (connected sets
+// of one height, within the solid) with no strictly higher neighbour.
+// Oracle: each plateau grown breadth-first from its first voxel in raster
+// order, kept if nothing next to it is higher. Random heights with many
+// ties and plateaus cut by the border; every connectivity and 1-3 threads.
+TEST(Markers, ZeroDepthGivesTheRegionalMaximaOfAnOracle) {
+  const int before = omp_get_max_threads();
+  const Shape s{9, 11, 13};
+  std::mt19937 rng(17);
+  std::uniform_int_distribution<int> height(1, 8);
+  std::bernoulli_distribution solid_p(0.8);
+  Volume<uint8_t> m(s);
+  Volume<float> d(s);
+  for (int64_t i = 0; i < m.size(); ++i) {
+    m[i] = solid_p(rng) ? 1 : 0;
+    d[i] = m[i] ? float(height(rng)) : 0.0f;
+  }
+  for (int conn : {6, 18, 26}) {
+    const int maxd2 = conn == 6 ? 1 : conn == 18 ? 2 : 3;
+    std::vector<uint32_t> want(size_t(m.size()), 0);
+    std::vector<uint8_t> seen(size_t(m.size()), 0);
+    uint32_t count = 0;
+    for (int64_t start = 0; start < m.size(); ++start) {
+      if (!m[start] || seen[size_t(start)]) continue;
+      std::vector<int64_t> plateau{start};
+      seen[size_t(start)] = 1;
+      bool higher = false;
+      for (size_t h = 0; h < plateau.size(); ++h) {
+        const auto [k, j, i] = s.coords(plateau[h]);
+        for (int dz = -1; dz <= 1; ++dz)
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const int d2 = dz * dz + dy * dy + dx * dx;
+              if (d2 == 0 || d2 > maxd2 || !s.contains(k + dz, j + dy, i + dx)) continue;
+              const int64_t y = s.index(k + dz, j + dy, i + dx);
+              if (!m[y]) continue;
+              if (d[y] > d[start]) higher = true;
+              if (d[y] == d[start] && !seen[size_t(y)]) {
+                seen[size_t(y)] = 1;
+                plateau.push_back(y);
+              }
+            }
+      }
+      if (higher) continue;
+      ++count;
+      for (int64_t v : plateau) want[size_t(v)] = count;
+    }
+    ASSERT_GT(count, 10u) << "conn " << conn;
+    for (int threads : {1, 2, 3}) {
+      omp_set_num_threads(threads);
+      Volume<uint32_t> mk;
+      ASSERT_EQ(find_markers(d, m, mk, {0.0, conn}), count) << "conn " << conn << ", " << threads << " threads";
+      for (int64_t i = 0; i < m.size(); ++i)
+        ASSERT_EQ(mk[i], want[size_t(i)]) << "conn " << conn << ", " << threads << " threads, voxel " << i;
+    }
+  }
+  omp_set_num_threads(before);
 }
 
 TEST(Markers, EmptyVolumeAndBadArguments) {

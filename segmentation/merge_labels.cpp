@@ -20,11 +20,11 @@ uint64_t pair_key(uint32_t a, uint32_t b) {
   return (uint64_t(a) << 32) | b;
 }
 
-// Distinct nonzero labels among the 26 neighbours of idx (up to 3 kept:
-// enough to tell "one", "two" and "more").
-int neighbour_labels(const Volume<uint32_t>& lab, const seg::Neighbourhood& nb, int64_t idx, uint32_t out[3]) {
+// Distinct nonzero labels among the 26 neighbours of voxel (k, j, i) at idx
+// (up to 3 kept: enough to tell "one", "two" and "more").
+int neighbour_labels(const Volume<uint32_t>& lab, const seg::Neighbourhood& nb, int64_t k, int64_t j, int64_t i,
+                     int64_t idx, uint32_t out[3]) {
   const Shape s = lab.shape();
-  const auto [k, j, i] = s.coords(idx);
   const bool in = seg::interior(s, k, j, i);
   int n = 0;
   for (int t = 0; t < nb.count; ++t) {
@@ -64,6 +64,18 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
   {
     std::vector<int64_t> my_vol(vol.size(), 0);
     std::unordered_map<uint64_t, int64_t> my_iface;
+    // Neighbouring interface voxels mostly share their pair: counts go to
+    // the map when the pair changes, not one lookup a voxel.
+    uint64_t last_key = 0;
+    int64_t pending = 0;
+    auto count_pair = [&](uint64_t key) {
+      if (key != last_key) {
+        if (pending) my_iface[last_key] += pending;
+        last_key = key;
+        pending = 0;
+      }
+      ++pending;
+    };
 #pragma omp for schedule(static)
     for (int64_t k = 0; k < s.nz; ++k)
       for (int64_t j = 0; j < s.ny; ++j)
@@ -74,14 +86,15 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
           if (a == 0) {
             if (!m[idx]) continue;
             uint32_t ls[3];
-            if (neighbour_labels(labels, nb, idx, ls) == 2) ++my_iface[pair_key(ls[0], ls[1])];
+            if (neighbour_labels(labels, nb, k, j, i, idx, ls) == 2) count_pair(pair_key(ls[0], ls[1]));
             continue;
           }
           const uint32_t fw[3] = {i + 1 < s.nx ? L[idx + 1] : 0, j + 1 < s.ny ? L[idx + s.nx] : 0,
                                   k + 1 < s.nz ? L[idx + s.slice_voxels()] : 0};
           for (uint32_t b : fw)
-            if (b != 0 && b != a) ++my_iface[pair_key(a, b)];
+            if (b != 0 && b != a) count_pair(pair_key(a, b));
         }
+    if (pending) my_iface[last_key] += pending;
 #pragma omp critical
     {
       for (size_t l = 0; l < vol.size(); ++l) vol[l] += my_vol[l];
@@ -122,14 +135,16 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
     auto& mine = join[size_t(omp_get_thread_num())];
 #pragma omp for schedule(static)
     for (int64_t k = 0; k < s.nz; ++k)
-      for (int64_t idx = k * s.slice_voxels(); idx < (k + 1) * s.slice_voxels(); ++idx) {
-        if (L[idx] != 0 || !m[idx]) continue;
-        uint32_t ls[3];
-        const int c = neighbour_labels(labels, nb, idx, ls);
-        if (c < 2 || c == 3) continue;
-        const uint32_t r = root[ls[0]];
-        if (root[ls[1]] == r) mine.emplace_back(idx, r);
-      }
+      for (int64_t j = 0; j < s.ny; ++j)
+        for (int64_t i = 0; i < s.nx; ++i) {
+          const int64_t idx = s.index(k, j, i);
+          if (L[idx] != 0 || !m[idx]) continue;
+          uint32_t ls[3];
+          const int c = neighbour_labels(labels, nb, k, j, i, idx, ls);
+          if (c < 2 || c == 3) continue;
+          const uint32_t r = root[ls[0]];
+          if (root[ls[1]] == r) mine.emplace_back(idx, r);
+        }
   }
   for (const auto& mine : join)
     for (const auto& [idx, r] : mine) L[idx] = r;

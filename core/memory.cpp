@@ -1,6 +1,7 @@
 #include "core/memory.hpp"
 
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -101,5 +102,12 @@ void* allocate_large(size_t bytes) {
 }
 
 void free_large(void* p) noexcept { std::free(p); }
+
+void discard_pages(void* p, size_t bytes) noexcept {
+  const size_t page = size_t(sysconf(_SC_PAGESIZE));
+  const uintptr_t a = (reinterpret_cast<uintptr_t>(p) + page - 1) / page * page;
+  const uintptr_t b = (reinterpret_cast<uintptr_t>(p) + bytes) / page * page;
+  if (b > a) madvise(reinterpret_cast<void*>(a), b - a, MADV_DONTNEED);  // a hint: nothing lost if it fails
+}
 
 }  // namespace tg

@@ -28,6 +28,10 @@ std::string human_bytes(double bytes);
 // throws ResourceError. Release with free_large (or LargeFree).
 void* allocate_large(size_t bytes);
 void free_large(void* p) noexcept;
+// Gives the whole pages inside [p, p + bytes) back to the system; the
+// range stays allocated and reads as zeros if touched again. For the unused
+// tail of a buffer that a smaller result took over (see Volume::reuse_as).
+void discard_pages(void* p, size_t bytes) noexcept;
 struct LargeFree {
   void operator()(void* p) const noexcept { free_large(p); }
 };

@@ -141,6 +141,22 @@ class Volume {
 
   void fill(T value) { std::fill(begin(), end(), value); }
 
+  // This volume's storage as a volume of another element type, no larger,
+  // and the same shape; this one is left empty. Saves an allocation (and
+  // the peak memory of holding both) where one stage's output replaces the
+  // previous one's: a float map over spent u32 labels, u8 levels over a
+  // float map. The bytes are as they were: the caller writes the values.
+  template <class U>
+  Volume<U> reuse_as() && {
+    static_assert(sizeof(U) <= sizeof(T) && alignof(U) <= alignof(T), "the new element must fit the old one");
+    Volume<U> v;
+    v.shape_ = shape_;
+    v.geom_ = geom_;
+    v.data_.reset(reinterpret_cast<U*>(data_.release()));
+    shape_ = Shape{};
+    return v;
+  }
+
   VolumeView<T> view() { return {data(), shape_, shape_.slice_voxels(), shape_.nx, geom_}; }
   VolumeView<const T> view() const { return {data(), shape_, shape_.slice_voxels(), shape_.nx, geom_}; }
   VolumeView<T> slice(int64_t k) { return view().slices(k, 1); }
@@ -149,6 +165,8 @@ class Volume {
   VolumeView<const T> sub(const Box& b) const { return view().sub(b); }
 
  private:
+  template <class>
+  friend class Volume;
   Shape shape_;
   Geometry geom_;
   std::unique_ptr<T[], LargeFree> data_;

@@ -24,7 +24,8 @@ constexpr uint32_t kLabelMask = kVisited - 1;
 // the plane maxima of three slices and one scratch plane (4 nx ny floats),
 // so the test costs a few vector max operations a voxel instead of up to
 // 26 dependent branches. Same candidates as the neighbour loop.
-void list_candidates_26(const float* d, const uint8_t* m, const Shape& s, std::vector<std::vector<int64_t>>& part) {
+template <class Solid>
+void list_candidates_26(const float* d, Solid solid, const Shape& s, std::vector<std::vector<int64_t>>& part) {
   const int64_t nx = s.nx, ny = s.ny, sl = s.slice_voxels();
   constexpr float kLow = -std::numeric_limits<float>::infinity();
 #pragma omp parallel num_threads(int(part.size()))
@@ -38,12 +39,11 @@ void list_candidates_26(const float* d, const uint8_t* m, const Shape& s, std::v
         return;
       }
       const float* dk = d + k * sl;
-      const uint8_t* mk = m + k * sl;
       for (int64_t j = 0; j < ny; ++j) {
         const float* dr = dk + j * nx;
-        const uint8_t* mr = mk + j * nx;
+        const int64_t r0 = k * sl + j * nx;
         float* xr = x3.data() + j * nx;
-        for (int64_t i = 0; i < nx; ++i) row[size_t(i)] = mr[i] ? dr[i] : kLow;
+        for (int64_t i = 0; i < nx; ++i) row[size_t(i)] = solid(r0 + i) ? dr[i] : kLow;
         xr[0] = nx > 1 ? std::max(row[0], row[1]) : row[0];
         for (int64_t i = 1; i + 1 < nx; ++i) xr[i] = std::max(std::max(row[size_t(i) - 1], row[size_t(i)]), row[size_t(i) + 1]);
         if (nx > 1) xr[nx - 1] = std::max(row[size_t(nx) - 2], row[size_t(nx) - 1]);
@@ -67,9 +67,8 @@ void list_candidates_26(const float* d, const uint8_t* m, const Shape& s, std::v
     for (int64_t k = k0; k < k1; ++k) {
       plane_max(k + 1, pl[2]);
       const float* dk = d + k * sl;
-      const uint8_t* mk = m + k * sl;
       for (int64_t i = 0; i < sl; ++i) {
-        if (!mk[i]) continue;
+        if (!solid(k * sl + i)) continue;
         const float top = std::max(std::max(pl[0][i], pl[1][i]), pl[2][i]);
         if (!(top > dk[i])) mine.push_back(k * sl + i);
       }
@@ -78,21 +77,16 @@ void list_candidates_26(const float* d, const uint8_t* m, const Shape& s, std::v
   }
 }
 
-}  // namespace
-
-uint32_t find_markers(const Volume<float>& dist, const Volume<uint8_t>& solid, Volume<uint32_t>& markers,
-                      const MarkerOptions& opt) {
-  if (dist.shape() != solid.shape())
-    throw UsageError("markers: distance map " + dist.shape().str() + " and mask " + solid.shape().str() +
-                     " differ in shape");
+// The markers of the solid voxels x for which solid(x) holds.
+template <class Solid>
+uint32_t markers_of(const Volume<float>& dist, Solid solid, Volume<uint32_t>& markers, const MarkerOptions& opt) {
   if (!(opt.h >= 0) || !std::isfinite(opt.h)) throw UsageError("markers: h must be finite and >= 0");
-  const Shape s = solid.shape();
-  if (markers.shape() != s) markers = Volume<uint32_t>(s, solid.geometry());
-  markers.set_geometry(solid.geometry());
+  const Shape s = dist.shape();
+  if (markers.shape() != s) markers = Volume<uint32_t>(s, dist.geometry());
+  markers.set_geometry(dist.geometry());
   markers.fill(0);
   const seg::Neighbourhood nb(s, opt.connectivity);
   const float* d = dist.data();
-  const uint8_t* m = solid.data();
   uint32_t* M = markers.data();
   uint32_t count = 0;
   std::vector<int64_t> queue;
@@ -115,11 +109,11 @@ uint32_t find_markers(const Volume<float>& dist, const Volume<uint8_t>& solid, V
   // t has the t-th chunk of the static schedule). The caps are then grown
   // serially from the candidates in that order, as the one serial scan
   // did before (same markers, same numbering).
-  const int64_t n = solid.size();
+  const int64_t n = dist.size();
   const int nthreads = omp_get_max_threads();
   std::vector<std::vector<int64_t>> part(static_cast<size_t>(nthreads));
   if (opt.connectivity == 26) {
-    list_candidates_26(d, m, s, part);
+    list_candidates_26(d, solid, s, part);
   } else {
 #pragma omp parallel num_threads(nthreads)
     {
@@ -130,17 +124,17 @@ uint32_t find_markers(const Volume<float>& dist, const Volume<uint8_t>& solid, V
           const bool inner_row = k > 0 && j > 0 && k + 1 < s.nz && j + 1 < s.ny;
           for (int64_t i = 0; i < s.nx; ++i) {
             const int64_t idx = s.index(k, j, i);
-            if (!m[idx]) continue;
+            if (!solid(idx)) continue;
             const float top = d[idx];
             bool higher = false;
             if (inner_row && i > 0 && i + 1 < s.nx) {
               for (int q = 0; q < nb.count && !higher; ++q) {
                 const int64_t y = idx + nb.offset[size_t(q)];
-                higher = m[y] && d[y] > top;
+                higher = solid(y) && d[y] > top;
               }
             } else {
               for_neighbours(idx, [&](int64_t y) {
-                if (m[y] && d[y] > top) higher = true;
+                if (solid(y) && d[y] > top) higher = true;
                 return !higher;
               });
             }
@@ -161,7 +155,7 @@ uint32_t find_markers(const Volume<float>& dist, const Volume<uint8_t>& solid, V
       M[start] |= kVisited;
       for (size_t head = 0; head < queue.size() && !higher; ++head)
         for_neighbours(queue[head], [&](int64_t q) {
-          if (!m[q] || (M[q] & kVisited) || double(d[q]) < floor_level) return true;
+          if (!solid(q) || (M[q] & kVisited) || double(d[q]) < floor_level) return true;
           if (d[q] > top) {
             higher = true;
             return false;
@@ -185,6 +179,24 @@ uint32_t find_markers(const Volume<float>& dist, const Volume<uint8_t>& solid, V
 #pragma omp parallel for schedule(static)
   for (int64_t i = 0; i < n; ++i) M[i] &= kLabelMask;
   return count;
+}
+
+}  // namespace
+
+uint32_t find_markers(const Volume<float>& dist, const Volume<uint8_t>& solid, Volume<uint32_t>& markers,
+                      const MarkerOptions& opt) {
+  if (dist.shape() != solid.shape())
+    throw UsageError("markers: distance map " + dist.shape().str() + " and mask " + solid.shape().str() +
+                     " differ in shape");
+  const uint8_t* m = solid.data();
+  const uint32_t n = markers_of(dist, [m](int64_t x) { return m[x] != 0; }, markers, opt);
+  markers.set_geometry(solid.geometry());
+  return n;
+}
+
+uint32_t find_markers(const Volume<float>& dist, Volume<uint32_t>& markers, const MarkerOptions& opt) {
+  const float* d = dist.data();
+  return markers_of(dist, [d](int64_t x) { return d[x] > 0; }, markers, opt);
 }
 
 }  // namespace tg

@@ -52,4 +52,8 @@ struct MarkerOptions {
 uint32_t find_markers(const Volume<float>& dist, const Volume<uint8_t>& solid, Volume<uint32_t>& markers,
                       const MarkerOptions& opt = {});
 
+// The same with the solid where dist > 0: the distance map of a mask with
+// some void is 0 exactly on the void, so the mask need not be kept.
+uint32_t find_markers(const Volume<float>& dist, Volume<uint32_t>& markers, const MarkerOptions& opt = {});
+
 }  // namespace tg

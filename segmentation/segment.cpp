@@ -123,6 +123,11 @@ SegmentResult segment_mask(Volume<uint8_t> solid, const SegmentOptions& opt_in) 
     return r;
   }
 
+  // Memory: each stage's output takes the storage of a spent input, so
+  // at most two 4-byte volumes live at once (8 B/voxel at peak): the
+  // distance map goes over the pore filter's scratch labels, the mask goes
+  // once the map exists (the map is 0 exactly on the void), and the flood
+  // levels go over the map.
   // Distance map in units of the finest voxel edge.
   EdtOptions eo;
   const auto& vs = solid.geometry().voxel_size_m;
@@ -130,26 +135,24 @@ SegmentResult segment_mask(Volume<uint8_t> solid, const SegmentOptions& opt_in) 
     const double w = std::min({vs[0], vs[1], vs[2]});
     eo.spacing = {vs[0] / w, vs[1] / w, vs[2] / w};
   }
-  Volume<float> dist;
+  Volume<float> dist = std::move(lab).reuse_as<float>();
   distance_transform(solid, dist, eo);
+  solid = Volume<uint8_t>();
   clock.lap("edt");
 
-  r.markers = find_markers(dist, solid, lab, {opt.h, opt.connectivity});
+  r.markers = find_markers(dist, lab, {opt.h, opt.connectivity});
   clock.lap("markers");
-  // The mask becomes the flooding levels (0 stays void) and the float
-  // distance map goes before the flood: 5 B/voxel instead of 9.
-  r.buckets_per_unit = quantise_levels(dist, solid, opt.buckets_per_unit);
+  Volume<uint8_t> levels = quantise_levels(std::move(dist), opt.buckets_per_unit, r.buckets_per_unit);
   if (r.buckets_per_unit < opt.buckets_per_unit)
     r.notes.push_back("watershed levels coarsened to " + std::to_string(r.buckets_per_unit) +
                       " per voxel (255 levels at most; the largest distance is " +
                       std::to_string(254.0 / r.buckets_per_unit) + " voxels)");
-  dist = Volume<float>();
-  watershed_levels(solid, lab, {opt.watershed_lines, opt.connectivity, r.buckets_per_unit});
+  watershed_levels(levels, lab, {opt.watershed_lines, opt.connectivity, r.buckets_per_unit});
   clock.lap("watershed");
 
-  if (opt.merge) r.merge = merge_oversegmented(lab, solid, {opt.merge_ratio});
+  if (opt.merge) r.merge = merge_oversegmented(lab, levels, {opt.merge_ratio});  // levels > 0: the solid
   clock.lap("merge");
-  solid = Volume<uint8_t>();
+  levels = Volume<uint8_t>();
   const auto rl = relabel_consecutive(lab, opt.min_size_vox);
   r.count = rl.count;
   r.dropped = rl.dropped;

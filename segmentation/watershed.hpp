@@ -61,6 +61,12 @@ struct WatershedOptions {
 // Returns the q used. `dist` must be finite on the solid.
 double quantise_levels(const Volume<float>& dist, Volume<uint8_t>& solid, double buckets_per_unit);
 
+// The same levels written over the float map's own storage, which is
+// taken (no second volume: 4 B/voxel at peak instead of 5): the solid is
+// where the map is > 0, as for an EDT of a mask with some void. The map
+// must be finite and >= 0; q_used is set to the q used.
+Volume<uint8_t> quantise_levels(Volume<float>&& dist, double buckets_per_unit, double& q_used);
+
 // The flood on quantised levels (from quantise_levels). `labels` holds the
 // markers on entry (1..2^29-2, 0 elsewhere) and the watershed labels on exit
 // (0 on void and on line voxels). opt.buckets_per_unit is not used here.

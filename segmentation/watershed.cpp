@@ -94,30 +94,36 @@ class Bucket {
   size_t fill_ = kBlock;  // entries in the last block
 };
 
-// One round of the frontier in slice (z) order: a stable counting sort of
-// spans of entries into a buffer that is reused round after round. Also
-// gives where each slab of the round starts.
+// One round of the frontier in row order (slice order for rounds much
+// smaller than the number of rows): a stable counting sort of spans of
+// entries into a buffer that is reused round after round. Also gives where
+// each slab of the round starts. Row order lets the voxels of a row of the
+// frontier share the cache lines of their neighbour rows; at 256^3 (10 M
+// solid voxels, 2 threads) the visits took 0.24-0.32 s in row order
+// against 0.47 s in slice order.
 template <class Index>
 class Round {
  public:
   Round(const Shape& s, int64_t slab_slices, int64_t slabs)
-      : slice_(s.slice_voxels()), inv_(1.0 / double(s.slice_voxels())), slab_(slab_slices),
-        start_(size_t(s.nz) + 1), slab_start_(size_t(slabs) + 1) {}
+      : rows_{s.nx, s.nz * s.ny, slab_slices * s.ny}, slices_{s.slice_voxels(), s.nz, slab_slices},
+        slab_start_(size_t(slabs) + 1) {}
   using Spans = std::vector<std::pair<const Index*, size_t>>;
   // Sorts the entries of the spans (in queue order; m in all) into the
   // buffer. Large rounds are counted and scattered by threads, each on a
   // contiguous share of the entries; a stable sort has one result, so the
-  // thread count does not change it.
+  // thread count does not change it. The key (row or slice) depends on m
+  // alone, so it does not either.
   void sort(const Spans& spans, size_t m) {
-    const int64_t nz = int64_t(start_.size()) - 1;
+    const Key& key = int64_t(m) * 4 >= rows_.bins ? rows_ : slices_;  // counting costs O(m + bins)
+    const int64_t bins = key.bins;
     if (buf_.size() < m) buf_.resize(m);
     const int threads = m >= (size_t(1) << 16) ? omp_get_max_threads() : 1;
-    count_.assign(size_t(threads) * size_t(nz), 0);
+    count_.assign(size_t(threads) * size_t(bins), 0);
 #pragma omp parallel num_threads(threads)
     {
       const int t = omp_get_thread_num(), nt = omp_get_num_threads();
       const size_t lo = m * size_t(t) / size_t(nt), hi = m * size_t(t + 1) / size_t(nt);
-      int64_t* c = count_.data() + size_t(t) * size_t(nz);
+      int64_t* c = count_.data() + size_t(t) * size_t(bins);
       // Calls f(entry) for the entries at positions [lo, hi).
       auto share = [&](auto&& f) {
         size_t pos = 0;
@@ -128,43 +134,46 @@ class Round {
           if (pos >= hi) break;
         }
       };
-      share([&](Index x) { ++c[slice(x)]; });
+      share([&](Index x) { ++c[key.of(x)]; });
 #pragma omp barrier
 #pragma omp single
       {
-        // Start of (slice k, share u): all of slices < k, then shares < u of slice k.
+        // Start of (bin k, share u): all of bins < k, then shares < u of bin k.
+        const size_t slabs = slab_start_.size() - 1;
         int64_t run = 0;
-        for (int64_t k = 0; k < nz; ++k) {
-          start_[size_t(k)] = run;
+        for (int64_t k = 0; k < bins; ++k) {
+          if (k % key.slab == 0 && size_t(k / key.slab) < slabs) slab_start_[size_t(k / key.slab)] = run;
           for (int u = 0; u < nt; ++u) {
-            int64_t& cu = count_[size_t(u) * size_t(nz) + size_t(k)];
+            int64_t& cu = count_[size_t(u) * size_t(bins) + size_t(k)];
             const int64_t here = cu;
             cu = run;
             run += here;
           }
         }
-        start_[size_t(nz)] = run;
-        const size_t slabs = slab_start_.size() - 1;
-        for (size_t p = 0; p < slabs; ++p) slab_start_[p] = start_[p * size_t(slab_)];
         slab_start_[slabs] = int64_t(m);
       }
-      share([&](Index x) { buf_[size_t(c[slice(x)]++)] = x; });
+      share([&](Index x) { buf_[size_t(c[key.of(x)]++)] = x; });
     }
   }
   // The entries of slab p: [slab_begin(p), slab_begin(p + 1)).
   const Index* slab_begin(int64_t p) const { return buf_.data() + slab_start_[size_t(p)]; }
 
  private:
-  int64_t slice(Index x) const {  // x / slice_ without a division per entry
-    int64_t k = int64_t(double(x) * inv_);
-    if (k * slice_ > int64_t(x)) --k;
-    else if ((k + 1) * slice_ <= int64_t(x)) ++k;
-    return k;
-  }
-  int64_t slice_;
-  double inv_;
-  int64_t slab_;
-  std::vector<int64_t> start_, slab_start_, count_;
+  // A sort key: the entry's index divided by `size` (a row's or a slice's
+  // voxels), `bins` keys in all, `slab` keys to a slab.
+  struct Key {
+    Key(int64_t size_, int64_t bins_, int64_t slab_) : size(size_), bins(bins_), slab(slab_), inv(1.0 / double(size_)) {}
+    int64_t size, bins, slab;
+    double inv;
+    int64_t of(Index x) const {  // x / size without a division per entry
+      int64_t k = int64_t(double(x) * inv);
+      if (k * size > int64_t(x)) --k;
+      else if ((k + 1) * size <= int64_t(x)) ++k;
+      return k;
+    }
+  };
+  Key rows_, slices_;
+  std::vector<int64_t> slab_start_, count_;
   std::vector<Index> buf_;
 };
 

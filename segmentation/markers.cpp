@@ -84,7 +84,12 @@ uint32_t markers_of(const Volume<float>& dist, Solid solid, Volume<uint32_t>& ma
   const Shape s = dist.shape();
   if (markers.shape() != s) markers = Volume<uint32_t>(s, dist.geometry());
   markers.set_geometry(dist.geometry());
-  markers.fill(0);
+  {
+    uint32_t* z = markers.data();
+    const int64_t nz = markers.size();
+#pragma omp parallel for schedule(static)  // also spreads a fresh volume's page faults
+    for (int64_t i = 0; i < nz; ++i) z[i] = 0;
+  }
   const seg::Neighbourhood nb(s, opt.connectivity);
   const float* d = dist.data();
   uint32_t* M = markers.data();

@@ -143,9 +143,10 @@ class Volume {
 
   // This volume's storage as a volume of another element type, no larger,
   // and the same shape; this one is left empty. Saves an allocation (and
-  // the peak memory of holding both) where one stage's output replaces the
-  // previous one's: a float map over spent u32 labels, u8 levels over a
-  // float map. The bytes are as they were: the caller writes the values.
+  // the peak memory of holding both) where one stage's output replaces a
+  // spent input: a float map over u32 labels, u8 levels over a float map.
+  // Fresh pages cost more than the work on them (see allocate_large). The
+  // bytes are as they were: the caller writes the values.
   template <class U>
   Volume<U> reuse_as() && {
     static_assert(sizeof(U) <= sizeof(T) && alignof(U) <= alignof(T), "the new element must fit the old one");
@@ -155,6 +156,34 @@ class Volume {
     v.data_.reset(reinterpret_cast<U*>(data_.release()));
     shape_ = Shape{};
     return v;
+  }
+
+  // Converts each value with f into a volume of a smaller element type
+  // written over this one's storage (taken; no second volume). Forward in
+  // rounds [b, r b), r = sizeof(T) / sizeof(U), from b = 1: a round reads
+  // elements >= b (bytes >= b sizeof(T)) and writes bytes below
+  // r b sizeof(U) = b sizeof(T), over elements already read; within a
+  // round, in parallel (the round's reads and writes never overlap).
+  template <class U, class F>
+  Volume<U> convert_in_place(F f) && {
+    static_assert(sizeof(U) < sizeof(T) && sizeof(T) % sizeof(U) == 0, "the new element must be smaller");
+    constexpr int64_t r = int64_t(sizeof(T) / sizeof(U));
+    const int64_t n = size();
+    const T* in = data();
+    Volume<U> out = std::move(*this).template reuse_as<U>();
+    U* o = out.data();
+    if (n > 0) {
+      const T first = in[0];
+      o[0] = f(first);
+    }
+    for (int64_t b = 1; b < n; b *= r) {
+      const int64_t e = std::min(n, r * b);
+      const T* __restrict src = in;
+      U* __restrict dst = o;
+#pragma omp parallel for schedule(static) if (e - b >= (1 << 16))
+      for (int64_t i = b; i < e; ++i) dst[i] = f(src[i]);
+    }
+    return out;
   }
 
   VolumeView<T> view() { return {data(), shape_, shape_.slice_voxels(), shape_.nx, geom_}; }

@@ -177,4 +177,8 @@ Volume<uint8_t> binarise(const Volume<uint16_t>& v, uint16_t t) {
   return m;
 }
 
+Volume<uint8_t> binarise(Volume<uint16_t>&& v, uint16_t t) {
+  return std::move(v).convert_in_place<uint8_t>([t](uint16_t x) -> uint8_t { return x > t ? 1 : 0; });
+}
+
 }  // namespace tg

@@ -67,5 +67,7 @@ double separability(const std::vector<int64_t>& hist, uint16_t t);
 
 // Solid mask (1 where v > t, else 0), geometry kept.
 Volume<uint8_t> binarise(const Volume<uint16_t>& v, uint16_t t);
+// The same written over the scan's own storage (taken): no second volume.
+Volume<uint8_t> binarise(Volume<uint16_t>&& v, uint16_t t);
 
 }  // namespace tg

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -475,30 +476,17 @@ Volume<uint8_t> quantise_levels(Volume<float>&& dist, double buckets_per_unit, d
   const int64_t n = dist.size();
   const float* d = dist.data();
   float dmax = 0;
-  bool finite = true;
-#pragma omp parallel for schedule(static) reduction(max : dmax) reduction(&& : finite)
+  int bad = 0;  // bitwise, so that the loop vectorises
+#pragma omp parallel for schedule(static) reduction(max : dmax) reduction(| : bad)
   for (int64_t i = 0; i < n; ++i) {
-    finite = finite && std::isfinite(d[i]) && d[i] >= 0;
+    bad |= int(!(d[i] >= 0.0f)) | int(!(d[i] <= std::numeric_limits<float>::max()));  // NaN, < 0, inf
     dmax = std::max(dmax, d[i]);
   }
-  if (!finite) throw UsageError("watershed: the distance map is not finite and >= 0 everywhere");
+  if (bad) throw UsageError("watershed: the distance map is not finite and >= 0 everywhere");
   const double q = q_used = levels_per_unit(dmax, buckets_per_unit);
-  // Byte i is written over the first bytes of the float map, where floats
-  // < i/4 + 1 lay: each is read before it is overwritten if the voxels go
-  // in rounds [B, 4B) after a serial start: a round reads floats >= B
-  // (bytes >= 4B) and writes bytes < 4B, over floats < B already read.
-  Volume<uint8_t> lev = std::move(dist).reuse_as<uint8_t>();
+  Volume<uint8_t> lev = std::move(dist).convert_in_place<uint8_t>(
+      [q](float d) -> uint8_t { return d > 0 ? level_of(d, q) : 0; });
   uint8_t* out = lev.data();
-  const float* in = reinterpret_cast<const float*>(out);
-  const int64_t start = std::min<int64_t>(n, 1 << 16);
-  for (int64_t i = 0; i < start; ++i) out[i] = in[i] > 0 ? level_of(in[i], q) : 0;
-  for (int64_t b = start; b < n; b *= 4) {
-    const int64_t e = std::min(n, 4 * b);
-    const float* __restrict src = in;
-    uint8_t* __restrict dst = out;
-#pragma omp parallel for schedule(static)
-    for (int64_t i = b; i < e; ++i) dst[i] = src[i] > 0 ? level_of(src[i], q) : 0;
-  }
   discard_pages(out + n, size_t(n) * (sizeof(float) - 1));  // the spent 3 B/voxel
   return lev;
 }

@@ -54,3 +54,35 @@ TEST(Volume, EmptyVolumeIsValid) {
 }
 
 }  // namespace tg
+
+namespace tg {
+namespace {
+
+// Written over its own storage, each value must still come from the value
+// it replaces: 4- and 2-byte elements to 1 byte, sizes across the rounds'
+// bounds (1, r, r^2 ... and the parallel ones), against a plain copy.
+TEST(Volume, ConvertInPlaceMatchesAConvertingCopy) {
+  for (int64_t nx : {1, 3, 4, 5, 17, 70001}) {
+    Volume<float> f(Shape{3, 1, nx});
+    Volume<uint16_t> g(Shape{3, 1, nx});
+    for (int64_t i = 0; i < f.size(); ++i) {
+      f[i] = float((i * 7919) % 251) - 100.0f;
+      g[i] = uint16_t((i * 104729) % 65536);
+    }
+    const Volume<float> f0 = f.clone();
+    const Volume<uint16_t> g0 = g.clone();
+    const float* fs = f.data();
+    const Volume<uint8_t> a = std::move(f).convert_in_place<uint8_t>([](float v) -> uint8_t { return v > 0 ? uint8_t(v) : 0; });
+    const Volume<uint8_t> b = std::move(g).convert_in_place<uint8_t>([](uint16_t v) -> uint8_t { return uint8_t(v >> 8); });
+    EXPECT_EQ(static_cast<const void*>(a.data()), static_cast<const void*>(fs));
+    EXPECT_TRUE(f.empty());
+    ASSERT_EQ(a.shape(), f0.shape());
+    for (int64_t i = 0; i < a.size(); ++i) {
+      ASSERT_EQ(a[i], f0[i] > 0 ? uint8_t(f0[i]) : 0) << "float " << i << " of " << a.size();
+      ASSERT_EQ(b[i], uint8_t(g0[i] >> 8)) << "u16 " << i << " of " << b.size();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace tg

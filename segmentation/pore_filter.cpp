@@ -4,10 +4,12 @@
 #include <cmath>
 #include <numbers>
 #include <sstream>
+#include <utility>
 #include <vector>
 
+#include <omp.h>
+
 #include "core/errors.hpp"
-#include "segmentation/connected_components.hpp"
 
 namespace tg {
 
@@ -32,64 +34,166 @@ double voxel_sphericity(int64_t volume_vox, int64_t faces) {
   return std::min(1.0, 36.0 * std::numbers::pi * v * v / (a * a * a));
 }
 
-PoreFilterResult fill_pores(Volume<uint8_t>& solid, Volume<uint32_t>& scratch, const PoreFilterOptions& opt) {
+namespace {
+
+// A run of void voxels [a, b) along x within one row.
+struct Run {
+  int64_t a, b;
+};
+
+// Calls f(v) for each run v of `row` (sorted) that overlaps [a, b).
+template <class F>
+void for_overlaps(const Run* row, const Run* end, int64_t a, int64_t b, F&& f) {
+  const Run* v = std::lower_bound(row, end, a, [](const Run& r, int64_t x) { return r.b <= x; });
+  for (; v < end && v->a < b; ++v) f(*v);
+}
+
+}  // namespace
+
+PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt) {
   if (opt.max_volume_vox < 0 || !(opt.min_sphericity >= 0 && opt.min_sphericity <= 1))
     throw UsageError("pore filter: max volume must be >= 0 and min sphericity in [0, 1]");
-  const auto cc = connected_components(solid, scratch, {6, Phase::zero, 1});
-  PoreFilterResult res;
-  res.void_components = cc.count;
-  if (cc.count == 0) return res;
-
-  // Per component: touches the border? faces shared with solid.
   const Shape s = solid.shape();
-  const uint8_t* m = solid.data();
-  const uint32_t* L = scratch.data();
-  std::vector<uint8_t> border(size_t(cc.count) + 1, 0);
-  std::vector<int64_t> faces(size_t(cc.count) + 1, 0);
-  const int64_t sy = s.nx, sz = s.slice_voxels();
-  // Components that reach a face of the volume are not enclosed: found on
-  // the six faces alone. The rest of the volume then counts solid faces
-  // around the other components only, skipping the inter-granular void
-  // (nearly all void voxels), in parallel (integer sums: any order).
-  for (int64_t k = 0; k < s.nz; ++k)
-    for (int64_t j = 0; j < s.ny; ++j) {
-      const bool whole = k == 0 || k + 1 == s.nz || j == 0 || j + 1 == s.ny;
-      for (int64_t i = 0; i < s.nx; i += whole ? 1 : std::max<int64_t>(1, s.nx - 1))
-        border[L[s.index(k, j, i)]] = 1;
+  const int64_t nx = s.nx, ny = s.ny, rows = s.nz * s.ny;
+  uint8_t* m = solid.data();
+  PoreFilterResult res;
+  if (s.empty()) return res;
+
+  // The void as runs, row by row (counted, then written: rows in parallel).
+  std::vector<int64_t> first(size_t(rows) + 1, 0);
+#pragma omp parallel for schedule(static)
+  for (int64_t r = 0; r < rows; ++r) {
+    const uint8_t* row = m + r * nx;
+    int64_t c = 0;
+    bool prev = false;
+    for (int64_t i = 0; i < nx; ++i) {
+      const bool v = row[i] == 0;
+      c += v && !prev;
+      prev = v;
     }
-  border[0] = 1;  // solid
-#pragma omp parallel if (int64_t(cc.count) <= s.voxels() / 16)  // per-thread tables: see connected_components
-  {
-    std::vector<int64_t> mine(faces.size(), 0);
-#pragma omp for schedule(static)
-    for (int64_t k = 1; k < s.nz - 1; ++k)
-      for (int64_t j = 1; j < s.ny - 1; ++j)
-        for (int64_t i = 1; i < s.nx - 1; ++i) {
-          const int64_t idx = s.index(k, j, i);
-          const uint32_t l = L[idx];
-          if (border[l]) continue;
-          mine[l] += (m[idx - 1] != 0) + (m[idx + 1] != 0) + (m[idx - sy] != 0) + (m[idx + sy] != 0) +
-                     (m[idx - sz] != 0) + (m[idx + sz] != 0);
-        }
-#pragma omp critical
-    for (size_t l = 0; l < faces.size(); ++l) faces[l] += mine[l];
+    first[size_t(r) + 1] = c;
   }
-  std::vector<uint8_t> fill(size_t(cc.count) + 1, 0);
-  for (uint32_t l = 1; l <= cc.count; ++l) {
-    if (border[l]) continue;
+  for (int64_t r = 0; r < rows; ++r) first[size_t(r) + 1] += first[size_t(r)];
+  const int64_t R = first[size_t(rows)];
+  if (R == 0) return res;
+  std::vector<Run> run(static_cast<size_t>(R));
+#pragma omp parallel for schedule(static)
+  for (int64_t r = 0; r < rows; ++r) {
+    const uint8_t* row = m + r * nx;
+    Run* out = run.data() + first[size_t(r)];
+    for (int64_t i = 0; i < nx;) {
+      if (row[i]) {
+        ++i;
+        continue;
+      }
+      const int64_t a = i;
+      while (i < nx && !row[i]) ++i;
+      *out++ = {a, i};
+    }
+  }
+  auto row_runs = [&](int64_t k, int64_t j) {
+    const int64_t r = k * ny + j;
+    return std::pair<const Run*, const Run*>{run.data() + first[size_t(r)], run.data() + first[size_t(r) + 1]};
+  };
+
+  // Components (6-connectivity: runs overlapping in the row before, y - 1,
+  // or the slice below, z - 1) by union-find over run numbers, the smaller
+  // root kept; slabs of slices in parallel, then their seams, as in
+  // connected_components: the sets do not depend on the split.
+  std::vector<int64_t> parent(static_cast<size_t>(R));
+  for (int64_t p = 0; p < R; ++p) parent[size_t(p)] = p;
+  auto find = [&](int64_t x) {
+    while (parent[size_t(x)] != x) {
+      parent[size_t(x)] = parent[size_t(parent[size_t(x)])];
+      x = parent[size_t(x)];
+    }
+    return x;
+  };
+  auto unite_with = [&](int64_t k, int64_t j, int64_t kk, int64_t jj) {
+    const auto [b0, e0] = row_runs(k, j);
+    const auto [b1, e1] = row_runs(kk, jj);
+    for (const Run* u = b0; u < e0; ++u)
+      for_overlaps(b1, e1, u->a, u->b, [&](const Run& v) {
+        const int64_t x = find(u - run.data()), y = find(&v - run.data());
+        if (x < y) parent[size_t(y)] = x;
+        else if (y < x) parent[size_t(x)] = y;
+      });
+  };
+  const int64_t slabs = std::min<int64_t>(s.nz, 4 * int64_t(omp_get_max_threads()));
+  auto slab_begin = [&](int64_t p) { return s.nz * p / slabs; };
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int64_t p = 0; p < slabs; ++p)
+    for (int64_t k = slab_begin(p); k < slab_begin(p + 1); ++k)
+      for (int64_t j = 0; j < ny; ++j) {
+        if (j > 0) unite_with(k, j, k, j - 1);
+        if (k > slab_begin(p)) unite_with(k, j, k - 1, j);
+      }
+  for (int64_t p = 1; p < slabs; ++p)
+    for (int64_t j = 0; j < ny; ++j) unite_with(slab_begin(p), j, slab_begin(p) - 1, j);
+  // Component numbers in raster order of their first run (parent[p] <= p).
+  std::vector<int64_t> comp(static_cast<size_t>(R));
+  int64_t count = 0;
+  for (int64_t p = 0; p < R; ++p) comp[size_t(p)] = parent[size_t(p)] == p ? count++ : comp[size_t(parent[size_t(p)])];
+  parent = {};
+  res.void_components = count;
+
+  // Per component: voxels, and whether it reaches a face of the volume.
+  std::vector<int64_t> size(size_t(count), 0);
+  std::vector<uint8_t> border(size_t(count), 0);
+  for (int64_t r = 0; r < rows; ++r) {
+    const int64_t k = r / ny, j = r % ny;
+    const bool face_row = k == 0 || k + 1 == s.nz || j == 0 || j + 1 == ny;
+    for (int64_t p = first[size_t(r)]; p < first[size_t(r) + 1]; ++p) {
+      const Run& u = run[size_t(p)];
+      const int64_t c = comp[size_t(p)];
+      size[size_t(c)] += u.b - u.a;
+      if (face_row || u.a == 0 || u.b == nx) border[size_t(c)] = 1;
+    }
+  }
+  // Solid faces of each run of an enclosed component (whose neighbours
+  // all lie inside the volume): its two ends along x, and along y and z
+  // its voxels less those next to void (which belongs to the same
+  // component). Per run in parallel, summed per component in run order.
+  std::vector<int64_t> run_faces(static_cast<size_t>(R), 0);
+#pragma omp parallel for schedule(static)
+  for (int64_t r = 0; r < rows; ++r) {
+    const int64_t k = r / ny, j = r % ny;
+    for (int64_t p = first[size_t(r)]; p < first[size_t(r) + 1]; ++p) {
+      if (border[size_t(comp[size_t(p)])]) continue;
+      const Run& u = run[size_t(p)];
+      int64_t f = 2;
+      for (const auto& [kk, jj] : {std::pair{k, j - 1}, {k, j + 1}, {k - 1, j}, {k + 1, j}}) {
+        int64_t open = 0;
+        const auto [b1, e1] = row_runs(kk, jj);
+        for_overlaps(b1, e1, u.a, u.b, [&](const Run& v) { open += std::min(u.b, v.b) - std::max(u.a, v.a); });
+        f += (u.b - u.a) - open;
+      }
+      run_faces[size_t(p)] = f;
+    }
+  }
+  std::vector<int64_t> faces(size_t(count), 0);
+  for (int64_t p = 0; p < R; ++p) faces[size_t(comp[size_t(p)])] += run_faces[size_t(p)];
+  run_faces = {};
+
+  std::vector<uint8_t> fill(size_t(count), 0);
+  for (int64_t c = 0; c < count; ++c) {
+    if (border[size_t(c)]) continue;
     ++res.enclosed;
-    const int64_t v = cc.sizes[l];
-    if (v <= opt.max_volume_vox && voxel_sphericity(v, faces[l]) >= opt.min_sphericity) {
-      fill[l] = 1;
+    const int64_t v = size[size_t(c)];
+    if (v <= opt.max_volume_vox && voxel_sphericity(v, faces[size_t(c)]) >= opt.min_sphericity) {
+      fill[size_t(c)] = 1;
       ++res.filled;
       res.filled_voxels += v;
     }
   }
-  uint8_t* mw = solid.data();
-  const int64_t n = solid.size();
+  if (res.filled == 0) return res;
 #pragma omp parallel for schedule(static)
-  for (int64_t i = 0; i < n; ++i)
-    if (fill[L[i]]) mw[i] = 1;  // fill[0] = 0: solid voxels untouched
+  for (int64_t r = 0; r < rows; ++r)
+    for (int64_t p = first[size_t(r)]; p < first[size_t(r) + 1]; ++p)
+      if (fill[size_t(comp[size_t(p)])]) {
+        const Run& u = run[size_t(p)];
+        std::fill(m + r * nx + u.a, m + r * nx + u.b, uint8_t(1));
+      }
   return res;
 }
 

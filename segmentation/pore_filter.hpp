@@ -22,9 +22,13 @@
 // Defaults from the expected grain radius R (voxels): max_volume_vox =
 // 2 % of (4/3) pi R^3 (a pore up to ~0.27 R in radius), min_sphericity 0.5.
 //
-// Cost: one connected-component labelling of the void (into a caller's u32
-// scratch volume, reused later by the watershed), one pass for the face
-// counts and one to fill: O(N), serial, deterministic.
+// Method: the void as runs along x (two passes over the mask), its
+// components by union-find over the runs (6-connectivity: runs that
+// overlap in the neighbouring rows), and each component's volume, border
+// contact and solid faces from the runs alone: no label volume, memory
+// 24 B per run (a few per row of a granular scan), every pass parallel but
+// the sums per component, in run order. Deterministic. At 512^3 this took
+// the filter from 0.8-1.1 s (a u32 labelling of the void) to ... s.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -51,7 +55,6 @@ struct PoreFilterResult {
 double voxel_sphericity(int64_t volume_vox, int64_t faces);
 
 // Fills qualifying pores in `solid` (0 void, nonzero solid) in place.
-// `scratch` is used for the void labels (reallocated if its shape differs).
-PoreFilterResult fill_pores(Volume<uint8_t>& solid, Volume<uint32_t>& scratch, const PoreFilterOptions& opt);
+PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt);
 
 }  // namespace tg

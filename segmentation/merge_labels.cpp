@@ -60,10 +60,17 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
   // the pairs are visited in key order below).
   const seg::Neighbourhood nb(s, 26);
   std::unordered_map<uint64_t, int64_t> iface;
-#pragma omp parallel if (int64_t(maxl) <= n / 16)
+  // Line voxels between exactly two labels, per thread in index order:
+  // those between two labels that merge join them below, without a second
+  // look at their neighbours.
+  const int nthreads = omp_get_max_threads();
+  std::vector<std::vector<std::pair<int64_t, uint64_t>>> two{static_cast<size_t>(nthreads)};
+  const bool parallel = int64_t(maxl) <= n / 16;
+#pragma omp parallel num_threads(nthreads) if (parallel)
   {
     std::vector<int64_t> my_vol(vol.size(), 0);
     std::unordered_map<uint64_t, int64_t> my_iface;
+    auto& my_two = two[size_t(omp_get_thread_num())];
     // Neighbouring interface voxels mostly share their pair: counts go to
     // the map when the pair changes, not one lookup a voxel.
     uint64_t last_key = 0;
@@ -86,7 +93,11 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
           if (a == 0) {
             if (!m[idx]) continue;
             uint32_t ls[3];
-            if (neighbour_labels(labels, nb, k, j, i, idx, ls) == 2) count_pair(pair_key(ls[0], ls[1]));
+            if (neighbour_labels(labels, nb, k, j, i, idx, ls) == 2) {
+              const uint64_t key = pair_key(ls[0], ls[1]);
+              count_pair(key);
+              my_two.emplace_back(idx, key);
+            }
             continue;
           }
           const uint32_t fw[3] = {i + 1 < s.nx ? L[idx + 1] : 0, j + 1 < s.ny ? L[idx + s.nx] : 0,
@@ -123,31 +134,15 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
   }
   if (res.merges == 0) return res;
 
-  // Line voxels whose neighbours all belong to one merged label join it,
-  // decided from the labels as they were before any joined (slices in
-  // parallel; each thread lists its voxels, applied afterwards).
+  // Line voxels whose neighbours all belong to one merged label join it
+  // (decided from the labels as they were before any joined).
   std::vector<uint32_t> root(parent.size());
   for (uint32_t l = 0; l <= maxl; ++l) root[l] = find(l);
-  const int nthreads = omp_get_max_threads();
-  std::vector<std::vector<std::pair<int64_t, uint32_t>>> join(static_cast<size_t>(nthreads));
-#pragma omp parallel num_threads(nthreads)
-  {
-    auto& mine = join[size_t(omp_get_thread_num())];
-#pragma omp for schedule(static)
-    for (int64_t k = 0; k < s.nz; ++k)
-      for (int64_t j = 0; j < s.ny; ++j)
-        for (int64_t i = 0; i < s.nx; ++i) {
-          const int64_t idx = s.index(k, j, i);
-          if (L[idx] != 0 || !m[idx]) continue;
-          uint32_t ls[3];
-          const int c = neighbour_labels(labels, nb, k, j, i, idx, ls);
-          if (c < 2 || c == 3) continue;
-          const uint32_t r = root[ls[0]];
-          if (root[ls[1]] == r) mine.emplace_back(idx, r);
-        }
-  }
-  for (const auto& mine : join)
-    for (const auto& [idx, r] : mine) L[idx] = r;
+  for (const auto& mine : two)
+    for (const auto& [idx, key] : mine) {
+      const uint32_t r = root[uint32_t(key >> 32)];
+      if (root[uint32_t(key & 0xffffffffu)] == r) L[idx] = r;
+    }
 #pragma omp parallel for schedule(static)
   for (int64_t i = 0; i < n; ++i) L[i] = root[L[i]];
   return res;

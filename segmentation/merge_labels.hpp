@@ -25,7 +25,10 @@
 // labels join them. Merged labels keep the smallest number of the group;
 // segment() renumbers them 1..count afterwards (relabel_consecutive).
 //
-// Cost: O(N) plus a hash map over touching pairs. Serial, deterministic.
+// Cost: one parallel pass over the volume (per-thread tables and interface
+// counts, summed; the line voxels between two labels listed on the way, so
+// joining them needs no second look), a hash map over touching pairs and
+// one pass to renumber. Deterministic.
 #pragma once
 #include <cstdint>
 

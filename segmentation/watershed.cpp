@@ -232,27 +232,22 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
   // The last lane of the last row reads one label past x + sl + nx + 1.
   const int64_t simd_end = n - (sl + nx + 2);
   const __m128i label_mask = _mm_set1_epi32(int32_t(kLabelMask));
-  const __m128i zero = _mm_setzero_si128(), big = _mm_set1_epi32(INT32_MAX);
+  const __m128i zero = _mm_setzero_si128(), ones = _mm_set1_epi32(-1);
   __m128i row_lanes[9];  // all-ones on the lanes that are neighbours
   for (int r = 0; r < 9; ++r)
     row_lanes[r] = _mm_set_epi32(0, (nb_bits >> (3 * r + 2)) & 1 ? -1 : 0,
                                          (nb_bits >> (3 * r + 1)) & 1 ? -1 : 0, (nb_bits >> (3 * r)) & 1 ? -1 : 0);
-  auto vmax = [](__m128i a, __m128i b) {  // SSE2 has no pmaxsd; labels are < 2^29
-    const __m128i gt = _mm_cmpgt_epi32(a, b);
-    return _mm_or_si128(_mm_and_si128(gt, a), _mm_andnot_si128(gt, b));
-  };
-  auto vmin = [](__m128i a, __m128i b) {
-    const __m128i gt = _mm_cmpgt_epi32(a, b);
-    return _mm_or_si128(_mm_and_si128(gt, b), _mm_andnot_si128(gt, a));
-  };
-  auto hmax = [&](__m128i v) {
-    v = vmax(v, _mm_shuffle_epi32(v, _MM_SHUFFLE(1, 0, 3, 2)));
-    v = vmax(v, _mm_shuffle_epi32(v, _MM_SHUFFLE(2, 3, 0, 1)));
+  // The labelled neighbours carry one label exactly when the OR of their
+  // labels equals the AND (a | b == a & b only if a == b): two bitwise
+  // operations a row instead of a signed max and min, which SSE2 lacks.
+  auto hor = [](__m128i v) {
+    v = _mm_or_si128(v, _mm_shuffle_epi32(v, _MM_SHUFFLE(1, 0, 3, 2)));
+    v = _mm_or_si128(v, _mm_shuffle_epi32(v, _MM_SHUFFLE(2, 3, 0, 1)));
     return uint32_t(_mm_cvtsi128_si32(v));
   };
-  auto hmin = [&](__m128i v) {
-    v = vmin(v, _mm_shuffle_epi32(v, _MM_SHUFFLE(1, 0, 3, 2)));
-    v = vmin(v, _mm_shuffle_epi32(v, _MM_SHUFFLE(2, 3, 0, 1)));
+  auto hand = [](__m128i v) {
+    v = _mm_and_si128(v, _mm_shuffle_epi32(v, _MM_SHUFFLE(1, 0, 3, 2)));
+    v = _mm_and_si128(v, _mm_shuffle_epi32(v, _MM_SHUFFLE(2, 3, 0, 1)));
     return uint32_t(_mm_cvtsi128_si32(v));
   };
 #endif
@@ -272,7 +267,7 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
     int nc = 0;
 #if defined(__SSE2__)
     if (!border && x < simd_end) {
-      __m128i hi = zero, lo = big;
+      __m128i any = zero, all = ones;  // OR and AND of the labelled neighbours' labels
       uint32_t free_bits = 0;
       for (int r = 0; r < 9; ++r) {
         const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(L + x + row_off[size_t(r)]));
@@ -280,13 +275,13 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
         const __m128i lab = _mm_and_si128(v, label_mask);
         const __m128i labelled =
             _mm_andnot_si128(_mm_cmpeq_epi32(lab, zero), _mm_and_si128(queued, row_lanes[r]));
-        hi = vmax(hi, _mm_and_si128(labelled, lab));
-        lo = vmin(lo, _mm_or_si128(_mm_and_si128(labelled, lab), _mm_andnot_si128(labelled, big)));
+        any = _mm_or_si128(any, _mm_and_si128(labelled, lab));
+        all = _mm_and_si128(all, _mm_or_si128(lab, _mm_andnot_si128(labelled, ones)));
         free_bits |= uint32_t(~_mm_movemask_ps(_mm_castsi128_ps(v)) & 7) << (3 * r);
       }
       free_bits &= nb_bits;
-      seen = hmax(hi);
-      line = seen != 0 && hmin(lo) != seen;
+      seen = hor(any);
+      line = seen != 0 && hand(all) != seen;
       // Candidates in nb order, as the scalar loop queues them (an
       // insertion sort of the few free neighbours by their rank).
       int rank[26];

@@ -251,11 +251,13 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
     return uint32_t(_mm_cvtsi128_si32(v));
   };
 #endif
-  // The voxels queued by one slab in one round: at the current level (the
-  // next round) and at lower levels, with their level.
+  // The voxels queued by one slab: at the current level in this round (the
+  // next round), and at lower levels in buckets of its own, from blocks of
+  // its own, so that no thread waits on another to queue them.
   struct Queued {
     std::vector<Index> now;
-    std::vector<std::pair<Index, uint8_t>> later;
+    std::array<Bucket<Index>, 256> later;
+    BlockPool<Index> pool;
   };
   // Visits the voxel x leaving the queue at level cur.
   auto visit = [&](const int64_t x, const int cur, Queued& out) {
@@ -344,7 +346,7 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
       const int64_t y = cand[c];
       L[y] = (L[y] & kBorder) | kQueued | push_label;
       if (lev[y] >= cur) out.now.push_back(Index(y));
-      else out.later.emplace_back(Index(y), lev[y]);
+      else out.later[lev[y]].push(Index(y), out.pool);
     }
   };
   // Threads share a round by slabs of kSlab slices, a partition fixed by
@@ -353,9 +355,11 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
   // slabs at work at the same time never touch the same voxel; and two
   // neighbours of one round are never decided at the same time, so the
   // second one sees the first one's label and lines stay one voxel thick,
-  // as in the serial flood. Each slab queues into lists of its own, which
-  // are appended to the buckets in slab order after the round: the order
-  // of the queue, and so the result, does not depend on the thread count.
+  // as in the serial flood. Each slab queues into lists and buckets of its
+  // own, taken in slab order (after the markers) when a round or a level
+  // starts: a round is sorted by row or slice, which lie within one slab,
+  // so the order of the queue, and so the result, does not depend on the
+  // thread count.
   constexpr int64_t kSlab = 8;  // >= 2 slices, or two slabs at work could meet
   const int64_t nslab = std::max<int64_t>(1, s.nz / kSlab);  // the last slab takes the rest
   std::vector<Queued> out{size_t(nslab)};
@@ -383,7 +387,7 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
     }
   };
   for (int cur = 255; cur >= 1; --cur) {
-    auto& b = bucket[size_t(cur)];
+    auto& b = bucket[size_t(cur)];  // markers
     // Breadth-first rounds: the voxels queued at this level so far, then
     // those they queue at this level, and so on (within a level, voxels
     // leave in order of geodesic distance, as with one FIFO). Each round is
@@ -399,19 +403,20 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
     size_t m = b.size();
     spans.clear();
     b.for_each_span([&](const Index* p, size_t c) { spans.emplace_back(p, c); });
+    for (const Queued& o : out) {
+      m += o.later[size_t(cur)].size();
+      o.later[size_t(cur)].for_each_span([&](const Index* p, size_t c) { spans.emplace_back(p, c); });
+    }
     round.sort(spans, m);
     b.release(pool);
+    for (Queued& o : out) o.later[size_t(cur)].release(o.pool);
     while (m) {
       for (int64_t phase = 0; phase < 2; ++phase) {
 #pragma omp parallel for schedule(dynamic, 1) if (m >= 4096)
         for (int64_t p = phase; p < nslab; p += 2) run_slab(round.slab_begin(p), round.slab_begin(p + 1), cur, p);
       }
       m = 0;
-      for (Queued& o : out) {
-        for (const auto& [y, l] : o.later) bucket[l].push(y, pool);
-        o.later.clear();
-        m += o.now.size();
-      }
+      for (const Queued& o : out) m += o.now.size();
       if (m) {
         spans.clear();
         for (const Queued& o : out) spans.emplace_back(o.now.data(), o.now.size());

@@ -83,28 +83,48 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
       }
       ++pending;
     };
+    // Row by row, in runs of one label: a run adds its length to the
+    // label's volume; its voxels are looked at one by one only where that
+    // can count (line voxels; a y or z neighbour of another label, which
+    // watershed lines leave none of), found by one comparison a voxel.
+    const int64_t sy = s.nx, sz = s.slice_voxels();
 #pragma omp for schedule(static)
     for (int64_t k = 0; k < s.nz; ++k)
-      for (int64_t j = 0; j < s.ny; ++j)
-        for (int64_t i = 0; i < s.nx; ++i) {
-          const int64_t idx = s.index(k, j, i);
-          const uint32_t a = L[idx];
-          ++my_vol[a];
+      for (int64_t j = 0; j < s.ny; ++j) {
+        const int64_t row = s.index(k, j, 0);
+        const uint32_t* up = j + 1 < s.ny ? L + row + sy : nullptr;
+        const uint32_t* back = k + 1 < s.nz ? L + row + sz : nullptr;
+        for (int64_t i0 = 0; i0 < s.nx;) {
+          const uint32_t a = L[row + i0];
+          int64_t i1 = i0 + 1;
+          while (i1 < s.nx && L[row + i1] == a) ++i1;
+          my_vol[a] += i1 - i0;
           if (a == 0) {
-            if (!m[idx]) continue;
-            uint32_t ls[3];
-            if (neighbour_labels(labels, nb, k, j, i, idx, ls) == 2) {
-              const uint64_t key = pair_key(ls[0], ls[1]);
-              count_pair(key);
-              my_two.emplace_back(idx, key);
+            for (int64_t i = i0; i < i1; ++i) {
+              const int64_t idx = row + i;
+              if (!m[idx]) continue;
+              uint32_t ls[3];
+              if (neighbour_labels(labels, nb, k, j, i, idx, ls) == 2) {
+                const uint64_t key = pair_key(ls[0], ls[1]);
+                count_pair(key);
+                my_two.emplace_back(idx, key);
+              }
             }
-            continue;
+          } else {
+            // Forward faces, in the order the voxel loop counted them: x
+            // (only the run's last voxel can meet another label), y, z.
+            for (int64_t i = i0; i < i1; ++i) {
+              const uint32_t by = up ? up[i] : 0, bz = back ? back[i] : 0;
+              const bool x_other = i + 1 == i1 && i1 < s.nx && L[row + i1] != 0;
+              if (!x_other && (by == 0 || by == a) && (bz == 0 || bz == a)) continue;
+              if (x_other) count_pair(pair_key(a, L[row + i1]));
+              if (by != 0 && by != a) count_pair(pair_key(a, by));
+              if (bz != 0 && bz != a) count_pair(pair_key(a, bz));
+            }
           }
-          const uint32_t fw[3] = {i + 1 < s.nx ? L[idx + 1] : 0, j + 1 < s.ny ? L[idx + s.nx] : 0,
-                                  k + 1 < s.nz ? L[idx + s.slice_voxels()] : 0};
-          for (uint32_t b : fw)
-            if (b != 0 && b != a) count_pair(pair_key(a, b));
+          i0 = i1;
         }
+      }
     if (pending) my_iface[last_key] += pending;
 #pragma omp critical
     {

@@ -443,7 +443,12 @@ double levels_per_unit(float dmax, double buckets_per_unit) {
   return double(dmax) * buckets_per_unit >= 255.0 ? 254.0 / double(dmax) : buckets_per_unit;
 }
 
-uint8_t level_of(float d, double q) { return uint8_t(1 + std::min(254, int(double(d) * q))); }
+// By value throughout (std::min returns a reference, which keeps GCC from
+// vectorising the loops that call this).
+uint8_t level_of(float d, double q) {
+  const int v = int(double(d) * q);
+  return uint8_t(1 + (v < 254 ? v : 254));
+}
 
 }  // namespace
 
@@ -477,15 +482,19 @@ Volume<uint8_t> quantise_levels(Volume<float>&& dist, double buckets_per_unit, d
   const float* d = dist.data();
   float dmax = 0;
   int bad = 0;  // bitwise, so that the loop vectorises
-#pragma omp parallel for schedule(static) reduction(max : dmax) reduction(| : bad)
+#pragma omp parallel for simd schedule(static) reduction(max : dmax) reduction(| : bad)
   for (int64_t i = 0; i < n; ++i) {
-    bad |= int(!(d[i] >= 0.0f)) | int(!(d[i] <= std::numeric_limits<float>::max()));  // NaN, < 0, inf
-    dmax = std::max(dmax, d[i]);
+    const float v = d[i];
+    bad |= int(!(v >= 0.0f)) | int(!(v <= std::numeric_limits<float>::max()));  // NaN, < 0, inf
+    dmax = v > dmax ? v : dmax;
   }
   if (bad) throw UsageError("watershed: the distance map is not finite and >= 0 everywhere");
   const double q = q_used = levels_per_unit(dmax, buckets_per_unit);
   Volume<uint8_t> lev = std::move(dist).convert_in_place<uint8_t>(
-      [q](float d) -> uint8_t { return d > 0 ? level_of(d, q) : 0; });
+      [q](float d) -> uint8_t {
+        const uint8_t l = level_of(d, q);  // computed for the void too: a select, not a branch
+        return d > 0 ? l : 0;
+      });
   uint8_t* out = lev.data();
   discard_pages(out + n, size_t(n) * (sizeof(float) - 1));  // the spent 3 B/voxel
   return lev;
@@ -498,10 +507,10 @@ void watershed_levels(const Volume<uint8_t>& levels, Volume<uint32_t>& labels, c
   const seg::Neighbourhood nb(s, opt.connectivity);
   const int64_t n = levels.size();
   uint32_t* L = labels.data();
-  bool ok = true;
-#pragma omp parallel for schedule(static) reduction(&& : ok)
-  for (int64_t i = 0; i < n; ++i) ok = ok && L[i] < kLabelMask;
-  if (!ok) throw UsageError("watershed: marker labels must be below 2^29 - 1");
+  int bad = 0;
+#pragma omp parallel for schedule(static) reduction(| : bad)
+  for (int64_t i = 0; i < n; ++i) bad |= int(L[i] >= kLabelMask);
+  if (bad) throw UsageError("watershed: marker labels must be below 2^29 - 1");
   if (s.empty()) return;
   mark_border(s, L);
   if (n <= int64_t(UINT32_MAX)) flood<uint32_t>(levels.data(), L, s, nb, opt.lines);

@@ -140,18 +140,22 @@ class Round {
 #pragma omp single
       {
         // Start of (bin k, share u): all of bins < k, then shares < u of bin k.
-        const size_t slabs = slab_start_.size() - 1;
+        // Slab by slab (the last one takes the rest): no division per bin,
+        // which cost as much as the counting in the serial part.
+        const int64_t slabs = int64_t(slab_start_.size()) - 1;
         int64_t run = 0;
-        for (int64_t k = 0; k < bins; ++k) {
-          if (k % key.slab == 0 && size_t(k / key.slab) < slabs) slab_start_[size_t(k / key.slab)] = run;
-          for (int u = 0; u < nt; ++u) {
-            int64_t& cu = count_[size_t(u) * size_t(bins) + size_t(k)];
-            const int64_t here = cu;
-            cu = run;
-            run += here;
-          }
+        for (int64_t p = 0; p < slabs; ++p) {
+          slab_start_[size_t(p)] = run;
+          const int64_t k1 = p + 1 < slabs ? (p + 1) * key.slab : bins;
+          for (int64_t k = p * key.slab; k < k1; ++k)
+            for (int u = 0; u < nt; ++u) {
+              int64_t& cu = count_[size_t(u) * size_t(bins) + size_t(k)];
+              const int64_t here = cu;
+              cu = run;
+              run += here;
+            }
         }
-        slab_start_[slabs] = int64_t(m);
+        slab_start_[size_t(slabs)] = int64_t(m);
       }
       share([&](Index x) { buf_[size_t(c[key.of(x)]++)] = x; });
     }

@@ -112,12 +112,18 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
   auto unite_with = [&](int64_t k, int64_t j, int64_t kk, int64_t jj) {
     const auto [b0, e0] = row_runs(k, j);
     const auto [b1, e1] = row_runs(kk, jj);
-    for (const Run* u = b0; u < e0; ++u)
-      for_overlaps(b1, e1, u->a, u->b, [&](const Run& v) {
-        const int64_t x = find(u - run.data()), y = find(&v - run.data());
+    // Both rows' runs are sorted: one walk over the two, uniting each
+    // overlapping pair (u and v overlap when each starts before the other ends).
+    const Run *u = b0, *v = b1;
+    while (u < e0 && v < e1) {
+      if (u->a < v->b && v->a < u->b) {
+        const int64_t x = find(u - run.data()), y = find(v - run.data());
         if (x < y) parent[size_t(y)] = x;
         else if (y < x) parent[size_t(x)] = y;
-      });
+      }
+      if (u->b < v->b) ++u;  // the run that ends first meets nothing further on
+      else ++v;
+    }
   };
   const int64_t slabs = std::min<int64_t>(s.nz, 4 * int64_t(omp_get_max_threads()));
   auto slab_begin = [&](int64_t p) { return s.nz * p / slabs; };

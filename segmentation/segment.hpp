@@ -12,14 +12,18 @@
 //
 // Memory (why the stages are ordered and buffers reused this way): the grey
 // volume (2 B/voxel) is needed only for the histogram and the mask; the
-// rvalue overload frees it right after. Then one u8 mask (1 B), one u32
-// volume (4 B: void labels for the pore filter, then markers, then the
-// watershed labels, in place) and one float distance map (4 B) are live:
-// 9 B/voxel plus the watershed frontier queue (8 B per queued voxel, a
-// small fraction of the volume). Measured (peak RSS of the whole `tomograin
-// segment` process, data_synth zeolite stage 4 at 256^3): 12.7 B/voxel, of
-// which ~1 B/voxel is the process itself at that size; the rest above 9 is
-// the watershed frontier. A 1220^3 scan (1.8e9 voxels) thus needs ~21 GB.
+// rvalue overload writes the u8 mask over the grey volume's own storage.
+// The pore filter works on runs of void voxels (no label volume). Then the
+// float distance map (4 B) is made; the mask goes (the map is 0 exactly
+// on the void), the u32 markers (4 B) come; the flood levels (u8) are
+// written over the map's storage, whose spent 3 B/voxel are given back;
+// the watershed labels and the merge are in place in the markers' volume.
+// At most two 4-byte volumes live at once: 8 B/voxel at peak, plus the
+// frontier queue (4 B per queued voxel, a small fraction of the volume)
+// and the process itself. Measured (peak RSS of the whole `tomograin
+// segment` process, data_synth zeolite stage 4): 9.1 B/voxel at 256^3
+// (the process is ~1 B/voxel at that size), 8.2 B/voxel at 512^3. A
+// 1220^3 scan (1.8e9 voxels) thus needs ~15 GB.
 // No 64-bit label or index volumes.
 //
 // Distances are in units of the smallest voxel edge (anisotropic voxels
@@ -85,8 +89,8 @@ struct SegmentResult {
   std::vector<std::string> notes;  // special cases met (two grey levels, no void, ...)
 };
 
-// Runs the chain; the rvalue overload frees the grey volume after the mask
-// is made (2 B/voxel less at peak). Throws InputError for degenerate input
+// Runs the chain; the rvalue overload takes the grey volume and writes the
+// mask over it (no second volume). Throws InputError for degenerate input
 // (e.g. a constant volume) and UsageError for invalid options.
 SegmentResult segment(const Volume<uint16_t>& grey, const SegmentOptions& opt);
 SegmentResult segment(Volume<uint16_t>&& grey, const SegmentOptions& opt);

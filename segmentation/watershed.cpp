@@ -210,6 +210,14 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
     for (const Index i : mine) bucket[lev[i]].push(i, pool);
   part.clear();
   const int64_t sl = s.slice_voxels(), nx = s.nx;
+  // A voxel queues its free neighbours in index order (their offsets
+  // ascending): the order of nb sorted by offset. (The SIMD path below
+  // gets it for free from its bit masks; the nb order it used to follow
+  // cost an insertion sort per voxel.)
+  std::array<int, 26> index_order{};
+  for (int t = 0; t < nb.count; ++t) index_order[size_t(t)] = t;
+  std::sort(index_order.begin(), index_order.begin() + nb.count,
+            [&](int a, int b) { return nb.offset[size_t(a)] < nb.offset[size_t(b)]; });
 #if defined(__SSE2__)
   // Interior voxels read their 3x3x3 block as nine rows of four labels
   // (the fourth lane is ignored) and decide without a branch per
@@ -219,7 +227,6 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
   // Bit b = 9 (dz+1) + 3 (dy+1) + (dx+1) of a block mask is neighbour (dz, dy, dx).
   std::array<int64_t, 9> row_off{};  // offset of lane 0 (dx = -1) of each row
   std::array<int64_t, 27> bit_off{};
-  std::array<int, 27> bit_rank{};    // position of the neighbour in nb order (push order)
   uint32_t nb_bits = 0;
   for (int dz = -1; dz <= 1; ++dz)
     for (int dy = -1; dy <= 1; ++dy) {
@@ -231,7 +238,6 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
     const seg::Step st = nb.step[size_t(t)];
     const int b = 9 * (st.dz + 1) + 3 * (st.dy + 1) + st.dx + 1;
     nb_bits |= 1u << b;
-    bit_rank[size_t(b)] = t;
   }
   // The last lane of the last row reads one label past x + sl + nx + 1.
   const int64_t simd_end = n - (sl + nx + 2);
@@ -288,21 +294,11 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
       free_bits &= nb_bits;
       seen = hor(any);
       line = seen != 0 && hand(all) != seen;
-      // Candidates in nb order, as the scalar loop queues them (an
-      // insertion sort of the few free neighbours by their rank).
-      int rank[26];
+      // Candidates in index order (bit order), as the scalar loop queues them.
       for (uint32_t m = free_bits; m; m &= m - 1) {
-        const int b = __builtin_ctz(m);
-        const int rk = bit_rank[size_t(b)];
-        const int64_t y = x + bit_off[size_t(b)];
+        const int64_t y = x + bit_off[size_t(__builtin_ctz(m))];
         __builtin_prefetch(lev + y);
-        int c = nc++;
-        for (; c > 0 && rank[c - 1] > rk; --c) {
-          rank[c] = rank[c - 1];
-          cand[c] = cand[c - 1];
-        }
-        rank[c] = rk;
-        cand[c] = y;
+        cand[nc++] = y;
       }
     } else
 #endif
@@ -315,7 +311,8 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
       // One pass over the neighbours: the labels they carry (lines mode)
       // and the ones not yet queued (solid by construction), which x will
       // queue if it is not a line.
-      for (int t = 0; t < nb.count; ++t) {
+      for (int q = 0; q < nb.count; ++q) {
+        const int t = index_order[size_t(q)];
         if (border) {
           const seg::Step st = nb.step[size_t(t)];
           if (!s.contains(k + st.dz, j + st.dy, i + st.dx)) continue;

@@ -183,18 +183,25 @@ ComponentsResult connected_components(const Volume<uint8_t>& mask, Volume<uint32
   return res;
 }
 
-RelabelResult relabel_consecutive(Volume<uint32_t>& labels, int64_t min_size) {
+RelabelResult relabel_consecutive(Volume<uint32_t>& labels, int64_t min_size, const std::vector<uint32_t>* premap) {
   uint32_t* L = labels.data();
   const int64_t n = labels.size();
-  uint32_t maxl = 0;
+  size_t nl = 0;
+  if (premap) {
+    nl = premap->size();
+  } else {
+    uint32_t maxl = 0;
 #pragma omp parallel for schedule(static) reduction(max : maxl)
-  for (int64_t i = 0; i < n; ++i) maxl = std::max(maxl, L[i]);
-  const size_t nl = size_t(maxl) + 1;
+    for (int64_t i = 0; i < n; ++i) maxl = std::max(maxl, L[i]);
+    nl = size_t(maxl) + 1;
+  }
+  const uint32_t* pm = premap ? premap->data() : nullptr;
+  auto label = [pm, L](int64_t i) { return pm ? pm[L[i]] : L[i]; };
   // Each thread counts its contiguous share of the voxels and lists the
   // labels in the order they first appear in it; the shares taken in order
   // give the raster order of first appearance. Serial when the labels are
   // so many that per-thread tables would outweigh the volume.
-  const int threads = int64_t(maxl) <= n / 16 ? omp_get_max_threads() : 1;
+  const int threads = int64_t(nl) <= n / 16 ? omp_get_max_threads() : 1;
   std::vector<std::vector<int64_t>> size_of{size_t(threads)};
   std::vector<std::vector<uint32_t>> order{size_t(threads)};
 #pragma omp parallel num_threads(threads)
@@ -205,7 +212,7 @@ RelabelResult relabel_consecutive(Volume<uint32_t>& labels, int64_t min_size) {
     c.assign(nl, 0);
     const int64_t lo = n * t / nt, hi = n * (t + 1) / nt;
     for (int64_t i = lo; i < hi; ++i) {
-      const uint32_t l = L[i];
+      const uint32_t l = label(i);
       if (c[l]++ == 0) o.push_back(l);
     }
   }
@@ -229,6 +236,8 @@ RelabelResult relabel_consecutive(Volume<uint32_t>& labels, int64_t min_size) {
         ++res.dropped;
       }
     }
+  if (pm)  // counted as premap[l]: label l takes premap[l]'s number
+    for (size_t l = 0; l < nl; ++l) to[l] = to[pm[l]];  // in place: a merge's roots map to themselves
 #pragma omp parallel for schedule(static)
   for (int64_t i = 0; i < n; ++i) L[i] = to[L[i]];
   return res;

@@ -53,6 +53,9 @@ struct RelabelResult {
 // Renumbers arbitrary labels to 1..count in raster order of first
 // appearance, setting labels with fewer than min_size voxels to 0. O(N),
 // in parallel (each thread lists the labels of its share in order).
-RelabelResult relabel_consecutive(Volume<uint32_t>& labels, int64_t min_size = 1);
+// With a premap, each label l is first read as premap[l] (every label must
+// be below premap.size()): a merge's roots applied in the same pass.
+RelabelResult relabel_consecutive(Volume<uint32_t>& labels, int64_t min_size = 1,
+                                  const std::vector<uint32_t>* premap = nullptr);
 
 }  // namespace tg

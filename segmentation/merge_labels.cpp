@@ -163,6 +163,10 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
       const uint32_t r = root[uint32_t(key >> 32)];
       if (root[uint32_t(key & 0xffffffffu)] == r) L[idx] = r;
     }
+  if (!opt.apply) {
+    res.root = std::move(root);
+    return res;
+  }
 #pragma omp parallel for schedule(static)
   for (int64_t i = 0; i < n; ++i) L[i] = root[L[i]];
   return res;

@@ -31,6 +31,7 @@
 // one pass to renumber. Deterministic.
 #pragma once
 #include <cstdint>
+#include <vector>
 
 #include "core/volume.hpp"
 
@@ -38,11 +39,16 @@ namespace tg {
 
 struct MergeOptions {
   double ratio = 1.0;  // merge when interface >= ratio * pi r^2 (r: smaller label's equivalent radius)
+  // false: the merged labels' voxels keep their old labels and `root` says
+  // where each goes, for a caller that renumbers anyway (relabel_consecutive
+  // takes it as its premap): one pass over the volume less.
+  bool apply = true;
 };
 
 struct MergeResult {
   int64_t touching_pairs = 0;  // label pairs sharing an interface
   int64_t merges = 0;          // unions made
+  std::vector<uint32_t> root;  // with apply = false and merges > 0: label l merges into root[l]
 };
 
 // `labels`: watershed output (0 on void and lines); `solid`: the mask it was

@@ -151,10 +151,12 @@ SegmentResult segment_mask(Volume<uint8_t> solid, const SegmentOptions& opt_in) 
   watershed_levels(levels, lab, {opt.watershed_lines, opt.connectivity, r.buckets_per_unit});
   clock.lap("watershed");
 
-  if (opt.merge) r.merge = merge_oversegmented(lab, levels, {opt.merge_ratio});  // levels > 0: the solid
+  // The merge's roots are applied by the renumbering below (one pass less).
+  if (opt.merge) r.merge = merge_oversegmented(lab, levels, {opt.merge_ratio, false});  // levels > 0: the solid
   clock.lap("merge");
   levels = Volume<uint8_t>();
-  const auto rl = relabel_consecutive(lab, opt.min_size_vox);
+  const auto rl = relabel_consecutive(lab, opt.min_size_vox, r.merge.root.empty() ? nullptr : &r.merge.root);
+  r.merge.root = {};
   r.count = rl.count;
   r.dropped = rl.dropped;
   r.labels = std::move(lab);

@@ -168,6 +168,26 @@ TEST(RelabelConsecutive, AnyThreadCountGivesRasterOrder) {
   omp_set_num_threads(before);
 }
 
+// A premap (a merge's roots: each root maps to itself, others to a smaller
+// root) is applied in the same pass: the result equals applying it first.
+TEST(RelabelConsecutive, PremapEqualsApplyingItFirst) {
+  Volume<uint32_t> lab(Shape{1, 2, 9});
+  const uint32_t in[] = {0, 7, 7, 3, 9, 9, 5, 0, 2, 4, 4, 8, 1, 0, 6, 6, 6, 9};
+  std::copy(in, in + 18, lab.begin());
+  std::vector<uint32_t> root(10);
+  for (uint32_t l = 0; l < 10; ++l) root[l] = l;
+  root[7] = 3, root[9] = 2, root[5] = 2, root[8] = 1;  // 7 -> 3, 9 and 5 -> 2, 8 -> 1
+  Volume<uint32_t> first = lab.clone();
+  for (auto& v : first.span()) v = root[v];
+  const auto want = relabel_consecutive(first, 3);  // drops 8 -> 1 and 4 (2 voxels each)
+  const auto got = relabel_consecutive(lab, 3, &root);
+  EXPECT_EQ(got.count, want.count);
+  EXPECT_EQ(got.dropped, want.dropped);
+  EXPECT_EQ(got.sizes, want.sizes);
+  for (int64_t i = 0; i < lab.size(); ++i) EXPECT_EQ(lab[i], first[i]) << i;
+  EXPECT_GT(want.dropped, 0);
+}
+
 TEST(RelabelConsecutive, RenumbersInRasterOrder) {
   Volume<uint32_t> lab(Shape{1, 1, 8});
   const uint32_t in[] = {0, 70, 70, 5, 900, 5, 5, 0};

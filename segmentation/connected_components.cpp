@@ -7,6 +7,7 @@
 
 #include "core/errors.hpp"
 #include "segmentation/neighbourhood.hpp"
+#include "segmentation/runs.hpp"
 
 namespace tg {
 namespace {
@@ -52,21 +53,8 @@ void label_runs(const Volume<uint8_t>& mask, Volume<uint32_t>& labels, int conne
   const int64_t nx = s.nx, rows = s.nz * s.ny;
   const uint8_t* m = mask.data();
   uint32_t* L = labels.data();
-  // Runs per row, then each row's first id: ids are 1.. in raster order.
-  std::vector<int64_t> first(size_t(rows) + 1, 0);
-#pragma omp parallel for schedule(static)
-  for (int64_t r = 0; r < rows; ++r) {
-    const uint8_t* row = m + r * nx;
-    int64_t c = 0;
-    bool prev = false;
-    for (int64_t i = 0; i < nx; ++i) {
-      const bool f = fg(row[i]);
-      c += f && !prev;
-      prev = f;
-    }
-    first[size_t(r) + 1] = c;
-  }
-  for (int64_t r = 0; r < rows; ++r) first[size_t(r) + 1] += first[size_t(r)];
+  // Each row's first run id: ids are 1.. in raster order.
+  const std::vector<int64_t> first = seg::run_offsets(mask, fg);
   const int64_t total = first[size_t(rows)];
   if (total > int64_t(kMaxLabel)) throw ResourceError("connected components: more than 2^32 - 2 runs of voxels");
   // Every voxel gets its run's id (0: background).

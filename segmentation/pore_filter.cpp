@@ -10,6 +10,7 @@
 #include <omp.h>
 
 #include "core/errors.hpp"
+#include "segmentation/runs.hpp"
 
 namespace tg {
 
@@ -60,20 +61,7 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
   if (s.empty()) return res;
 
   // The void as runs, row by row (counted, then written: rows in parallel).
-  std::vector<int64_t> first(size_t(rows) + 1, 0);
-#pragma omp parallel for schedule(static)
-  for (int64_t r = 0; r < rows; ++r) {
-    const uint8_t* row = m + r * nx;
-    int64_t c = 0;
-    bool prev = false;
-    for (int64_t i = 0; i < nx; ++i) {
-      const bool v = row[i] == 0;
-      c += v && !prev;
-      prev = v;
-    }
-    first[size_t(r) + 1] = c;
-  }
-  for (int64_t r = 0; r < rows; ++r) first[size_t(r) + 1] += first[size_t(r)];
+  const std::vector<int64_t> first = seg::run_offsets(solid, [](uint8_t v) { return v == 0; });
   const int64_t R = first[size_t(rows)];
   if (R == 0) return res;
   std::vector<Run> run(static_cast<size_t>(R));

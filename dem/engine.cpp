@@ -14,9 +14,6 @@ namespace {
 // Spheres per block of the kicks and the gather (the blocks, not the
 // spheres, are shared out among the threads).
 constexpr int64_t kSphereBlock = 64;
-// A sphere's force and torque sums of one part (6 doubles) in a 64-byte
-// line of its own: one line a sphere a contact, not two for most.
-constexpr int64_t kAccStride = 8;
 inline double* align64(double* p) {
   return reinterpret_cast<double*>((reinterpret_cast<uintptr_t>(p) + 63) & ~uintptr_t(63));
 }
@@ -58,6 +55,7 @@ Engine::Engine(Particles p, const EngineOptions& opt) : p_(std::move(p)), opt_(o
   law_pp_ = make_hertz_mindlin(opt_.material, opt_.material, opt_.friction, opt_.restitution);
   law_platen_ = make_hertz_mindlin(opt_.material, opt_.material, opt_.walls.platen_friction, opt_.restitution);
   law_cyl_ = make_hertz_mindlin(opt_.material, opt_.material, opt_.walls.cylinder_friction, opt_.restitution);
+  kernel_ = pair_kernel(opt_.pair_kernel);
   for (int64_t i = 0; i < p_.size(); ++i)
     if (!(p_.r[i] > 0) || !(p_.m[i] > 0) || !(p_.inertia[i] > 0))
       throw InputError("DEM: sphere " + std::to_string(i) + " has a non-positive radius, mass or inertia");
@@ -257,156 +255,32 @@ void Engine::set_time_step(double dt) {
   opt_.time_step = dt;
 }
 
-// The contact loop: one pair, one slot. A bond law (issue 7) adds its force
-// and torques into the same slot here.
+// The contact loop: one pair, one slot; its body is the lane kernel of
+// dem/contact/pair_kernel.hpp. A bond law (issue 7) adds its force and
+// torques into the same slot from the force hook.
 void Engine::compute_pair_forces() {
   const int64_t np = list_.pairs();
-  const double dt = opt_.time_step, lim = opt_.overlap_limit;
-  // Local, non-aliased views: the compiler keeps them in registers instead
-  // of reloading them after every store into the pair arrays.
-  const int64_t* __restrict pi = pi_.data();
-  const int64_t* __restrict pj = list_.j.data();
-  const double *__restrict x = p_.x.data(), *__restrict y = p_.y.data(), *__restrict z = p_.z.data();
-  const double *__restrict vx = p_.vx.data(), *__restrict vy = p_.vy.data(), *__restrict vz = p_.vz.data();
-  const double *__restrict wx = p_.wx.data(), *__restrict wy = p_.wy.data(), *__restrict wz = p_.wz.data();
-  const double* __restrict r = p_.r.data();
-  const double *__restrict reff = reff_.data(), *__restrict meff = meff_.data();
-  double* __restrict xi = xi_.data();
-  PairData* __restrict slot = slot_.data();
-  uint8_t* __restrict touching = touching_.data();
-  uint8_t* __restrict badk = bad_.data();
-  const HertzMindlin law = law_pp_;
-  const bool keep = keep_slots_;
-  // The contact law runs on two pairs at once, one in each lane of a Lanes2:
-  // it is a chain of dependent square roots and divisions, and two lanes
-  // take two chains through each instruction. Pairs k0 < k1 (k1 == k0: lane
-  // 1 unused). A lane whose pair does not touch computes on stand-in values
-  // and is dropped; that pair has its state reset if it touched before.
-  // Results are written lane 0 first, so each part's sums still take its
-  // pairs in ascending pair order.
-  const auto two_pairs = [&](int64_t k0, int64_t k1, double* __restrict acc) __attribute__((always_inline)) {
-    const int64_t i0 = pi[k0], j0 = pj[k0], i1 = pi[k1], j1 = pj[k1];
-    const auto L = [](const double* __restrict a, int64_t u, int64_t v) { return Lanes2{a[u], a[v]}; };
-    const Vec3T<Lanes2> d{L(x, j0, j1) - L(x, i0, i1), L(y, j0, j1) - L(y, i0, i1), L(z, j0, j1) - L(z, i0, i1)};
-    const Lanes2 ri = L(r, i0, i1), rj = L(r, j0, j1), rs = ri + rj;
-    const Lanes2 d2 = dot(d, d);
-    // Touching, or not finite (caught below): !(d2 >= rs²).
-    Mask2 on = ~Mask2(d2 >= rs * rs);
-    if (k1 == k0) on[1] = 0;
-    for (int l = 0; l < (k1 == k0 ? 1 : 2); ++l) {
-      const int64_t k = l ? k1 : k0;
-      // Just separated (touching at the last step, or holding a history, as
-      // after a restart or a rebuild): forget it. Most listed pairs never
-      // touch, and are not written every step.
-      if (!on[l] && touching[k]) {
-        touching[k] = kNotTouching;
-        xi[3 * k] = xi[3 * k + 1] = xi[3 * k + 2] = 0;
-        slot[k] = PairData{};
-      }
-    }
-    if (!any(on)) return 0;
-    // Stand-ins for a lane that does not touch: a contact at rest, overlap
-    // a thousandth of rs (no NaN, no denormal on the way).
-    const Lanes2 dist = select(on, lane_sqrt(d2), rs);
-    const Lanes2 delta = select(on, rs - dist, 1e-3 * rs);
-    int failed = 0;
-    for (int l = 0; l < 2; ++l) {
-      const int64_t k = l ? k1 : k0;
-      if (on[l] && (!(dist[l] > 0) || delta[l] > lim * std::min(ri[l], rj[l]))) {
-        badk[k] = 1;
-        touching[k] = kNotTouching;
-        slot[k] = PairData{};
-        on[l] = 0;
-        failed = 1;
-      }
-    }
-    if (!any(on)) return failed;
-    const Vec3T<Lanes2> nrm = (1.0 / dist) * d;
-    const Lanes2 ai = ri - 0.5 * delta, aj = rj - 0.5 * delta;
-    const Vec3T<Lanes2> wi{L(wx, i0, i1), L(wy, i0, i1), L(wz, i0, i1)}, wj{L(wx, j0, j1), L(wy, j0, j1), L(wz, j0, j1)};
-    const Vec3T<Lanes2> vci = Vec3T<Lanes2>{L(vx, i0, i1), L(vy, i0, i1), L(vz, i0, i1)} + cross(wi, ai * nrm);
-    const Vec3T<Lanes2> vcj = Vec3T<Lanes2>{L(vx, j0, j1), L(vy, j0, j1), L(vz, j0, j1)} + cross(wj, -aj * nrm);
-    const ContactGeometryT<Lanes2> g{nrm, delta, L(reff, k0, k1), L(meff, k0, k1), vcj - vci};
-    Vec3T<Lanes2> h{L(xi, 3 * k0, 3 * k1), L(xi, 3 * k0 + 1, 3 * k1 + 1), L(xi, 3 * k0 + 2, 3 * k1 + 2)};
-    const ContactForceT<Lanes2> cf = hertz_mindlin_force(law, g, dt, h);
-    const Vec3T<Lanes2> nf = cross(nrm, cf.force_on_j);
-    const Vec3T<Lanes2> ti = -ai * nf, tj = -aj * nf;
-    for (int l = 0; l < 2; ++l) {
-      if (!on[l]) continue;
-      const int64_t k = l ? k1 : k0, i = l ? i1 : i0, j = l ? j1 : j0;
-      const Vec3 f{cf.force_on_j.x[l], cf.force_on_j.y[l], cf.force_on_j.z[l]};
-      const Vec3 tik{ti.x[l], ti.y[l], ti.z[l]}, tjk{tj.x[l], tj.y[l], tj.z[l]};
-      xi[3 * k] = h.x[l];
-      xi[3 * k + 1] = h.y[l];
-      xi[3 * k + 2] = h.z[l];
-      if (keep) slot[k] = PairData{f.x, f.y, f.z, tik.x, tik.y, tik.z, tjk.x, tjk.y, tjk.z};
-      touching[k] = kTouching;
-      {
-        double *a = acc + kAccStride * i, *c = acc + kAccStride * j;
-        a[0] -= f.x;
-        a[1] -= f.y;
-        a[2] -= f.z;
-        a[3] += tik.x;
-        a[4] += tik.y;
-        a[5] += tik.z;
-        c[0] += f.x;
-        c[1] += f.y;
-        c[2] += f.z;
-        c[3] += tjk.x;
-        c[4] += tjk.y;
-        c[5] += tjk.z;
-      }
-    }
-    return failed;
-  };
-  // Pairs in blocks: a first, branch-free pass over a block lists the pairs
-  // that touch (or touched, to be reset) in ascending order, and the lanes
-  // are filled from that list, so few lanes carry a pair that does not
-  // touch. Both together: a restart from 8 % strain on one thread, 6 125
-  // steps, median 1.31 -> 1.07 s (bench/dem/RESULTS.md, session 5; same
-  // bits as the one-pair loop).
-  constexpr int64_t kBlock = 256;
-  const auto block = [&](int64_t kb, int64_t ke, double* __restrict acc) __attribute__((always_inline)) {
-    int32_t listed[kBlock];
-    int m = 0;
-    for (int64_t k = kb; k < ke; ++k) {
-      const int64_t i = pi[k], j = pj[k];
-      const double dx = x[j] - x[i], dy = y[j] - y[i], dz = z[j] - z[i], rs = r[i] + r[j];
-      listed[m] = int32_t(k - kb);
-      m += int(!(dx * dx + dy * dy + dz * dz >= rs * rs)) | int(touching[k] != 0);  // NaN: listed
-    }
-    int failed = 0;
-    for (int q = 0; q < m; q += 2) failed |= two_pairs(kb + listed[q], kb + listed[q + 1 < m ? q + 1 : q], acc);
-    return failed;
-  };
+  const int64_t n = p_.size();
   // Each part of the pair list sums its forces and torques into its own
   // per-sphere array (part 0 starts from the weights); the gather adds the
   // parts in their order. A pair's part is fixed by its own i alone (rows
   // of i in chunks of kRowChunk spheres, dealt out to the parts in turn),
   // not by the list: the sums then do not depend on which pairs that do not
-  // touch the list holds (skin, rebuild times, a restart), as before.
-  const int64_t n = p_.size();
+  // touch the list holds (skin, rebuild times, a restart).
   acc_.resize(size_t(kForceParts) * kAccStride * size_t(n) + 8);
   double* const acc0 = align64(acc_.data());
-  const double g = opt_.gravity_z;
-  const int64_t* off = list_.offsets.data();
-  const int64_t rows = static_cast<int64_t>(list_.offsets.size()) - 1;
-  constexpr int64_t kRowChunk = 64;
+  const PairKernelArgs args{pi_.data(), list_.j.data(), list_.offsets.data(),
+                            static_cast<int64_t>(list_.offsets.size()) - 1, n,
+                            p_.x.data(), p_.y.data(), p_.z.data(), p_.r.data(),
+                            p_.vx.data(), p_.vy.data(), p_.vz.data(),
+                            p_.wx.data(), p_.wy.data(), p_.wz.data(), p_.m.data(),
+                            reff_.data(), meff_.data(), xi_.data(), slot_.data(), touching_.data(), bad_.data(),
+                            law_pp_, opt_.time_step, opt_.overlap_limit, opt_.gravity_z, keep_slots_, kForceParts};
+  const PairPartKernel kernel = kernel_;
   const int bad = for_each_or(kForceParts, parallel(np), [&](int64_t part) __attribute__((always_inline)) {
-    double* __restrict acc = acc0 + part * kAccStride * n;
-    for (int64_t s = 0; s < n; ++s) {
-      double* a = acc + kAccStride * s;
-      a[0] = a[1] = 0;
-      a[2] = part == 0 ? p_.m[s] * g : 0.0;
-      a[3] = a[4] = a[5] = 0;
-    }
-    int failed = 0;
-    for (int64_t c = part; c * kRowChunk < rows; c += kForceParts) {
-      const int64_t lo = off[c * kRowChunk], hi = off[std::min(rows, (c + 1) * kRowChunk)];
-      for (int64_t kb = lo; kb < hi; kb += kBlock) failed |= block(kb, std::min(hi, kb + kBlock), acc);
-    }
-    return failed;
+    return kernel(args, static_cast<int>(part), acc0 + part * kAccStride * n);
   });
+  const double lim = opt_.overlap_limit;
   const Particles& p = p_;
   if (bad) {
     for (int64_t k = 0; k < np; ++k)

@@ -26,9 +26,10 @@
 // (a restart continues bit for bit). Tests compare 1- and 2-thread histories
 // and runs with different skins byte for byte.
 //
-// The contact law runs on two pairs at once (SSE2 lanes, dem/lanes.hpp),
-// filled from a branch-free list of the touching pairs of each block;
-// lane arithmetic is the scalar law's, bit for bit.
+// The contact law runs on 2, 4 or 8 pairs at once (SSE2, AVX2 or AVX-512
+// lanes, chosen at run time: dem/contact/pair_kernel.hpp), filled from a
+// branch-free list of the touching pairs of each block; lane arithmetic is
+// the scalar law's, bit for bit, so every kernel gives the same run.
 //
 // Walls: bottom platen z = 0 (fixed), top platen z = top_z moving at top_vz
 // (velocity-controlled; its reaction force is recorded), inner surface of a
@@ -58,6 +59,7 @@
 
 #include "core/errors.hpp"
 #include "dem/contact/hertz_mindlin.hpp"
+#include "dem/contact/pair_kernel.hpp"
 #include "dem/neighbor_grid.hpp"
 #include "dem/particles.hpp"
 
@@ -100,6 +102,9 @@ struct EngineOptions {
   // the OpenMP fork/barrier costs more than the work (and results do not
   // depend on it either way).
   int64_t parallel_min_items = 512;
+  // The contact loop's instruction set (dem/contact/pair_kernel.hpp): the
+  // widest the CPU has by default. Every kernel gives the same bits.
+  PairKernelIsa pair_kernel = PairKernelIsa::kAuto;
   Walls walls;
 };
 
@@ -109,13 +114,6 @@ struct WallForces {
   double bottom_z = 0;     // force on the bottom platen, z component (< 0 when loaded)
   double top_z = 0;        // force on the top platen, z component (> 0 when loaded)
   double cylinder_radial = 0;  // outward radial force on the cylinder, N
-};
-
-// One pair slot: force on j (on i: the opposite) and the two torques.
-struct PairData {
-  double fx, fy, fz;     // force on j
-  double tix, tiy, tiz;  // torque on i
-  double tjx, tjy, tjz;  // torque on j
 };
 
 class Engine {
@@ -216,11 +214,9 @@ class Engine {
   static constexpr int kForceParts = 2;
   std::vector<double> acc_;            // per part and sphere: f, t in a 64-byte line (engine.cpp kAccStride)
   std::vector<PairData> slot_;     // this step's force
-  // Per pair: kTouching (in contact this step), kHistoryOnly (not known to
-  // touch but may hold a tangential history or a force: after a rebuild or a
-  // restart) or kNotTouching (nothing stored: a separated pair costs one test).
-  enum : uint8_t { kNotTouching = 0, kTouching = 1, kHistoryOnly = 2 };
+  // Per pair: kTouching, kHistoryOnly or kNotTouching (pair_kernel.hpp).
   std::vector<uint8_t> touching_;
+  PairPartKernel kernel_ = nullptr;  // the contact loop of one part
   // Positions at the last rebuild (skin criterion).
   std::vector<double> x0_, y0_, z0_;
   // Per-sphere wall reaction this step (bottom z, top z, cylinder radial).

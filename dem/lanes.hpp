@@ -14,6 +14,9 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
 
 namespace tg::dem {
 
@@ -33,5 +36,27 @@ inline Lanes2 lane_sqrt(Lanes2 x) {
   return Lanes2{std::sqrt(x[0]), std::sqrt(x[1])};
 #endif
 }
+
+// Four and eight doubles: one AVX or AVX-512 register. Declared only where
+// the file is compiled for that instruction set (dem/contact/pair_kernel_*.cpp).
+#if defined(__AVX__)
+using Lanes4 = double __attribute__((vector_size(32)));
+using Mask4 = decltype(Lanes4{} > Lanes4{});
+inline Lanes4 select(Mask4 m, Lanes4 a, Lanes4 b) { return m ? a : b; }
+inline bool any(Mask4 m) { return _mm256_movemask_pd(__m256d(m)) != 0; }
+inline Lanes4 lane_sqrt(Lanes4 x) { return Lanes4(_mm256_sqrt_pd(__m256d(x))); }
+#endif
+#if defined(__AVX512F__)
+using Lanes8 = double __attribute__((vector_size(64)));
+using Mask8 = decltype(Lanes8{} > Lanes8{});
+inline Lanes8 select(Mask8 m, Lanes8 a, Lanes8 b) { return m ? a : b; }
+inline bool any(Mask8 m) {
+  const __m512i v = __m512i(m);
+  return _mm512_test_epi64_mask(v, v) != 0;
+}
+// The zero-masking form with every lane kept: _mm512_sqrt_pd starts from an
+// "undefined" vector that GCC 12 reports as maybe uninitialised.
+inline Lanes8 lane_sqrt(Lanes8 x) { return Lanes8(_mm512_maskz_sqrt_pd(__mmask8(0xFF), __m512d(x))); }
+#endif
 
 }  // namespace tg::dem

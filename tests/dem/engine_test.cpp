@@ -6,6 +6,10 @@
 #include <omp.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string_view>
+#include <type_traits>
 #include <numbers>
 #include <random>
 #include <tuple>
@@ -293,6 +297,71 @@ TEST(Engine, SameResultWithAnySkin) {
     EXPECT_TRUE(a.x == b.x && a.y == b.y && a.z == b.z) << "positions differ with skin " << skin;
     EXPECT_TRUE(a.wx == b.wx && a.hbx == b.hbx) << "spins or wall histories differ with skin " << skin;
   }
+}
+
+// The contact loop is compiled for SSE2, AVX2 and AVX-512 (2, 4 and 8
+// lanes), and the engine takes the widest the CPU has. Every kernel must
+// give the SSE2 kernel's bits: a 5 x 5 x 5 lattice of slightly overlapping,
+// jittered, spinning spheres pressed by the top platen (most listed pairs
+// touch, some slide, blocks leave lanes over), run with each kernel this
+// machine can run.
+TEST(Engine, EveryContactKernelGivesTheSameBits) {
+  auto run = [](PairKernelIsa isa) {
+    std::mt19937_64 rng(9);
+    std::uniform_real_distribution<double> u(-1, 1);
+    Particles p;
+    const double a = 0.97e-3, r0 = 0.5e-3;
+    for (int iz = 0; iz < 5; ++iz)
+      for (int iy = 0; iy < 5; ++iy)
+        for (int ix = 0; ix < 5; ++ix) {
+          const int64_t s = p.append_sphere((ix - 2) * a + 5e-6 * u(rng), (iy - 2) * a + 5e-6 * u(rng),
+                                            r0 + iz * a + 5e-6 * u(rng), r0 * (1 + 0.01 * u(rng)), 2180, p.size());
+          p.vx[s] = 0.1 * u(rng), p.vy[s] = 0.1 * u(rng), p.vz[s] = 0.1 * u(rng);
+          p.wx[s] = 300 * u(rng), p.wy[s] = 300 * u(rng), p.wz[s] = 300 * u(rng);
+        }
+    EngineOptions o = closed_box(1e-7, 3.5e-3, r0 + 4 * a + r0);
+    o.walls.top_vz = -0.5;
+    o.friction = 0.3;
+    o.pair_kernel = isa;
+    Engine e(std::move(p), o);
+    int64_t most = 0;  // the lattice's overlaps push it apart: most contacts early on
+    for (int c = 0; c < 200; ++c) {
+      e.run(10);
+      most = std::max(most, e.contact_count());
+    }
+    return std::make_tuple(e.particles(), e.pair_history().xi, most);
+  };
+  const auto [a, xa, ca] = run(PairKernelIsa::kSse2);
+  EXPECT_GT(ca, 200);  // dense: the lanes carry many touching pairs
+  int tested = 0;
+  for (PairKernelIsa isa : {PairKernelIsa::kAvx2, PairKernelIsa::kAvx512}) {
+    if (!pair_kernel_available(isa)) {
+      std::printf("[ note ] the %s kernel is not available here: not compared\n", pair_kernel_name(isa).c_str());
+      continue;
+    }
+    const auto [b, xb, cb] = run(isa);
+    ++tested;
+    EXPECT_EQ(cb, ca) << pair_kernel_name(isa);
+    EXPECT_EQ(xb, xa) << pair_kernel_name(isa) << ": tangential histories differ";
+    a.for_each_field([&, &b = b](std::string_view name, const auto& va) {
+      b.for_each_field([&](std::string_view nb, const auto& vb) {
+        if constexpr (std::is_same_v<decltype(va), decltype(vb)>) {
+          if (nb == name) {
+            EXPECT_TRUE(va == vb) << pair_kernel_name(isa) << ": " << name << " differs";
+          }
+        }
+      });
+    });
+  }
+  std::printf("[ note ] %d wider kernel(s) compared with sse2\n", tested);
+}
+
+TEST(Engine, UnknownContactKernelNameIsAnInputError) {
+  setenv("TOMOGRAIN_SIMD", "avx9", 1);
+  EXPECT_THROW(pair_kernel(), InputError);
+  unsetenv("TOMOGRAIN_SIMD");
+  EXPECT_NO_THROW(pair_kernel());
+  EXPECT_NE(pair_kernel(PairKernelIsa::kSse2), nullptr);
 }
 
 // Removing a sphere (breakage fines) renumbers the others but must not

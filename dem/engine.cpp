@@ -11,9 +11,6 @@
 namespace tg::dem {
 
 namespace {
-// Spheres per block of the kicks and the gather (the blocks, not the
-// spheres, are shared out among the threads).
-constexpr int64_t kSphereBlock = 64;
 inline double* align64(double* p) {
   return reinterpret_cast<double*>((reinterpret_cast<uintptr_t>(p) + 63) & ~uintptr_t(63));
 }
@@ -55,7 +52,7 @@ Engine::Engine(Particles p, const EngineOptions& opt) : p_(std::move(p)), opt_(o
   law_pp_ = make_hertz_mindlin(opt_.material, opt_.material, opt_.friction, opt_.restitution);
   law_platen_ = make_hertz_mindlin(opt_.material, opt_.material, opt_.walls.platen_friction, opt_.restitution);
   law_cyl_ = make_hertz_mindlin(opt_.material, opt_.material, opt_.walls.cylinder_friction, opt_.restitution);
-  kernel_ = pair_kernel(opt_.pair_kernel);
+  kernels_ = contact_kernels(opt_.kernel_isa);
   for (int64_t i = 0; i < p_.size(); ++i)
     if (!(p_.r[i] > 0) || !(p_.m[i] > 0) || !(p_.inertia[i] > 0))
       throw InputError("DEM: sphere " + std::to_string(i) + " has a non-positive radius, mass or inertia");
@@ -256,7 +253,7 @@ void Engine::set_time_step(double dt) {
 }
 
 // The contact loop: one pair, one slot; its body is the lane kernel of
-// dem/contact/pair_kernel.hpp. A bond law (issue 7) adds its force and
+// dem/contact/kernels.hpp. A bond law (issue 7) adds its force and
 // torques into the same slot from the force hook.
 void Engine::compute_pair_forces() {
   const int64_t np = list_.pairs();
@@ -276,7 +273,7 @@ void Engine::compute_pair_forces() {
                             p_.wx.data(), p_.wy.data(), p_.wz.data(), p_.m.data(),
                             reff_.data(), meff_.data(), xi_.data(), slot_.data(), touching_.data(), bad_.data(),
                             law_pp_, opt_.time_step, opt_.overlap_limit, opt_.gravity_z, keep_slots_, kForceParts};
-  const PairPartKernel kernel = kernel_;
+  const PairPartKernel kernel = kernels_.pairs;
   const int bad = for_each_or(kForceParts, parallel(np), [&](int64_t part) __attribute__((always_inline)) {
     return kernel(args, static_cast<int>(part), acc0 + part * kAccStride * n);
   });
@@ -295,99 +292,27 @@ void Engine::compute_pair_forces() {
   }
 }
 
-namespace {
-// One sphere–wall contact; n points from the sphere into the wall. Returns
-// the force on the wall; updates the sphere's force/torque and history.
-// Always inlined: up to three calls per sphere and step in the gather (2 %).
-__attribute__((always_inline)) inline Vec3 wall_contact(const HertzMindlin& law, const Particles& p, int64_t s, Vec3 n, double delta, Vec3 v_wall,
-                         double dt, double* hx, double* hy, double* hz, Vec3& f, Vec3& t) {
-  const double a = p.r[s] - 0.5 * delta;
-  const Vec3 vc = Vec3{p.vx[s], p.vy[s], p.vz[s]} + cross(Vec3{p.wx[s], p.wy[s], p.wz[s]}, a * n);
-  ContactGeometry g{n, delta, p.r[s], p.m[s], v_wall - vc};
-  Vec3 h{*hx, *hy, *hz};
-  const ContactForce cf = hertz_mindlin_force(law, g, dt, h);
-  *hx = h.x;
-  *hy = h.y;
-  *hz = h.z;
-  f = f - cf.force_on_j;
-  t = t + cross(a * n, -cf.force_on_j);
-  return cf.force_on_j;
-}
-}  // namespace
-
+// The gather's body is the lane kernel of dem/contact/kernels.hpp: per
+// block of spheres, the parts' sums, then the wall contacts W a time, then
+// damping and (kick) the closing half kick.
 void Engine::gather_forces(bool kick) {
   const int64_t n = p_.size();
   Particles& p = p_;
   const Walls& w = opt_.walls;
-  const double dt = opt_.time_step, half = 0.5 * dt, alpha = opt_.local_damping;
-  const double lim = opt_.overlap_limit;
-  const double* const acc0 = align64(acc_.data());  // the parts' sums (compute_pair_forces)
-  const auto one = [&](int64_t s) __attribute__((always_inline)) {
-    Vec3 f, t;
-    for (int part = 0; part < kForceParts; ++part) {
-      const double* a = acc0 + (part * n + s) * kAccStride;
-      f = f + Vec3{a[0], a[1], a[2]};
-      t = t + Vec3{a[3], a[4], a[5]};
-    }
-    double fb = 0, ft = 0, fc = 0;
-    const double r = p.r[s];
-    const double db = r - p.z[s];
-    if (w.bottom && db > 0) {
-      if (db > lim * r) bad_[s] = 1;
-      fb = wall_contact(law_platen_, p, s, {0, 0, -1}, db, {}, dt, &p.hbx[s], &p.hby[s], &p.hbz[s], f, t).z;
-    } else {
-      p.hbx[s] = p.hby[s] = p.hbz[s] = 0;
-    }
-    const double dtp = p.z[s] + r - w.top_z;
-    if (w.top && dtp > 0) {
-      if (dtp > lim * r) bad_[s] = 1;
-      ft = wall_contact(law_platen_, p, s, {0, 0, 1}, dtp, {0, 0, w.top_vz}, dt, &p.htx[s], &p.hty[s], &p.htz[s], f, t).z;
-    } else {
-      p.htx[s] = p.hty[s] = p.htz[s] = 0;
-    }
-    // The square root only for spheres near the cylinder (rho > R - r).
-    const double rho2 = p.x[s] * p.x[s] + p.y[s] * p.y[s], inner = w.cylinder_radius - r;
-    const double rho = inner > 0 && rho2 <= inner * inner ? 0.0 : std::sqrt(rho2);
-    const double dc = rho + r - w.cylinder_radius;
-    if (w.cylinder && dc > 0 && rho > 0) {
-      if (dc > lim * r) bad_[s] = 1;
-      const Vec3 nc{p.x[s] / rho, p.y[s] / rho, 0};
-      fc = dot(wall_contact(law_cyl_, p, s, nc, dc, {}, dt, &p.hcx[s], &p.hcy[s], &p.hcz[s], f, t), nc);
-    } else {
-      p.hcx[s] = p.hcy[s] = p.hcz[s] = 0;
-    }
-    wall_f_[3 * s] = fb;
-    wall_f_[3 * s + 1] = ft;
-    wall_f_[3 * s + 2] = fc;
-    if (alpha > 0) {  // PFC local damping: oppose the velocity with α|F|
-      auto damp = [alpha](double fv, double v) { return v > 0 ? fv - alpha * std::abs(fv) : v < 0 ? fv + alpha * std::abs(fv) : fv; };
-      f = {damp(f.x, p.vx[s]), damp(f.y, p.vy[s]), damp(f.z, p.vz[s])};
-      t = {damp(t.x, p.wx[s]), damp(t.y, p.wy[s]), damp(t.z, p.wz[s])};
-    }
-    p.fx[s] = f.x;
-    p.fy[s] = f.y;
-    p.fz[s] = f.z;
-    p.tx[s] = t.x;
-    p.ty[s] = t.y;
-    p.tz[s] = t.z;
-    if (kick && !(p.flags[s] & kFlagFixed)) {  // as step()'s closing half kick
-      const double hm = half * inv_m_[s], hi = half * inv_i_[s];
-      p.vx[s] += hm * f.x;
-      p.vy[s] += hm * f.y;
-      p.vz[s] += hm * f.z;
-      p.wx[s] += hi * t.x;
-      p.wy[s] += hi * t.y;
-      p.wz[s] += hi * t.z;
-    }
-    if (!std::isfinite(f.x + f.y + f.z + t.x + t.y + t.z)) bad_[s] = 2;
-    return int(bad_[s] != 0);
-  };
+  const GatherArgs args{align64(acc_.data()), kForceParts,
+                        p.x.data(), p.y.data(), p.z.data(), p.r.data(), p.m.data(), inv_m_.data(), inv_i_.data(),
+                        p.vx.data(), p.vy.data(), p.vz.data(), p.wx.data(), p.wy.data(), p.wz.data(),
+                        p.fx.data(), p.fy.data(), p.fz.data(), p.tx.data(), p.ty.data(), p.tz.data(),
+                        p.hbx.data(), p.hby.data(), p.hbz.data(), p.htx.data(), p.hty.data(), p.htz.data(),
+                        p.hcx.data(), p.hcy.data(), p.hcz.data(),
+                        p.flags.data(), kFlagFixed, wall_f_.data(), bad_.data(),
+                        law_platen_, law_cyl_, w.bottom, w.top, w.cylinder, w.top_z, w.top_vz, w.cylinder_radius,
+                        opt_.time_step, opt_.overlap_limit, opt_.local_damping, n, kick};
+  const GatherKernel gather = kernels_.gather;
   // The kicks' blocks of spheres (kSphereBlock), so that each thread gathers
   // the spheres it kicks: fewer of them change hands between the threads.
   const int bad = for_each_or((n + kSphereBlock - 1) / kSphereBlock, parallel(n), [&](int64_t b) __attribute__((always_inline)) {
-    int any = 0;
-    for (int64_t s = b * kSphereBlock; s < std::min(n, (b + 1) * kSphereBlock); ++s) any |= one(s);
-    return any;
+    return gather(args, b * kSphereBlock, std::min(n, (b + 1) * kSphereBlock));
   });
   if (bad) {
     for (int64_t s = 0; s < n; ++s)

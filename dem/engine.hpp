@@ -26,10 +26,11 @@
 // (a restart continues bit for bit). Tests compare 1- and 2-thread histories
 // and runs with different skins byte for byte.
 //
-// The contact law runs on 2, 4 or 8 pairs at once (SSE2, AVX2 or AVX-512
-// lanes, chosen at run time: dem/contact/pair_kernel.hpp), filled from a
-// branch-free list of the touching pairs of each block; lane arithmetic is
-// the scalar law's, bit for bit, so every kernel gives the same run.
+// The contact law runs on 2, 4 or 8 contacts at once (SSE2, AVX2 or AVX-512
+// lanes, chosen at run time: dem/contact/kernels.hpp), pairs filled from a
+// branch-free list of the touching pairs of each block, wall contacts from
+// lists per block of spheres; lane arithmetic is the scalar law's, bit for
+// bit, so every kernel gives the same run.
 //
 // Walls: bottom platen z = 0 (fixed), top platen z = top_z moving at top_vz
 // (velocity-controlled; its reaction force is recorded), inner surface of a
@@ -59,7 +60,7 @@
 
 #include "core/errors.hpp"
 #include "dem/contact/hertz_mindlin.hpp"
-#include "dem/contact/pair_kernel.hpp"
+#include "dem/contact/kernels.hpp"
 #include "dem/neighbor_grid.hpp"
 #include "dem/particles.hpp"
 
@@ -102,9 +103,9 @@ struct EngineOptions {
   // the OpenMP fork/barrier costs more than the work (and results do not
   // depend on it either way).
   int64_t parallel_min_items = 512;
-  // The contact loop's instruction set (dem/contact/pair_kernel.hpp): the
+  // The contact kernels' instruction set (dem/contact/kernels.hpp): the
   // widest the CPU has by default. Every kernel gives the same bits.
-  PairKernelIsa pair_kernel = PairKernelIsa::kAuto;
+  KernelIsa kernel_isa = KernelIsa::kAuto;
   Walls walls;
 };
 
@@ -214,9 +215,9 @@ class Engine {
   static constexpr int kForceParts = 2;
   std::vector<double> acc_;            // per part and sphere: f, t in a 64-byte line (engine.cpp kAccStride)
   std::vector<PairData> slot_;     // this step's force
-  // Per pair: kTouching, kHistoryOnly or kNotTouching (pair_kernel.hpp).
+  // Per pair: kTouching, kHistoryOnly or kNotTouching (contact/kernels.hpp).
   std::vector<uint8_t> touching_;
-  PairPartKernel kernel_ = nullptr;  // the contact loop of one part
+  ContactKernels kernels_;  // the contact loop of one part and the gather
   // Positions at the last rebuild (skin criterion).
   std::vector<double> x0_, y0_, z0_;
   // Per-sphere wall reaction this step (bottom z, top z, cylinder radial).

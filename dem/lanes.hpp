@@ -10,6 +10,7 @@
 // law (dem/contact/hertz_mindlin.hpp) serves walls (double) and pairs (Lanes2).
 #pragma once
 #include <cmath>
+#include <cstdint>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -29,6 +30,10 @@ inline Lanes2 select(Mask2 m, Lanes2 a, Lanes2 b) { return m ? a : b; }
 inline bool any(bool m) { return m; }
 inline bool any(Mask2 m) { return (m[0] | m[1]) != 0; }
 inline double lane_sqrt(double x) { return std::sqrt(x); }
+// Lanes' values base[idx[l]]; an index vector is the mask type (64-bit
+// integers per lane). Gather instructions where the lanes are AVX2/AVX-512.
+inline Lanes2 lane_gather(const double* base, Mask2 idx) { return Lanes2{base[idx[0]], base[idx[1]]}; }
+inline Mask2 lane_gather(const int64_t* base, Mask2 idx) { return Mask2{base[idx[0]], base[idx[1]]}; }
 inline Lanes2 lane_sqrt(Lanes2 x) {
 #if defined(__SSE2__)
   return Lanes2(_mm_sqrt_pd(__m128d(x)));
@@ -38,13 +43,19 @@ inline Lanes2 lane_sqrt(Lanes2 x) {
 }
 
 // Four and eight doubles: one AVX or AVX-512 register. Declared only where
-// the file is compiled for that instruction set (dem/contact/pair_kernel_*.cpp).
+// the file is compiled for that instruction set (dem/contact/kernels_*.cpp).
 #if defined(__AVX__)
 using Lanes4 = double __attribute__((vector_size(32)));
 using Mask4 = decltype(Lanes4{} > Lanes4{});
 inline Lanes4 select(Mask4 m, Lanes4 a, Lanes4 b) { return m ? a : b; }
 inline bool any(Mask4 m) { return _mm256_movemask_pd(__m256d(m)) != 0; }
 inline Lanes4 lane_sqrt(Lanes4 x) { return Lanes4(_mm256_sqrt_pd(__m256d(x))); }
+#if defined(__AVX2__)
+inline Lanes4 lane_gather(const double* base, Mask4 idx) { return Lanes4(_mm256_i64gather_pd(base, __m256i(idx), 8)); }
+inline Mask4 lane_gather(const int64_t* base, Mask4 idx) {
+  return Mask4(_mm256_i64gather_epi64(reinterpret_cast<const long long*>(base), __m256i(idx), 8));
+}
+#endif
 #endif
 #if defined(__AVX512F__)
 using Lanes8 = double __attribute__((vector_size(64)));
@@ -57,6 +68,13 @@ inline bool any(Mask8 m) {
 // The zero-masking form with every lane kept: _mm512_sqrt_pd starts from an
 // "undefined" vector that GCC 12 reports as maybe uninitialised.
 inline Lanes8 lane_sqrt(Lanes8 x) { return Lanes8(_mm512_maskz_sqrt_pd(__mmask8(0xFF), __m512d(x))); }
+// (The masked forms from zero: the plain ones start from an "undefined" vector, as above.)
+inline Lanes8 lane_gather(const double* base, Mask8 idx) {
+  return Lanes8(_mm512_mask_i64gather_pd(_mm512_setzero_pd(), __mmask8(0xFF), __m512i(idx), base, 8));
+}
+inline Mask8 lane_gather(const int64_t* base, Mask8 idx) {
+  return Mask8(_mm512_mask_i64gather_epi64(_mm512_setzero_si512(), __mmask8(0xFF), __m512i(idx), base, 8));
+}
 #endif
 
 }  // namespace tg::dem

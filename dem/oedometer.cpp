@@ -254,7 +254,7 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
        << ",\n  \"critical_step_reference_overlap\": " << fmt17(s.reference_overlap)
        << ",\n  \"mass_scaling\": " << fmt17(s.mass_scaling) << ",\n  \"damping\": {\"viscous_restitution\": "
        << fmt17(eo.restitution) << ", \"local\": " << fmt17(eo.local_damping)
-       << "},\n  \"contact\": \"hertz_mindlin\",\n  \"contact_kernel\": \"" << pair_kernel_name(eo.pair_kernel)
+       << "},\n  \"contact\": \"hertz_mindlin\",\n  \"contact_kernel\": \"" << kernels_name(eo.kernel_isa)
        << "\",\n  \"threads\": " << omp_get_max_threads()
        << ",\n  \"specimen\": \"" << (s.packing_csv.empty() ? std::string("pluviation") : s.packing_csv) << "\"";
     if (s.breakage) {

@@ -1,0 +1,422 @@
+// The two hot loops of a DEM step, written once for any lane width and
+// compiled once per instruction set: SSE2 (2 lanes, every x86-64), AVX2 (4
+// lanes) and AVX-512 (8 lanes), chosen at run time from what the CPU has.
+//  * pair_part: the sphere–sphere contacts of one part of the pair list,
+//    summed into the part's per-sphere array (see dem/engine.hpp);
+//  * gather_block: for a block of spheres, the parts' sums, the sphere–wall
+//    contacts (bottom and top platen, cylinder), local damping and the
+//    closing half kick.
+//
+// Why lanes: the Hertz–Mindlin law is a chain of dependent square roots and
+// divisions whose latency, not the arithmetic, bounds the loop; W contacts
+// in the lanes of one register take W chains through each instruction. On
+// the 2-core Xeon VM of bench/dem/RESULTS.md a restart from 8 % strain took
+// 1.37 s with 2 lanes, 1.23 s with 4 and 1.0 s with 8 (session 7).
+//
+// Same bits with any kernel: lane arithmetic is IEEE double arithmetic lane
+// by lane, the kernels' files are compiled without contraction into fused
+// multiply-adds, every kernel takes a part's touching pairs in ascending
+// order, and each sphere adds its parts, then its bottom, top and cylinder
+// contacts, in that order. Tests run every kernel the CPU offers against the
+// SSE2 one.
+//
+// The templates below live in an unnamed namespace, each lane type is
+// instantiated in one file only, and the double helpers they use are
+// always inlined (dem/vec3.hpp) or builtins: no inline function compiled
+// for AVX-512 is shared with the SSE2 file, where the linker could keep
+// either copy, even in an unoptimised build.
+#pragma once
+#include <cstdint>
+#include <cstring>
+#include <string>
+
+#include "dem/contact/hertz_mindlin.hpp"
+
+namespace tg::dem {
+
+// One pair slot: force on j (on i: the opposite) and the two torques.
+struct PairData {
+  double fx, fy, fz;     // force on j
+  double tix, tiy, tiz;  // torque on i
+  double tjx, tjy, tjz;  // torque on j
+};
+
+// Per-pair state flag: in contact this step, holding a history or a force
+// without being known to touch (after a rebuild or a restart), or nothing
+// stored (a separated pair costs one test).
+enum : uint8_t { kNotTouching = 0, kTouching = 1, kHistoryOnly = 2 };
+
+// A sphere's force and torque sums of one part (6 doubles) in a 64-byte
+// line of its own.
+constexpr int64_t kAccStride = 8;
+// Rows (i) of the pair list in chunks of this many spheres, dealt out to
+// the parts in turn: a pair's part depends on its i alone.
+constexpr int64_t kRowChunk = 64;
+
+// What the contact loop reads and writes; the engine's arrays.
+struct PairKernelArgs {
+  const int64_t *pi, *pj, *offsets;  // pair (i, j), CSR row offsets
+  int64_t rows, n;                   // rows of the list, spheres
+  const double *x, *y, *z, *r, *vx, *vy, *vz, *wx, *wy, *wz, *m;
+  const double *reff, *meff;  // R*, m* per pair
+  double* xi;                 // tangential history, 3 per pair
+  PairData* slot;             // written only when `keep`
+  uint8_t *touching, *bad;    // per pair
+  HertzMindlin law;
+  double dt, overlap_limit, gravity_z;
+  bool keep;
+  int parts;
+};
+
+// Part `part` of the pair list: fills acc (kAccStride doubles per sphere,
+// 64-byte aligned) with the weights (part 0) or zeros, then adds the part's
+// contact forces and torques. Returns 1 if some pair overlapped beyond the
+// limit or was not finite (its bad flag set).
+using PairPartKernel = int (*)(const PairKernelArgs&, int part, double* acc);
+
+// Spheres per block of the gather (and of the kicks in the engine).
+constexpr int64_t kSphereBlock = 64;
+
+// What the gather reads and writes; the engine's arrays and walls.
+struct GatherArgs {
+  const double* acc;  // the parts' sums: part p, sphere s at (p n + s) kAccStride
+  int parts;
+  const double *x, *y, *z, *r, *m, *inv_m, *inv_i;
+  double *vx, *vy, *vz, *wx, *wy, *wz;
+  double *fx, *fy, *fz, *tx, *ty, *tz;
+  double *hbx, *hby, *hbz, *htx, *hty, *htz, *hcx, *hcy, *hcz;  // wall histories
+  const uint32_t* flags;
+  uint32_t fixed_flag;  // spheres with this flag are not kicked
+  double* wall_f;       // per sphere: force on bottom (z), top (z), cylinder (radial)
+  uint8_t* bad;         // per sphere: 1 overlap beyond the limit, 2 non-finite force
+  HertzMindlin law_platen, law_cyl;
+  bool bottom, top, cylinder;
+  double top_z, top_vz, cylinder_radius;
+  double dt, overlap_limit, local_damping;
+  int64_t n;
+  bool kick;  // end each sphere with the closing half kick
+};
+
+// Spheres [from, to), at most kSphereBlock of them: forces and torques into
+// fx..tz, wall reactions into wall_f, histories updated, optionally kicked.
+// Returns 1 if some sphere got a bad flag.
+using GatherKernel = int (*)(const GatherArgs&, int64_t from, int64_t to);
+
+struct ContactKernels {
+  PairPartKernel pairs = nullptr;
+  GatherKernel gather = nullptr;
+};
+
+enum class KernelIsa { kAuto, kSse2, kAvx2, kAvx512 };
+// Whether this build has the kernels and this CPU can run them.
+bool kernels_available(KernelIsa isa);
+// kAuto: the widest available (or the one TOMOGRAIN_SIMD = sse2 | avx2 |
+// avx512 names). Throws InputError for kernels that are not available.
+ContactKernels contact_kernels(KernelIsa isa = KernelIsa::kAuto);
+// "sse2 (2 lanes)" etc. for the run record.
+std::string kernels_name(KernelIsa isa = KernelIsa::kAuto);
+
+// The kernels, one set per file (kernels*.cpp).
+ContactKernels kernels_sse2();
+ContactKernels kernels_avx2();
+ContactKernels kernels_avx512();
+
+namespace {
+
+// Listed pairs per block of the contact loop (see pair_part).
+constexpr int64_t kPairBlock = 256;
+
+// W 64-bit indices, one a lane (the type of a lane comparison).
+template <class V>
+using LaneIndex = decltype(V{} < V{});
+
+// The body of every kernel; V is Lanes2, Lanes4 or Lanes8.
+template <class V, class IV = LaneIndex<V>>
+int pair_part(const PairKernelArgs& a, int part, double* __restrict acc) {
+  static constexpr int W = sizeof(V) / sizeof(double);
+  // Local, non-aliased views: the compiler keeps them in registers instead
+  // of reloading them after every store into the pair arrays.
+  const int64_t* __restrict pi = a.pi;
+  const int64_t* __restrict pj = a.pj;
+  const double *__restrict x = a.x, *__restrict y = a.y, *__restrict z = a.z, *__restrict r = a.r;
+  const double *__restrict vx = a.vx, *__restrict vy = a.vy, *__restrict vz = a.vz;
+  const double *__restrict wx = a.wx, *__restrict wy = a.wy, *__restrict wz = a.wz;
+  const double *__restrict reff = a.reff, *__restrict meff = a.meff;
+  double* __restrict xi = a.xi;
+  PairData* __restrict slot = a.slot;
+  uint8_t* __restrict touching = a.touching;
+  uint8_t* __restrict badk = a.bad;
+  const HertzMindlin law = a.law;
+  const double dt = a.dt, lim = a.overlap_limit;
+  const bool keep = a.keep;
+
+  // W listed pairs kk[0] < ... < kk[used-1]; lanes from `used` on repeat
+  // the last pair and are dropped. A lane whose pair does not touch
+  // computes on stand-in values and is dropped; that pair has its state
+  // reset if it touched before. Results are written lane 0 first, so the
+  // part's sums take its pairs in ascending order.
+  const auto lanes = [&](const int64_t* kk, int used) __attribute__((always_inline)) {
+    // kk holds W entries (the list is padded with its last pair).
+    IV kv;
+    std::memcpy(&kv, kk, sizeof kv);
+    const IV iv = lane_gather(pi, kv), jv = lane_gather(pj, kv), k3 = 3 * kv;
+    int64_t k[W], i[W], j[W];
+    std::memcpy(k, &kv, sizeof k);
+    std::memcpy(i, &iv, sizeof i);
+    std::memcpy(j, &jv, sizeof j);
+    const auto L = [](const double* __restrict v, IV u) __attribute__((always_inline)) { return lane_gather(v, u); };
+    const auto H = [&](int c) __attribute__((always_inline)) { return lane_gather(xi + c, k3); };
+    const Vec3T<V> d{L(x, jv) - L(x, iv), L(y, jv) - L(y, iv), L(z, jv) - L(z, iv)};
+    const V ri = L(r, iv), rj = L(r, jv), rs = ri + rj;
+    const V d2 = dot(d, d);
+    // Touching, or not finite (caught below): !(d2 >= rs²).
+    auto on = ~(d2 >= rs * rs);
+    for (int l = used; l < W; ++l) on[l] = 0;
+    for (int l = 0; l < used; ++l) {
+      // Just separated (touching at the last step, or holding a history, as
+      // after a restart or a rebuild): forget it. Most listed pairs never
+      // touch, and are not written every step.
+      if (!on[l] && touching[k[l]]) {
+        touching[k[l]] = kNotTouching;
+        xi[3 * k[l]] = xi[3 * k[l] + 1] = xi[3 * k[l] + 2] = 0;
+        slot[k[l]] = PairData{};
+      }
+    }
+    if (!any(on)) return 0;
+    // Stand-ins for a lane that does not touch: a contact at rest, overlap
+    // a thousandth of rs (no NaN, no denormal on the way).
+    const V dist = select(on, lane_sqrt(d2), rs);
+    const V delta = select(on, rs - dist, 1e-3 * rs);
+    int failed = 0;
+    for (int l = 0; l < used; ++l) {
+      const double rmin = ri[l] < rj[l] ? ri[l] : rj[l];
+      if (on[l] && (!(dist[l] > 0) || delta[l] > lim * rmin)) {
+        badk[k[l]] = 1;
+        touching[k[l]] = kNotTouching;
+        slot[k[l]] = PairData{};
+        on[l] = 0;
+        failed = 1;
+      }
+    }
+    if (!any(on)) return failed;
+    const Vec3T<V> nrm = (1.0 / dist) * d;
+    const V ai = ri - 0.5 * delta, aj = rj - 0.5 * delta;
+    const Vec3T<V> wi{L(wx, iv), L(wy, iv), L(wz, iv)}, wj{L(wx, jv), L(wy, jv), L(wz, jv)};
+    const Vec3T<V> vci = Vec3T<V>{L(vx, iv), L(vy, iv), L(vz, iv)} + cross(wi, ai * nrm);
+    const Vec3T<V> vcj = Vec3T<V>{L(vx, jv), L(vy, jv), L(vz, jv)} + cross(wj, -aj * nrm);
+    const ContactGeometryT<V> g{nrm, delta, L(reff, kv), L(meff, kv), vcj - vci};
+    Vec3T<V> h{H(0), H(1), H(2)};
+    const ContactForceT<V> cf = hertz_mindlin_force(law, g, dt, h);
+    const Vec3T<V> nf = cross(nrm, cf.force_on_j);
+    const Vec3T<V> ti = -ai * nf, tj = -aj * nf;
+    for (int l = 0; l < used; ++l) {
+      if (!on[l]) continue;
+      const int64_t kl = k[l];
+      const double fx = cf.force_on_j.x[l], fy = cf.force_on_j.y[l], fz = cf.force_on_j.z[l];
+      xi[3 * kl] = h.x[l];
+      xi[3 * kl + 1] = h.y[l];
+      xi[3 * kl + 2] = h.z[l];
+      if (keep) slot[kl] = PairData{fx, fy, fz, ti.x[l], ti.y[l], ti.z[l], tj.x[l], tj.y[l], tj.z[l]};
+      touching[kl] = kTouching;
+      double *ai_ = acc + kAccStride * i[l], *aj_ = acc + kAccStride * j[l];
+      ai_[0] -= fx;
+      ai_[1] -= fy;
+      ai_[2] -= fz;
+      ai_[3] += ti.x[l];
+      ai_[4] += ti.y[l];
+      ai_[5] += ti.z[l];
+      aj_[0] += fx;
+      aj_[1] += fy;
+      aj_[2] += fz;
+      aj_[3] += tj.x[l];
+      aj_[4] += tj.y[l];
+      aj_[5] += tj.z[l];
+    }
+    return failed;
+  };
+
+  // Pairs in blocks: a first, branch-free pass over a block lists the pairs
+  // that touch (or touched, to be reset) in ascending order, and the lanes
+  // are filled from that list, so few lanes carry a pair that does not
+  // touch (session 5: a restart from 8 % strain on one thread, median
+  // 1.31 -> 1.07 s).
+  const auto block = [&](int64_t kb, int64_t ke) __attribute__((always_inline)) {
+    int64_t listed[kPairBlock + 8];  // padded for up to 8 lanes
+    int m = 0;
+    for (int64_t k = kb; k < ke; ++k) {
+      const int64_t i = pi[k], j = pj[k];
+      const double dx = x[j] - x[i], dy = y[j] - y[i], dz = z[j] - z[i], rs = r[i] + r[j];
+      listed[m] = k;
+      m += int(!(dx * dx + dy * dy + dz * dz >= rs * rs)) | int(touching[k] != 0);  // NaN: listed
+    }
+    for (int l = 0; l < W; ++l) listed[m + l] = listed[m > 0 ? m - 1 : 0];  // pad the last lanes
+    int failed = 0;
+    for (int q = 0; q < m; q += W) failed |= lanes(listed + q, m - q < W ? m - q : W);
+    return failed;
+  };
+
+  const int64_t n = a.n;
+  for (int64_t s = 0; s < n; ++s) {
+    double* c = acc + kAccStride * s;
+    c[0] = c[1] = 0;
+    c[2] = part == 0 ? a.m[s] * a.gravity_z : 0.0;
+    c[3] = c[4] = c[5] = 0;
+  }
+  int failed = 0;
+  for (int64_t c = part; c * kRowChunk < a.rows; c += a.parts) {
+    const int64_t lo = a.offsets[c * kRowChunk];
+    const int64_t hi = a.offsets[(c + 1) * kRowChunk < a.rows ? (c + 1) * kRowChunk : a.rows];
+    for (int64_t kb = lo; kb < hi; kb += kPairBlock) failed |= block(kb, hi - kb < kPairBlock ? hi : kb + kPairBlock);
+  }
+  return failed;
+}
+
+// The wall contacts of a block of spheres, in lists of one law each (the
+// platens, the cylinder): what a contact needs, its history and its result.
+struct WallList {
+  static constexpr int kCap = 2 * kSphereBlock + 8;  // both platens, lanes padded
+  int count = 0;
+  int64_t s[kCap];
+  double nx[kCap], ny[kCap], nz[kCap], delta[kCap], vz[kCap];  // normal into the wall, overlap, wall speed
+  double hx[kCap], hy[kCap], hz[kCap];                          // tangential history in and out
+  double fx[kCap], fy[kCap], fz[kCap], tx[kCap], ty[kCap], tz[kCap];  // force on the wall, torque on the sphere
+  int add(int64_t sphere, double x, double y, double z, double d, double v, double a, double b, double c) {
+    const int e = count++;
+    s[e] = sphere, nx[e] = x, ny[e] = y, nz[e] = z, delta[e] = d, vz[e] = v, hx[e] = a, hy[e] = b, hz[e] = c;
+    return e;
+  }
+};
+
+template <class V, class IV = LaneIndex<V>>
+void wall_lanes(const GatherArgs& a, const HertzMindlin& law, WallList& w) {
+  static constexpr int W = sizeof(V) / sizeof(double);
+  if (w.count == 0) return;
+  const int used = w.count, count = (used + W - 1) / W * W;
+  for (int e = used; e < count; ++e)  // pad the last lanes with the last contact
+    w.add(w.s[used - 1], w.nx[used - 1], w.ny[used - 1], w.nz[used - 1], w.delta[used - 1], w.vz[used - 1],
+          w.hx[used - 1], w.hy[used - 1], w.hz[used - 1]);
+  const auto ld = [](const double* v) __attribute__((always_inline)) {
+    V o;
+    std::memcpy(&o, v, sizeof o);
+    return o;
+  };
+  const auto st = [](double* v, V o) __attribute__((always_inline)) { std::memcpy(v, &o, sizeof o); };
+  for (int q = 0; q < count; q += W) {
+    IV sv;
+    std::memcpy(&sv, w.s + q, sizeof sv);
+    const Vec3T<V> n{ld(w.nx + q), ld(w.ny + q), ld(w.nz + q)};
+    const V delta = ld(w.delta + q), r = lane_gather(a.r, sv);
+    const V ai = r - 0.5 * delta;
+    const Vec3T<V> v{lane_gather(a.vx, sv), lane_gather(a.vy, sv), lane_gather(a.vz, sv)};
+    const Vec3T<V> om{lane_gather(a.wx, sv), lane_gather(a.wy, sv), lane_gather(a.wz, sv)};
+    const Vec3T<V> vc = v + cross(om, ai * n);
+    const V zero{};
+    const Vec3T<V> vwall{zero, zero, ld(w.vz + q)};
+    const ContactGeometryT<V> g{n, delta, r, lane_gather(a.m, sv), vwall - vc};
+    Vec3T<V> h{ld(w.hx + q), ld(w.hy + q), ld(w.hz + q)};
+    const ContactForceT<V> cf = hertz_mindlin_force(law, g, a.dt, h);
+    const Vec3T<V> t = cross(ai * n, -cf.force_on_j);
+    st(w.hx + q, h.x), st(w.hy + q, h.y), st(w.hz + q, h.z);
+    st(w.fx + q, cf.force_on_j.x), st(w.fy + q, cf.force_on_j.y), st(w.fz + q, cf.force_on_j.z);
+    st(w.tx + q, t.x), st(w.ty + q, t.y), st(w.tz + q, t.z);
+  }
+}
+
+template <class V>
+int gather_block(const GatherArgs& a, int64_t from, int64_t to) {
+  const double lim = a.overlap_limit;
+  const int64_t n = a.n;
+  WallList platen, cyl;
+  int eb[kSphereBlock], et[kSphereBlock], ec[kSphereBlock];  // each sphere's contacts (-1: none)
+  // 1. Which spheres touch which wall; histories of the others forgotten.
+  for (int64_t s = from; s < to; ++s) {
+    const int q = static_cast<int>(s - from);
+    const double r = a.r[s];
+    const double db = r - a.z[s];
+    eb[q] = et[q] = ec[q] = -1;
+    if (a.bottom && db > 0) {
+      if (db > lim * r) a.bad[s] = 1;
+      eb[q] = platen.add(s, 0, 0, -1, db, 0, a.hbx[s], a.hby[s], a.hbz[s]);
+    } else {
+      a.hbx[s] = a.hby[s] = a.hbz[s] = 0;
+    }
+    const double dtp = a.z[s] + r - a.top_z;
+    if (a.top && dtp > 0) {
+      if (dtp > lim * r) a.bad[s] = 1;
+      et[q] = platen.add(s, 0, 0, 1, dtp, a.top_vz, a.htx[s], a.hty[s], a.htz[s]);
+    } else {
+      a.htx[s] = a.hty[s] = a.htz[s] = 0;
+    }
+    // The square root only for spheres near the cylinder (rho > R - r).
+    const double rho2 = a.x[s] * a.x[s] + a.y[s] * a.y[s], inner = a.cylinder_radius - r;
+    const double rho = inner > 0 && rho2 <= inner * inner ? 0.0 : __builtin_sqrt(rho2);
+    const double dc = rho + r - a.cylinder_radius;
+    if (a.cylinder && dc > 0 && rho > 0) {
+      if (dc > lim * r) a.bad[s] = 1;
+      ec[q] = cyl.add(s, a.x[s] / rho, a.y[s] / rho, 0, dc, 0, a.hcx[s], a.hcy[s], a.hcz[s]);
+    } else {
+      a.hcx[s] = a.hcy[s] = a.hcz[s] = 0;
+    }
+  }
+  // 2. The wall contacts, W a time.
+  wall_lanes<V>(a, a.law_platen, platen);
+  wall_lanes<V>(a, a.law_cyl, cyl);
+  // 3. Each sphere: its parts, then its bottom, top and cylinder contacts.
+  const double half = 0.5 * a.dt, alpha = a.local_damping;
+  int any_bad = 0;
+  for (int64_t s = from; s < to; ++s) {
+    const int q = static_cast<int>(s - from);
+    Vec3 f, t;
+    for (int part = 0; part < a.parts; ++part) {
+      const double* c = a.acc + (part * n + s) * kAccStride;
+      f = f + Vec3{c[0], c[1], c[2]};
+      t = t + Vec3{c[3], c[4], c[5]};
+    }
+    double fw[3] = {0, 0, 0};
+    const auto apply = [&](const WallList& w, int e, int slot, bool radial) __attribute__((always_inline)) {
+      if (e < 0) return;
+      const Vec3 F{w.fx[e], w.fy[e], w.fz[e]};
+      f = f - F;
+      t = t + Vec3{w.tx[e], w.ty[e], w.tz[e]};
+      fw[slot] = radial ? dot(F, Vec3{w.nx[e], w.ny[e], w.nz[e]}) : F.z;
+    };
+    apply(platen, eb[q], 0, false);
+    apply(platen, et[q], 1, false);
+    apply(cyl, ec[q], 2, true);
+    if (eb[q] >= 0) a.hbx[s] = platen.hx[eb[q]], a.hby[s] = platen.hy[eb[q]], a.hbz[s] = platen.hz[eb[q]];
+    if (et[q] >= 0) a.htx[s] = platen.hx[et[q]], a.hty[s] = platen.hy[et[q]], a.htz[s] = platen.hz[et[q]];
+    if (ec[q] >= 0) a.hcx[s] = cyl.hx[ec[q]], a.hcy[s] = cyl.hy[ec[q]], a.hcz[s] = cyl.hz[ec[q]];
+    a.wall_f[3 * s] = fw[0];
+    a.wall_f[3 * s + 1] = fw[1];
+    a.wall_f[3 * s + 2] = fw[2];
+    if (alpha > 0) {  // PFC local damping: oppose the velocity with α|F|
+      auto damp = [alpha](double fv, double v) {
+        return v > 0 ? fv - alpha * __builtin_fabs(fv) : v < 0 ? fv + alpha * __builtin_fabs(fv) : fv;
+      };
+      f = {damp(f.x, a.vx[s]), damp(f.y, a.vy[s]), damp(f.z, a.vz[s])};
+      t = {damp(t.x, a.wx[s]), damp(t.y, a.wy[s]), damp(t.z, a.wz[s])};
+    }
+    a.fx[s] = f.x, a.fy[s] = f.y, a.fz[s] = f.z;
+    a.tx[s] = t.x, a.ty[s] = t.y, a.tz[s] = t.z;
+    if (a.kick && !(a.flags[s] & a.fixed_flag)) {  // as the engine's closing half kick
+      const double hm = half * a.inv_m[s], hi = half * a.inv_i[s];
+      a.vx[s] += hm * f.x;
+      a.vy[s] += hm * f.y;
+      a.vz[s] += hm * f.z;
+      a.wx[s] += hi * t.x;
+      a.wy[s] += hi * t.y;
+      a.wz[s] += hi * t.z;
+    }
+    if (!__builtin_isfinite(f.x + f.y + f.z + t.x + t.y + t.z)) a.bad[s] = 2;
+    any_bad |= int(a.bad[s] != 0);
+  }
+  return any_bad;
+}
+
+template <class V>
+ContactKernels kernels_for() {
+  return {pair_part<V>, gather_block<V>};
+}
+
+}  // namespace
+}  // namespace tg::dem

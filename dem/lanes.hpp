@@ -34,6 +34,17 @@ inline double lane_sqrt(double x) { return std::sqrt(x); }
 // integers per lane). Gather instructions where the lanes are AVX2/AVX-512.
 inline Lanes2 lane_gather(const double* base, Mask2 idx) { return Lanes2{base[idx[0]], base[idx[1]]}; }
 inline Mask2 lane_gather(const int64_t* base, Mask2 idx) { return Mask2{base[idx[0]], base[idx[1]]}; }
+// Writes the lanes of v where `on` is set to out[0], out[1], ... in lane
+// order and returns how many; may write up to the lane count (out has room).
+template <class IV>
+inline int lane_compress(int64_t* out, IV v, IV on) {
+  int c = 0;
+  for (int l = 0; l < int(sizeof(IV) / sizeof(int64_t)); ++l) {
+    out[c] = v[l];
+    c += int(on[l] != 0);
+  }
+  return c;
+}
 inline Lanes2 lane_sqrt(Lanes2 x) {
 #if defined(__SSE2__)
   return Lanes2(_mm_sqrt_pd(__m128d(x)));
@@ -74,6 +85,13 @@ inline Lanes8 lane_gather(const double* base, Mask8 idx) {
 }
 inline Mask8 lane_gather(const int64_t* base, Mask8 idx) {
   return Mask8(_mm512_mask_i64gather_epi64(_mm512_setzero_si512(), __mmask8(0xFF), __m512i(idx), base, 8));
+}
+// The register form of the compress and a full store (the memory form is
+// slow on some CPUs).
+inline int lane_compress(int64_t* out, Mask8 v, Mask8 on) {
+  const __mmask8 k = _mm512_test_epi64_mask(__m512i(on), __m512i(on));
+  _mm512_storeu_si512(out, _mm512_maskz_compress_epi64(k, __m512i(v)));
+  return __builtin_popcount(unsigned(k));
 }
 #endif
 

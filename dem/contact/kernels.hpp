@@ -243,7 +243,17 @@ int pair_part(const PairKernelArgs& a, int part, double* __restrict acc) {
   const auto block = [&](int64_t kb, int64_t ke) __attribute__((always_inline)) {
     int64_t listed[kPairBlock + 8];  // padded for up to 8 lanes
     int m = 0;
-    for (int64_t k = kb; k < ke; ++k) {
+    int64_t k = kb;
+    for (; k + W <= ke; k += W) {  // W pairs a time, then one a time
+      IV iv, jv, kv, t;
+      std::memcpy(&iv, pi + k, sizeof iv);
+      std::memcpy(&jv, pj + k, sizeof jv);
+      for (int l = 0; l < W; ++l) kv[l] = k + l, t[l] = touching[k + l];
+      const V dx = lane_gather(x, jv) - lane_gather(x, iv), dy = lane_gather(y, jv) - lane_gather(y, iv);
+      const V dz = lane_gather(z, jv) - lane_gather(z, iv), rs = lane_gather(r, iv) + lane_gather(r, jv);
+      m += lane_compress(listed + m, kv, ~(dx * dx + dy * dy + dz * dz >= rs * rs) | (t != 0));
+    }
+    for (; k < ke; ++k) {
       const int64_t i = pi[k], j = pj[k];
       const double dx = x[j] - x[i], dy = y[j] - y[i], dz = z[j] - z[i], rs = r[i] + r[j];
       listed[m] = k;

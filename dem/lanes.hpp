@@ -34,6 +34,12 @@ inline double lane_sqrt(double x) { return std::sqrt(x); }
 // integers per lane). Gather instructions where the lanes are AVX2/AVX-512.
 inline Lanes2 lane_gather(const double* base, Mask2 idx) { return Lanes2{base[idx[0]], base[idx[1]]}; }
 inline Mask2 lane_gather(const int64_t* base, Mask2 idx) { return Mask2{base[idx[0]], base[idx[1]]}; }
+// base[idx[l]] = v[l] for the lanes where `on` is set (distinct indices).
+template <class V, class IV>
+inline void lane_scatter(double* base, IV idx, V v, IV on) {
+  for (int l = 0; l < int(sizeof(V) / sizeof(double)); ++l)
+    if (on[l]) base[idx[l]] = v[l];
+}
 // Writes the lanes of v where `on` is set to out[0], out[1], ... in lane
 // order and returns how many; may write up to the lane count (out has room).
 template <class IV>
@@ -85,6 +91,9 @@ inline Lanes8 lane_gather(const double* base, Mask8 idx) {
 }
 inline Mask8 lane_gather(const int64_t* base, Mask8 idx) {
   return Mask8(_mm512_mask_i64gather_epi64(_mm512_setzero_si512(), __mmask8(0xFF), __m512i(idx), base, 8));
+}
+inline void lane_scatter(double* base, Mask8 idx, Lanes8 v, Mask8 on) {
+  _mm512_mask_i64scatter_pd(base, _mm512_test_epi64_mask(__m512i(on), __m512i(on)), __m512i(idx), __m512d(v), 8);
 }
 // The register form of the compress and a full store (the memory form is
 // slow on some CPUs).

@@ -130,6 +130,79 @@ constexpr int64_t kPairBlock = 256;
 template <class V>
 using LaneIndex = decltype(V{} < V{});
 
+// Adds W pairs' forces and torques to their spheres' sums, lane by lane in
+// order (lanes `on` among the first `used`): -f and ti to sphere i, f and tj
+// to sphere j.
+template <class V, class M>
+[[gnu::always_inline]] inline void add_pair_sums(double* __restrict acc, const int64_t* i, const int64_t* j, int used,
+                                                 M on, const Vec3T<V>& f, const Vec3T<V>& ti, const Vec3T<V>& tj) {
+  for (int l = 0; l < used; ++l) {
+    if (!on[l]) continue;
+    double *a = acc + kAccStride * i[l], *c = acc + kAccStride * j[l];
+    a[0] -= f.x[l];
+    a[1] -= f.y[l];
+    a[2] -= f.z[l];
+    a[3] += ti.x[l];
+    a[4] += ti.y[l];
+    a[5] += ti.z[l];
+    c[0] += f.x[l];
+    c[1] += f.y[l];
+    c[2] += f.z[l];
+    c[3] += tj.x[l];
+    c[4] += tj.y[l];
+    c[5] += tj.z[l];
+  }
+}
+
+#if defined(__AVX512F__)
+// On 8 lanes: the lanes' sums transposed into one 64-byte line a sphere
+// (f, t, 0, 0: the accumulator's layout), each added to its sphere's line
+// with one vector add, in lane order. a - f and a + (-f) are the same IEEE
+// result, and the padding entries gain zeros: the same bits as above.
+// (GCC's generic shuffles: the unpack and shuffle intrinsics start from an
+// "undefined" vector that GCC 12 reports as maybe uninitialised.)
+[[gnu::always_inline]] inline void transpose8(Lanes8 r[8]) {
+  constexpr Mask8 lo{0, 8, 2, 10, 4, 12, 6, 14}, hi{1, 9, 3, 11, 5, 13, 7, 15};
+  constexpr Mask8 even{0, 1, 4, 5, 8, 9, 12, 13}, odd{2, 3, 6, 7, 10, 11, 14, 15};  // 128-bit chunks
+  Lanes8 t[8], u[8];
+  for (int q = 0; q < 4; ++q) {
+    t[2 * q] = __builtin_shuffle(r[2 * q], r[2 * q + 1], lo);
+    t[2 * q + 1] = __builtin_shuffle(r[2 * q], r[2 * q + 1], hi);
+  }
+  for (int h = 0; h < 2; ++h) {  // rows 0-3, then 4-7
+    u[4 * h] = __builtin_shuffle(t[4 * h], t[4 * h + 2], even);         // columns 0, 4
+    u[4 * h + 1] = __builtin_shuffle(t[4 * h], t[4 * h + 2], odd);      // 2, 6
+    u[4 * h + 2] = __builtin_shuffle(t[4 * h + 1], t[4 * h + 3], even);  // 1, 5
+    u[4 * h + 3] = __builtin_shuffle(t[4 * h + 1], t[4 * h + 3], odd);   // 3, 7
+  }
+  r[0] = __builtin_shuffle(u[0], u[4], even);
+  r[4] = __builtin_shuffle(u[0], u[4], odd);
+  r[2] = __builtin_shuffle(u[1], u[5], even);
+  r[6] = __builtin_shuffle(u[1], u[5], odd);
+  r[1] = __builtin_shuffle(u[2], u[6], even);
+  r[5] = __builtin_shuffle(u[2], u[6], odd);
+  r[3] = __builtin_shuffle(u[3], u[7], even);
+  r[7] = __builtin_shuffle(u[3], u[7], odd);
+}
+
+[[gnu::always_inline]] inline void add_pair_sums(double* __restrict acc, const int64_t* i, const int64_t* j, int used,
+                                                 Mask8 on, const Vec3T<Lanes8>& f, const Vec3T<Lanes8>& ti,
+                                                 const Vec3T<Lanes8>& tj) {
+  static_assert(kAccStride == 8);
+  const Lanes8 zero{};
+  Lanes8 ri[8] = {-f.x, -f.y, -f.z, ti.x, ti.y, ti.z, zero, zero};
+  Lanes8 rj[8] = {f.x, f.y, f.z, tj.x, tj.y, tj.z, zero, zero};
+  transpose8(ri);
+  transpose8(rj);
+  for (int l = 0; l < used; ++l) {
+    if (!on[l]) continue;
+    double *a = acc + kAccStride * i[l], *c = acc + kAccStride * j[l];
+    _mm512_store_pd(a, _mm512_add_pd(_mm512_load_pd(a), __m512d(ri[l])));
+    _mm512_store_pd(c, _mm512_add_pd(_mm512_load_pd(c), __m512d(rj[l])));
+  }
+}
+#endif
+
 // The body of every kernel; V is Lanes2, Lanes4 or Lanes8.
 template <class V, class IV = LaneIndex<V>>
 int pair_part(const PairKernelArgs& a, int part, double* __restrict acc) {
@@ -209,29 +282,19 @@ int pair_part(const PairKernelArgs& a, int part, double* __restrict acc) {
     const ContactForceT<V> cf = hertz_mindlin_force(law, g, dt, h);
     const Vec3T<V> nf = cross(nrm, cf.force_on_j);
     const Vec3T<V> ti = -ai * nf, tj = -aj * nf;
+    // The touching lanes' pairs are distinct: their histories are stored in any order.
+    lane_scatter(xi, k3, h.x, on);
+    lane_scatter(xi + 1, k3, h.y, on);
+    lane_scatter(xi + 2, k3, h.z, on);
     for (int l = 0; l < used; ++l) {
       if (!on[l]) continue;
       const int64_t kl = k[l];
-      const double fx = cf.force_on_j.x[l], fy = cf.force_on_j.y[l], fz = cf.force_on_j.z[l];
-      xi[3 * kl] = h.x[l];
-      xi[3 * kl + 1] = h.y[l];
-      xi[3 * kl + 2] = h.z[l];
-      if (keep) slot[kl] = PairData{fx, fy, fz, ti.x[l], ti.y[l], ti.z[l], tj.x[l], tj.y[l], tj.z[l]};
+      if (keep)
+        slot[kl] = PairData{cf.force_on_j.x[l], cf.force_on_j.y[l], cf.force_on_j.z[l], ti.x[l], ti.y[l], ti.z[l],
+                            tj.x[l], tj.y[l], tj.z[l]};
       touching[kl] = kTouching;
-      double *ai_ = acc + kAccStride * i[l], *aj_ = acc + kAccStride * j[l];
-      ai_[0] -= fx;
-      ai_[1] -= fy;
-      ai_[2] -= fz;
-      ai_[3] += ti.x[l];
-      ai_[4] += ti.y[l];
-      ai_[5] += ti.z[l];
-      aj_[0] += fx;
-      aj_[1] += fy;
-      aj_[2] += fz;
-      aj_[3] += tj.x[l];
-      aj_[4] += tj.y[l];
-      aj_[5] += tj.z[l];
     }
+    add_pair_sums(acc, i, j, used, on, cf.force_on_j, ti, tj);
     return failed;
   };
 
@@ -270,7 +333,7 @@ int pair_part(const PairKernelArgs& a, int part, double* __restrict acc) {
     double* c = acc + kAccStride * s;
     c[0] = c[1] = 0;
     c[2] = part == 0 ? a.m[s] * a.gravity_z : 0.0;
-    c[3] = c[4] = c[5] = 0;
+    c[3] = c[4] = c[5] = c[6] = c[7] = 0;  // 6, 7: padding (the AVX-512 kernel adds whole lines)
   }
   int failed = 0;
   for (int64_t c = part; c * kRowChunk < a.rows; c += a.parts) {

@@ -157,7 +157,11 @@ void Engine::update_inverse_masses() {
   }
 }
 
-void Engine::step() {
+void Engine::run(int64_t steps) {
+  for (int64_t s = 0; s < steps; ++s) advance(s + 1 < steps);
+}
+
+void Engine::advance(bool fuse_next) {
   const int64_t n = p_.size();
   const double dt = opt_.time_step, half = 0.5 * dt;
   Particles& p = p_;
@@ -218,7 +222,10 @@ void Engine::step() {
       return half_kick(b * kSphereBlock, std::min(count, (b + 1) * kSphereBlock), drift);
     });
   };
-  const int moved = kick_all(n, true);
+  // The previous step's gather may have made this step's opening kick and
+  // drift already (fused, see run()).
+  const int moved = drifted_ ? pending_moved_ : kick_all(n, true);
+  drifted_ = false;
   opt_.walls.top_z += dt * opt_.walls.top_vz;
   if (force_rebuild_ || n != static_cast<int64_t>(x0_.size()) || moved) {
     if (moved & 2) explode("a sphere position became non-finite");
@@ -229,7 +236,9 @@ void Engine::step() {
   // kick (one pass over the spheres and one parallel region less a step);
   // the hook (breakage) may edit forces and spheres, so it is kicked after.
   const bool kick_in_gather = !force_hook_;
-  compute_forces(kick_in_gather);
+  const bool fuse = kick_in_gather && fuse_next;
+  compute_forces(kick_in_gather, fuse);
+  drifted_ = fuse;
   if (!kick_in_gather) {
     fresh_masses();
     kick_all(p.size(), false);
@@ -238,12 +247,12 @@ void Engine::step() {
   ++steps_;
 }
 
-void Engine::compute_forces(bool kick) {
+void Engine::compute_forces(bool kick, bool drift_next) {
   // The pair slots are read by the force hook's model only (breakage:
   // contact statistics); a scene without one does not write them.
   keep_slots_ = static_cast<bool>(force_hook_);
   compute_pair_forces();
-  gather_forces(kick);
+  gather_forces(kick, drift_next);
   if (force_hook_) force_hook_(*this);
 }
 
@@ -295,10 +304,11 @@ void Engine::compute_pair_forces() {
 // The gather's body is the lane kernel of dem/contact/kernels.hpp: per
 // block of spheres, the parts' sums, then the wall contacts W a time, then
 // damping and (kick) the closing half kick.
-void Engine::gather_forces(bool kick) {
+void Engine::gather_forces(bool kick, bool drift_next) {
   const int64_t n = p_.size();
   Particles& p = p_;
   const Walls& w = opt_.walls;
+  const int64_t n_built = std::min<int64_t>(n, static_cast<int64_t>(x0_.size()));
   const GatherArgs args{align64(acc_.data()), kForceParts,
                         p.x.data(), p.y.data(), p.z.data(), p.r.data(), p.m.data(), inv_m_.data(), inv_i_.data(),
                         p.vx.data(), p.vy.data(), p.vz.data(), p.wx.data(), p.wy.data(), p.wz.data(),
@@ -307,14 +317,16 @@ void Engine::gather_forces(bool kick) {
                         p.hcx.data(), p.hcy.data(), p.hcz.data(),
                         p.flags.data(), kFlagFixed, wall_f_.data(), bad_.data(),
                         law_platen_, law_cyl_, w.bottom, w.top, w.cylinder, w.top_z, w.top_vz, w.cylinder_radius,
-                        opt_.time_step, opt_.overlap_limit, opt_.local_damping, n, kick};
+                        opt_.time_step, opt_.overlap_limit, opt_.local_damping, n, kick,
+                        drift_next, x0_.data(), y0_.data(), z0_.data(), n_built, 0.25 * opt_.skin * opt_.skin};
   const GatherKernel gather = kernels_.gather;
   // The kicks' blocks of spheres (kSphereBlock), so that each thread gathers
   // the spheres it kicks: fewer of them change hands between the threads.
-  const int bad = for_each_or((n + kSphereBlock - 1) / kSphereBlock, parallel(n), [&](int64_t b) __attribute__((always_inline)) {
+  const int flags = for_each_or((n + kSphereBlock - 1) / kSphereBlock, parallel(n), [&](int64_t b) __attribute__((always_inline)) {
     return gather(args, b * kSphereBlock, std::min(n, (b + 1) * kSphereBlock));
   });
-  if (bad) {
+  pending_moved_ = flags >> 1;
+  if (flags & 1) {
     for (int64_t s = 0; s < n; ++s)
       if (bad_[s])
         explode("sphere " + std::to_string(s) +

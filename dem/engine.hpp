@@ -122,10 +122,14 @@ class Engine {
   // Validates the options (throws InputError) and builds the first pair list.
   Engine(Particles p, const EngineOptions& opt);
 
-  void step();
-  void run(int64_t steps) {
-    for (int64_t s = 0; s < steps; ++s) step();
-  }
+  void step() { advance(false); }
+  // `steps` steps. Within the run, each step's gather also makes the next
+  // step's opening half kick and drift (one pass over the spheres and one
+  // parallel region less a step; the same operations in the same order, so
+  // the same bits as calling step() `steps` times). Between runs, and after
+  // step(), velocities and positions are at the same time, as observers
+  // (history, snapshots, the force hook) need.
+  void run(int64_t steps);
 
   Particles& particles() { return p_; }
   const Particles& particles() const { return p_; }
@@ -184,14 +188,17 @@ class Engine {
 
  private:
   void rebuild();
-  // Forces of this step; kick: each sphere also gets its closing half kick.
-  void compute_forces(bool kick);
+  // One step; fuse_next: its gather makes the next step's opening kick and drift.
+  void advance(bool fuse_next);
+  // Forces of this step; kick: each sphere also gets its closing half kick;
+  // drift_next: and the next step's opening half kick and drift.
+  void compute_forces(bool kick, bool drift_next);
   void compute_pair_forces();
   void update_inverse_masses();
   // Whether a loop over `items` runs on the OpenMP team (enough items, and
   // more than one thread).
   bool parallel(int64_t items) const;
-  void gather_forces(bool kick);
+  void gather_forces(bool kick, bool drift_next);
   [[noreturn]] void explode(const std::string& what) const;
 
   Particles p_;
@@ -201,6 +208,8 @@ class Engine {
   double time_ = 0;
   int64_t steps_ = 0, rebuilds_ = 0;
   bool force_rebuild_ = false;
+  bool drifted_ = false;    // this step's opening kick and drift are done (run())
+  int pending_moved_ = 0;   // their skin test: 1 moved beyond skin/2, 3 not finite
   std::function<void(Engine&)> force_hook_;
 
   // Pair list (CSR by i, ascending j) with per-pair history and force slot.

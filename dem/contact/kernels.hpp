@@ -81,7 +81,8 @@ constexpr int64_t kSphereBlock = 64;
 struct GatherArgs {
   const double* acc;  // the parts' sums: part p, sphere s at (p n + s) kAccStride
   int parts;
-  const double *x, *y, *z, *r, *m, *inv_m, *inv_i;
+  double *x, *y, *z;
+  const double *r, *m, *inv_m, *inv_i;
   double *vx, *vy, *vz, *wx, *wy, *wz;
   double *fx, *fy, *fz, *tx, *ty, *tz;
   double *hbx, *hby, *hbz, *htx, *hty, *htz, *hcx, *hcy, *hcz;  // wall histories
@@ -94,12 +95,18 @@ struct GatherArgs {
   double top_z, top_vz, cylinder_radius;
   double dt, overlap_limit, local_damping;
   int64_t n;
-  bool kick;  // end each sphere with the closing half kick
+  bool kick;   // end each sphere with the closing half kick
+  bool drift;  // then the next step's opening half kick and drift, and its skin test:
+  const double *x0, *y0, *z0;  // positions at the last rebuild (spheres below n_built)
+  int64_t n_built;
+  double skin_lim2;  // (skin/2)²
 };
 
 // Spheres [from, to), at most kSphereBlock of them: forces and torques into
-// fx..tz, wall reactions into wall_f, histories updated, optionally kicked.
-// Returns 1 if some sphere got a bad flag.
+// fx..tz, wall reactions into wall_f, histories updated, optionally kicked
+// (and drifted). Returns bit 0: some sphere got a bad flag; bits 1-2 (with
+// drift): 1 a sphere moved beyond skin/2 since the last rebuild, 3 a
+// position is not finite.
 using GatherKernel = int (*)(const GatherArgs&, int64_t from, int64_t to);
 
 struct ContactKernels {
@@ -436,7 +443,7 @@ int gather_block(const GatherArgs& a, int64_t from, int64_t to) {
   wall_lanes<V>(a, a.law_cyl, cyl);
   // 3. Each sphere: its parts, then its bottom, top and cylinder contacts.
   const double half = 0.5 * a.dt, alpha = a.local_damping;
-  int any_bad = 0;
+  int any_bad = 0, moved = 0;
   for (int64_t s = from; s < to; ++s) {
     const int q = static_cast<int>(s - from);
     Vec3 f, t;
@@ -479,11 +486,27 @@ int gather_block(const GatherArgs& a, int64_t from, int64_t to) {
       a.wx[s] += hi * t.x;
       a.wy[s] += hi * t.y;
       a.wz[s] += hi * t.z;
+      if (a.drift) {  // the next step's opening half kick and drift, as the engine's
+        a.vx[s] += hm * f.x;
+        a.vy[s] += hm * f.y;
+        a.vz[s] += hm * f.z;
+        a.wx[s] += hi * t.x;
+        a.wy[s] += hi * t.y;
+        a.wz[s] += hi * t.z;
+        a.x[s] += a.dt * a.vx[s];
+        a.y[s] += a.dt * a.vy[s];
+        a.z[s] += a.dt * a.vz[s];
+      }
+    }
+    if (a.drift && s < a.n_built) {
+      const double dx = a.x[s] - a.x0[s], dy = a.y[s] - a.y0[s], dz = a.z[s] - a.z0[s];
+      const double d2 = dx * dx + dy * dy + dz * dz;
+      if (!(d2 <= a.skin_lim2)) moved |= __builtin_isfinite(d2) ? 1 : 3;
     }
     if (!__builtin_isfinite(f.x + f.y + f.z + t.x + t.y + t.z)) a.bad[s] = 2;
     any_bad |= int(a.bad[s] != 0);
   }
-  return any_bad;
+  return any_bad | moved << 1;
 }
 
 template <class V>

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 #include <string_view>
 #include <type_traits>
 #include <numbers>
@@ -299,31 +300,73 @@ TEST(Engine, SameResultWithAnySkin) {
   }
 }
 
+// A 5 x 5 x 5 lattice of slightly overlapping, jittered, spinning spheres
+// in a closed cell: its corner columns overlap the cylinder, its bottom
+// layer the bottom platen, and the top platen comes down on it (most listed
+// pairs touch, some slide, blocks leave lanes over).
+std::pair<Particles, EngineOptions> pressed_lattice() {
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Particles p;
+  const double a = 0.97e-3, r0 = 0.5e-3;
+  for (int iz = 0; iz < 5; ++iz)
+    for (int iy = 0; iy < 5; ++iy)
+      for (int ix = 0; ix < 5; ++ix) {
+        const int64_t s = p.append_sphere((ix - 2) * a + 5e-6 * u(rng), (iy - 2) * a + 5e-6 * u(rng),
+                                          r0 + iz * a + 5e-6 * u(rng), r0 * (1 + 0.01 * u(rng)), 2180, p.size());
+        p.vx[s] = 0.1 * u(rng), p.vy[s] = 0.1 * u(rng), p.vz[s] = 0.1 * u(rng);
+        p.wx[s] = 300 * u(rng), p.wy[s] = 300 * u(rng), p.wz[s] = 300 * u(rng);
+      }
+  EngineOptions o = closed_box(1e-7, 3.2e-3, r0 + 4 * a + r0);
+  o.walls.top_vz = -0.5;
+  o.friction = 0.3;
+  return {p, o};
+}
+
+// Every field of two sets of spheres, bit for bit.
+void expect_same_spheres(const Particles& a, const Particles& b, const std::string& what) {
+  int fields = 0;
+  a.for_each_field([&](std::string_view name, const auto& va) {
+    b.for_each_field([&](std::string_view nb, const auto& vb) {
+      if constexpr (std::is_same_v<decltype(va), decltype(vb)>) {
+        if (nb == name) {
+          ++fields;
+          EXPECT_TRUE(va == vb) << what << ": " << name << " differs";
+        }
+      }
+    });
+  });
+  EXPECT_EQ(fields, 30);
+}
+
+// Engine::run() fuses each step's gather with the next step's opening half
+// kick and drift; it must give the bits of as many single steps, with
+// rebuilds, wall contacts and a moving platen along the way, and leave
+// velocities and positions at the same time.
+TEST(Engine, RunGivesTheBitsOfSingleSteps) {
+  auto [p, o] = pressed_lattice();
+  o.skin = 2e-5;  // rebuilds within the run
+  Engine fused(p, o), single(p, o);
+  for (int c = 0; c < 20; ++c) {
+    fused.run(97);
+    for (int s = 0; s < 97; ++s) single.step();
+    ASSERT_EQ(fused.step_count(), single.step_count());
+    EXPECT_EQ(fused.kinetic_energy(), single.kinetic_energy()) << "after " << fused.step_count() << " steps";
+    EXPECT_EQ(fused.wall_forces().top_z, single.wall_forces().top_z);
+  }
+  EXPECT_GT(fused.rebuild_count(), 3);
+  EXPECT_EQ(fused.rebuild_count(), single.rebuild_count());
+  EXPECT_EQ(fused.pair_history().xi, single.pair_history().xi);
+  expect_same_spheres(fused.particles(), single.particles(), "fused run");
+}
+
 // The contact loop is compiled for SSE2, AVX2 and AVX-512 (2, 4 and 8
 // lanes), and the engine takes the widest the CPU has. Every kernel must
-// give the SSE2 kernel's bits: a 5 x 5 x 5 lattice of slightly overlapping,
-// jittered, spinning spheres pressed by the top platen (most listed pairs
-// touch, some slide, blocks leave lanes over), run with each kernel this
-// machine can run.
+// give the SSE2 kernel's bits on the pressed lattice, run with each kernel
+// this machine can run.
 TEST(Engine, EveryContactKernelGivesTheSameBits) {
   auto run = [](KernelIsa isa) {
-    std::mt19937_64 rng(9);
-    std::uniform_real_distribution<double> u(-1, 1);
-    Particles p;
-    const double a = 0.97e-3, r0 = 0.5e-3;
-    for (int iz = 0; iz < 5; ++iz)
-      for (int iy = 0; iy < 5; ++iy)
-        for (int ix = 0; ix < 5; ++ix) {
-          const int64_t s = p.append_sphere((ix - 2) * a + 5e-6 * u(rng), (iy - 2) * a + 5e-6 * u(rng),
-                                            r0 + iz * a + 5e-6 * u(rng), r0 * (1 + 0.01 * u(rng)), 2180, p.size());
-          p.vx[s] = 0.1 * u(rng), p.vy[s] = 0.1 * u(rng), p.vz[s] = 0.1 * u(rng);
-          p.wx[s] = 300 * u(rng), p.wy[s] = 300 * u(rng), p.wz[s] = 300 * u(rng);
-        }
-    // The lattice's corner columns overlap the cylinder, its bottom layer
-    // the bottom platen, and the top platen comes down on it.
-    EngineOptions o = closed_box(1e-7, 3.2e-3, r0 + 4 * a + r0);
-    o.walls.top_vz = -0.5;
-    o.friction = 0.3;
+    auto [p, o] = pressed_lattice();
     o.kernel_isa = isa;
     Engine e(std::move(p), o);
     int64_t most = 0;  // the lattice's overlaps push it apart: most contacts early on
@@ -351,15 +394,7 @@ TEST(Engine, EveryContactKernelGivesTheSameBits) {
     EXPECT_EQ(cb, ca) << kernels_name(isa);
     EXPECT_EQ(wb, wa) << kernels_name(isa) << ": wall forces differ";
     EXPECT_EQ(xb, xa) << kernels_name(isa) << ": tangential histories differ";
-    a.for_each_field([&, &b = b](std::string_view name, const auto& va) {
-      b.for_each_field([&](std::string_view nb, const auto& vb) {
-        if constexpr (std::is_same_v<decltype(va), decltype(vb)>) {
-          if (nb == name) {
-            EXPECT_TRUE(va == vb) << kernels_name(isa) << ": " << name << " differs";
-          }
-        }
-      });
-    });
+    expect_same_spheres(a, b, kernels_name(isa));
   }
   std::printf("[ note ] %d wider kernel(s) compared with sse2\n", tested);
 }

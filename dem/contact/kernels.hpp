@@ -166,30 +166,37 @@ template <class V, class M>
 // (f, t, 0, 0: the accumulator's layout), each added to its sphere's line
 // with one vector add, in lane order. a - f and a + (-f) are the same IEEE
 // result, and the padding entries gain zeros: the same bits as above.
-// (GCC's generic shuffles: the unpack and shuffle intrinsics start from an
-// "undefined" vector that GCC 12 reports as maybe uninitialised.)
+// (The generic shuffles of GCC >= 12 and Clang: the unpack and shuffle
+// intrinsics start from an "undefined" vector that GCC 12 reports as maybe
+// uninitialised.)
 [[gnu::always_inline]] inline void transpose8(Lanes8 r[8]) {
-  constexpr Mask8 lo{0, 8, 2, 10, 4, 12, 6, 14}, hi{1, 9, 3, 11, 5, 13, 7, 15};
-  constexpr Mask8 even{0, 1, 4, 5, 8, 9, 12, 13}, odd{2, 3, 6, 7, 10, 11, 14, 15};  // 128-bit chunks
+#define TG_LO(a, b) __builtin_shufflevector(a, b, 0, 8, 2, 10, 4, 12, 6, 14)
+#define TG_HI(a, b) __builtin_shufflevector(a, b, 1, 9, 3, 11, 5, 13, 7, 15)
+#define TG_EVEN(a, b) __builtin_shufflevector(a, b, 0, 1, 4, 5, 8, 9, 12, 13)  // 128-bit chunks 0, 2 of a, then of b
+#define TG_ODD(a, b) __builtin_shufflevector(a, b, 2, 3, 6, 7, 10, 11, 14, 15)  // chunks 1, 3
   Lanes8 t[8], u[8];
   for (int q = 0; q < 4; ++q) {
-    t[2 * q] = __builtin_shuffle(r[2 * q], r[2 * q + 1], lo);
-    t[2 * q + 1] = __builtin_shuffle(r[2 * q], r[2 * q + 1], hi);
+    t[2 * q] = TG_LO(r[2 * q], r[2 * q + 1]);
+    t[2 * q + 1] = TG_HI(r[2 * q], r[2 * q + 1]);
   }
   for (int h = 0; h < 2; ++h) {  // rows 0-3, then 4-7
-    u[4 * h] = __builtin_shuffle(t[4 * h], t[4 * h + 2], even);         // columns 0, 4
-    u[4 * h + 1] = __builtin_shuffle(t[4 * h], t[4 * h + 2], odd);      // 2, 6
-    u[4 * h + 2] = __builtin_shuffle(t[4 * h + 1], t[4 * h + 3], even);  // 1, 5
-    u[4 * h + 3] = __builtin_shuffle(t[4 * h + 1], t[4 * h + 3], odd);   // 3, 7
+    u[4 * h] = TG_EVEN(t[4 * h], t[4 * h + 2]);          // columns 0, 4
+    u[4 * h + 1] = TG_ODD(t[4 * h], t[4 * h + 2]);       // 2, 6
+    u[4 * h + 2] = TG_EVEN(t[4 * h + 1], t[4 * h + 3]);  // 1, 5
+    u[4 * h + 3] = TG_ODD(t[4 * h + 1], t[4 * h + 3]);   // 3, 7
   }
-  r[0] = __builtin_shuffle(u[0], u[4], even);
-  r[4] = __builtin_shuffle(u[0], u[4], odd);
-  r[2] = __builtin_shuffle(u[1], u[5], even);
-  r[6] = __builtin_shuffle(u[1], u[5], odd);
-  r[1] = __builtin_shuffle(u[2], u[6], even);
-  r[5] = __builtin_shuffle(u[2], u[6], odd);
-  r[3] = __builtin_shuffle(u[3], u[7], even);
-  r[7] = __builtin_shuffle(u[3], u[7], odd);
+  r[0] = TG_EVEN(u[0], u[4]);
+  r[4] = TG_ODD(u[0], u[4]);
+  r[2] = TG_EVEN(u[1], u[5]);
+  r[6] = TG_ODD(u[1], u[5]);
+  r[1] = TG_EVEN(u[2], u[6]);
+  r[5] = TG_ODD(u[2], u[6]);
+  r[3] = TG_EVEN(u[3], u[7]);
+  r[7] = TG_ODD(u[3], u[7]);
+#undef TG_LO
+#undef TG_HI
+#undef TG_EVEN
+#undef TG_ODD
 }
 
 [[gnu::always_inline]] inline void add_pair_sums(double* __restrict acc, const int64_t* i, const int64_t* j, int used,

@@ -485,21 +485,19 @@ int gather_block(const GatherArgs& a, int64_t from, int64_t to) {
     }
     a.fx[s] = f.x, a.fy[s] = f.y, a.fz[s] = f.z;
     a.tx[s] = t.x, a.ty[s] = t.y, a.tz[s] = t.z;
-    if (a.kick && !(a.flags[s] & a.fixed_flag)) {  // as the engine's closing half kick
+    if (a.kick && !(a.flags[s] & a.fixed_flag)) {
       const double hm = half * a.inv_m[s], hi = half * a.inv_i[s];
-      a.vx[s] += hm * f.x;
-      a.vy[s] += hm * f.y;
-      a.vz[s] += hm * f.z;
-      a.wx[s] += hi * t.x;
-      a.wy[s] += hi * t.y;
-      a.wz[s] += hi * t.z;
-      if (a.drift) {  // the next step's opening half kick and drift, as the engine's
+      const auto half_kick = [&] __attribute__((always_inline)) {
         a.vx[s] += hm * f.x;
         a.vy[s] += hm * f.y;
         a.vz[s] += hm * f.z;
         a.wx[s] += hi * t.x;
         a.wy[s] += hi * t.y;
         a.wz[s] += hi * t.z;
+      };
+      half_kick();  // as the engine's closing half kick
+      if (a.drift) {  // the next step's opening half kick and drift, as the engine's
+        half_kick();
         a.x[s] += a.dt * a.vx[s];
         a.y[s] += a.dt * a.vy[s];
         a.z[s] += a.dt * a.vz[s];

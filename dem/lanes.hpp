@@ -1,13 +1,14 @@
-// Two doubles in one SSE2 register (GCC/Clang vector extension), so that the
-// contact loop computes two contacts with each instruction: the contact law
-// is a chain of dependent square roots and divisions whose latency, not the
-// arithmetic, bounds the loop; two lanes halve the chains per contact.
-// Lane arithmetic is IEEE double arithmetic, lane by lane: a contact gets
-// the same bits in either lane and from the scalar form (x86-64 has no FMA
-// in its baseline, so nothing is contracted differently).
+// Lanes of doubles (GCC/Clang vector extension): Lanes2 in one SSE2
+// register, Lanes4 (AVX) and Lanes8 (AVX-512) where the file is compiled
+// for them, so that the contact kernels (dem/contact/kernels.hpp) compute
+// 2, 4 or 8 contacts with each instruction: the contact law is a chain of
+// dependent square roots and divisions whose latency, not the arithmetic,
+// bounds the loop. Lane arithmetic is IEEE double arithmetic, lane by lane:
+// a contact gets the same bits in any lane, at any width and from the
+// scalar form (the kernels' files are compiled without FMA contraction).
 //
 // The helpers below have a double overload too, so that one template of the
-// law (dem/contact/hertz_mindlin.hpp) serves walls (double) and pairs (Lanes2).
+// law (dem/contact/hertz_mindlin.hpp) serves a double and any lane type.
 #pragma once
 #include <cmath>
 #include <cstdint>

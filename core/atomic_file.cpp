@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <fstream>
 
 #include "core/errors.hpp"
 
@@ -35,6 +36,17 @@ void AtomicPath::commit() {
   fs::rename(temp_, target_, ec);
   if (ec) throw InputError(target_.string() + ": cannot write (" + ec.message() + ")");
   committed_ = true;
+}
+
+void write_file_atomic(const fs::path& path, std::string_view bytes) {
+  AtomicPath out(path);
+  {
+    std::ofstream f(out.temp(), std::ios::binary);
+    f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    f.close();
+    if (!f) throw InputError(path.string() + ": cannot write");
+  }
+  out.commit();
 }
 
 }  // namespace tg

@@ -8,6 +8,7 @@
 #pragma once
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 namespace tg {
 
@@ -27,5 +28,10 @@ class AtomicPath {
   std::filesystem::path target_, temp_;
   bool committed_ = false;
 };
+
+// The one writer of small text or binary files (JSON, CSV, XDMF, .npy):
+// `bytes` to a temporary beside `path`, checked, then renamed onto it.
+// Throws InputError("PATH: cannot write") and leaves nothing behind on failure.
+void write_file_atomic(const std::filesystem::path& path, std::string_view bytes);
 
 }  // namespace tg

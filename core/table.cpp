@@ -65,18 +65,69 @@ bool parse_number(std::string_view s, double& v) {
   return r.ec == std::errc() && r.ptr == s.data() + s.size();
 }
 
-std::vector<std::string> split_line(const std::string& line) {
+// RFC 4180 quoting: a text cell holding a comma, a quote, a line break or
+// edge white space is written between double quotes, with inner quotes
+// doubled, so a stage name or a path with a comma reads back as one cell.
+void append_text(std::string& out, const std::string& cell) {
+  const bool quote = cell.find_first_of(",\"\n\r") != std::string::npos ||
+                     (!cell.empty() && (cell.front() == ' ' || cell.front() == '\t' || cell.back() == ' ' ||
+                                        cell.back() == '\t' || cell.front() == '#'));
+  if (!quote) {
+    out += cell;
+    return;
+  }
+  out += '"';
+  for (char ch : cell) {
+    if (ch == '"') out += '"';
+    out += ch;
+  }
+  out += '"';
+}
+
+// One CSV record from `text` at `pos` (advanced past its line break): cells
+// trimmed of edge white space unless quoted; quoted cells may hold commas,
+// doubled quotes and line breaks. `lines` counts the line breaks consumed.
+std::vector<std::string> next_record(const std::string& text, size_t& pos, int64_t& lines, const std::string& source) {
   std::vector<std::string> cells;
   std::string cur;
-  for (char ch : line) {
-    if (ch == ',') { cells.push_back(cur); cur.clear(); }
-    else if (ch != '\r') cur += ch;
+  bool quoted = false, was_quoted = false;
+  const int64_t first_line = lines + 1;
+  auto finish_cell = [&] {
+    if (!was_quoted) {
+      const auto b = cur.find_first_not_of(" \t"), e = cur.find_last_not_of(" \t");
+      cur = b == std::string::npos ? "" : cur.substr(b, e - b + 1);
+    }
+    cells.push_back(std::move(cur));
+    cur.clear();
+    was_quoted = false;
+  };
+  while (pos < text.size()) {
+    const char ch = text[pos++];
+    if (quoted) {
+      if (ch == '"' && pos < text.size() && text[pos] == '"') {
+        cur += '"';
+        ++pos;
+      } else if (ch == '"') {
+        quoted = false;
+      } else {
+        if (ch == '\n') ++lines;
+        cur += ch;
+      }
+    } else if (ch == '"' && cur.find_first_not_of(" \t") == std::string::npos) {
+      cur.clear();
+      quoted = was_quoted = true;
+    } else if (ch == ',') {
+      finish_cell();
+    } else if (ch == '\n') {
+      ++lines;
+      finish_cell();
+      return cells;
+    } else if (ch != '\r') {
+      cur += ch;
+    }
   }
-  cells.push_back(cur);
-  for (auto& c : cells) {  // trim
-    const auto b = c.find_first_not_of(" \t"), e = c.find_last_not_of(" \t");
-    c = b == std::string::npos ? "" : c.substr(b, e - b + 1);
-  }
+  if (quoted) throw InputError(source + ":" + std::to_string(first_line) + ": quoted cell never closed");
+  finish_cell();
   return cells;
 }
 
@@ -90,7 +141,7 @@ std::string to_csv(const Table& t) {
   for (int64_t r = 0; r < t.rows(); ++r) {
     for (size_t c = 0; c < cols.size(); ++c) {
       if (c) out += ',';
-      if (cols[c].is_text) out += cols[c].text[r];
+      if (cols[c].is_text) append_text(out, cols[c].text[r]);
       else append_number(out, cols[c].num[r]);
     }
     out += '\n';
@@ -98,27 +149,20 @@ std::string to_csv(const Table& t) {
   return out;
 }
 
-void write_csv(const Table& t, const std::filesystem::path& path) {
-  AtomicPath out(path);
-  {
-    std::ofstream f(out.temp(), std::ios::binary);
-    const std::string s = to_csv(t);
-    f.write(s.data(), static_cast<std::streamsize>(s.size()));
-    if (!f) throw InputError(path.string() + ": cannot write");
-  }
-  out.commit();
-}
+void write_csv(const Table& t, const std::filesystem::path& path) { write_file_atomic(path, to_csv(t)); }
 
 Table parse_csv(const std::string& text, const std::string& source, const std::vector<std::string>& required) {
-  std::istringstream in(text);
-  std::string line;
+  size_t pos = 0;
   int64_t lineno = 0;
+  // Blank lines and lines starting with '#' are skipped (comments).
+  auto skip = [&](const std::vector<std::string>& row, size_t start) {
+    return (row.size() == 1 && row[0].empty() && text[start] != '"') || text[start] == '#';
+  };
   std::vector<std::string> header;
-  while (std::getline(in, line)) {
-    ++lineno;
-    if (line.empty() || line == "\r" || line[0] == '#') continue;
-    header = split_line(line);
-    break;
+  while (pos < text.size() && header.empty()) {
+    const size_t start = pos;
+    auto row = next_record(text, pos, lineno, source);
+    if (!skip(row, start)) header = std::move(row);
   }
   if (header.empty()) throw InputError(source + ": empty file, expected a CSV header line");
   for (size_t c = 0; c < header.size(); ++c) {
@@ -127,12 +171,13 @@ Table parse_csv(const std::string& text, const std::string& source, const std::v
       if (header[d] == header[c]) throw InputError(source + ": duplicate column '" + header[c] + "'");
   }
   std::vector<std::vector<std::string>> cells(header.size());
-  while (std::getline(in, line)) {
-    ++lineno;
-    if (line.empty() || line == "\r" || line[0] == '#') continue;
-    auto row = split_line(line);
+  while (pos < text.size()) {
+    const size_t start = pos;
+    const int64_t line = lineno + 1;
+    auto row = next_record(text, pos, lineno, source);
+    if (skip(row, start)) continue;
     if (row.size() != header.size())
-      throw InputError(source + ":" + std::to_string(lineno) + ": " + std::to_string(row.size()) +
+      throw InputError(source + ":" + std::to_string(line) + ": " + std::to_string(row.size()) +
                        " cells, header has " + std::to_string(header.size()));
     for (size_t c = 0; c < row.size(); ++c) cells[c].push_back(std::move(row[c]));
   }

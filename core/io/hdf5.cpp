@@ -99,6 +99,20 @@ bool read_attr_doubles(hid_t obj, const char* name, double* v, size_t n) {
   return H5Aread(a.get(), H5T_NATIVE_DOUBLE, v) >= 0;
 }
 
+// voxel_size_m as 3 doubles (z, y, x) or one (isotropic; the usual h5py idiom
+// `f.attrs["voxel_size_m"] = 12.3e-6`). Any other count is an error, not "no size".
+bool read_voxel_size(hid_t obj, const std::string& where, double* v) {
+  if (H5Aexists(obj, "voxel_size_m") <= 0) return false;
+  Handle a = attr_h(H5Aopen(obj, "voxel_size_m", H5P_DEFAULT));
+  Handle sp = space_h(H5Aget_space(a.get()));
+  const hssize_t n = H5Sget_simple_extent_npoints(sp.get());
+  if (n != 1 && n != 3)
+    throw InputError(where + ": attribute voxel_size_m holds " + std::to_string(n) + " values, expected 1 or 3 (z, y, x)");
+  if (H5Aread(a.get(), H5T_NATIVE_DOUBLE, v) < 0) throw InputError(where + ": attribute voxel_size_m is not numeric");
+  if (n == 1) v[1] = v[2] = v[0];
+  return true;
+}
+
 std::string read_attr_string(hid_t obj, const char* name) {
   if (H5Aexists(obj, name) <= 0) return "";
   Handle a = attr_h(H5Aopen(obj, name, H5P_DEFAULT));
@@ -348,7 +362,7 @@ AnyVolume H5Reader::read_volume(const std::string& dataset, bool progress) const
   if (shape.empty()) throw InputError(where + ": dataset is empty " + shape.str());
   Geometry g;
   double buf[3];
-  if (read_attr_doubles(d.get(), "voxel_size_m", buf, 3) || read_attr_doubles(impl_->file.get(), "voxel_size_m", buf, 3))
+  if (read_voxel_size(d.get(), where, buf) || read_voxel_size(impl_->file.get(), where, buf))
     g.voxel_size_m = {buf[0], buf[1], buf[2]};
   if (read_attr_doubles(d.get(), "origin_m", buf, 3)) g.origin_m = {buf[0], buf[1], buf[2]};
   for (double v : g.voxel_size_m)

@@ -21,7 +21,7 @@ bool is_h5_ext(const std::string& e) { return e == ".h5" || e == ".hdf5" || e ==
 
 std::pair<std::string, std::string> split_dataset_spec(const std::string& spec) {
   // "file.h5:/path" -> split at the last ':' that follows an HDF5 extension.
-  for (const char* ext : {".h5:", ".hdf5:", ".hdf:", ".nxs:", ".H5:", ".HDF5:"}) {
+  for (const char* ext : {".h5:", ".hdf5:", ".hdf:", ".nxs:", ".H5:", ".HDF5:", ".HDF:", ".NXS:"}) {
     const auto p = spec.rfind(ext);
     if (p != std::string::npos) {
       const auto colon = p + std::string(ext).size() - 1;
@@ -30,6 +30,8 @@ std::pair<std::string, std::string> split_dataset_spec(const std::string& spec) 
   }
   return {spec, ""};
 }
+
+bool is_hdf5(const std::string& spec) { return is_h5_ext(lower_ext(split_dataset_spec(spec).first)); }
 
 FileFormat format_of(const std::string& spec, bool for_writing) {
   const auto [path, ds] = split_dataset_spec(spec);

@@ -41,6 +41,10 @@ void write_volume(const AnyVolume& v, const std::string& spec, const WriteOption
 template <class T>
 void write_volume(const Volume<T>& v, const std::string& spec, const WriteOptions& opt = {});
 
+// The one answer to "is this HDF5?": the file part of `spec` ("file.h5" or
+// "file.h5:/dataset") ends in .h5, .hdf5, .hdf or .nxs (any case).
+bool is_hdf5(const std::string& spec);
+
 // Splits "file.h5:/path" into ("file.h5", "/path"); dataset empty if absent.
 std::pair<std::string, std::string> split_dataset_spec(const std::string& spec);
 

@@ -67,4 +67,29 @@ TEST(Table, MismatchedColumnLengthIsRejected) {
   EXPECT_THROW(t.add("a", {1, 2}), UsageError);
 }
 
+TEST(Table, TextCellsWithCommasQuotesAndBreaksRoundTrip) {
+  // RFC 4180: such cells are quoted, inner quotes doubled; the reader undoes it.
+  const std::vector<std::string> names{"stage 1, 4.4 %", "say \"hi\"", "two\nlines", " edge ", "#not a comment", "",
+                                       "plain"};
+  Table t;
+  t.add_text("name", names);
+  t.add("v", {1, 2, 3, 4, 5, 6, 7});
+  const std::string csv = to_csv(t);
+  EXPECT_NE(csv.find("\"stage 1, 4.4 %\""), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\"say \"\"hi\"\"\""), std::string::npos) << csv;
+  const Table r = parse_csv(csv, "mem.csv", {"v"});
+  ASSERT_EQ(r.rows(), 7);
+  EXPECT_EQ(r.text("name"), names);
+  EXPECT_EQ(r.num("v")[6], 7);
+}
+
+TEST(Table, QuotedCellNeverClosedNamesTheLine) {
+  try {
+    parse_csv("a,b\n1,2\n\"open,3\n", "q.csv");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("q.csv:3"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace tg

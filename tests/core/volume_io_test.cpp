@@ -3,6 +3,7 @@
 #include "core/io/volume_io.hpp"
 
 #include <gtest/gtest.h>
+#include <hdf5.h>
 #include <tiffio.h>
 
 #include <cmath>
@@ -297,4 +298,49 @@ TEST(VolumeIO, TiledTiffTileLargerThanPage) {
   }
 }
 
+
+// h5py's idiom `f["volume"].attrs["voxel_size_m"] = 12.3e-6` stores ONE
+// double: read as an isotropic size. Two values are an error, not "no size".
+TEST(VolumeIO, HDF5ScalarVoxelSizeIsIsotropic) {
+  const auto dir = std::filesystem::temp_directory_path() / ("tg_h5scalar_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  auto make = [&](const std::string& name, int nvalues) {
+    const std::string path = (dir / name).string();
+    const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    const hsize_t dims[3] = {2, 3, 4};
+    const hid_t sp = H5Screate_simple(3, dims, nullptr);
+    const hid_t d = H5Dcreate2(f, "volume", H5T_NATIVE_UINT16, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    std::vector<uint16_t> v(24, 7);
+    H5Dwrite(d, H5T_NATIVE_UINT16, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+    const hsize_t n = static_cast<hsize_t>(nvalues);
+    const hid_t asp = nvalues == 1 ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, &n, nullptr);
+    const hid_t a = H5Acreate2(d, "voxel_size_m", H5T_NATIVE_DOUBLE, asp, H5P_DEFAULT, H5P_DEFAULT);
+    const double vals[2] = {12.3e-6, 12.3e-6};
+    H5Awrite(a, H5T_NATIVE_DOUBLE, vals);
+    H5Aclose(a);
+    H5Sclose(asp);
+    H5Dclose(d);
+    H5Sclose(sp);
+    H5Fclose(f);
+    return path;
+  };
+  const auto v = read_volume_as<uint16_t>(make("scalar.h5", 1) + ":/volume");
+  for (double e : v.geometry().voxel_size_m) EXPECT_EQ(e, 12.3e-6);
+  try {
+    read_volume(make("two.h5", 2) + ":/volume");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("voxel_size_m holds 2 values"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(VolumeIO, IsHdf5DecidesByTheFilePart) {
+  EXPECT_TRUE(is_hdf5("a.h5"));
+  EXPECT_TRUE(is_hdf5("dir.x/a.HDF5:/volume"));
+  EXPECT_TRUE(is_hdf5("scan.nxs:/entry/data"));
+  EXPECT_FALSE(is_hdf5("a.h5.csv"));
+  EXPECT_FALSE(is_hdf5("stack.tif"));
+  EXPECT_FALSE(is_hdf5("folder.h5x/"));
+}
 }  // namespace tg

@@ -63,10 +63,6 @@ double integrate(const Curve& c, double a, double b) {
 
 }  // namespace
 
-std::vector<double> default_sieves_mm() {
-  return {0.1, 0.125, 0.16, 0.2, 0.25, 0.315, 0.4, 0.5, 0.63, 0.8, 1.0, 1.25, 1.6, 2.0, 2.5};
-}
-
 std::vector<double> percent_passing(std::span<const double> sizes, std::span<const double> masses,
                                     std::span<const double> sieves) {
   check_sieves(sieves);
@@ -102,15 +98,6 @@ double grading_quantile(std::span<const double> s, std::span<const double> p, do
     return s[k - 1] * std::pow(s[k] / s[k - 1], t);
   }
   return kNaN;
-}
-
-GradingSummary grading_summary(std::span<const double> s, std::span<const double> p) {
-  GradingSummary g;
-  g.d10 = grading_quantile(s, p, 10);
-  g.d50 = grading_quantile(s, p, 50);
-  g.d60 = grading_quantile(s, p, 60);
-  g.cu = g.d60 / g.d10;
-  return g;
 }
 
 std::vector<double> class_percent(std::span<const double> values, std::span<const double> t) {

@@ -27,7 +27,10 @@
 // dm) it is interpolated linearly in log d from 0 at that lower bound (fines
 // assumed spread evenly in log size). The integrals of F are exact for that
 // curve; Fu is integrated by Simpson's rule on 64 sub-steps per interval.
-// The largest sieve must pass 100 % (the CLI adds one when needed).
+// The largest sieve must pass 100 % (measure/grading.hpp's sieves_covering
+// extends a sieve set so that it does). The grading of whole stages (which
+// particles count, D-values from the sorted table, the default sieves) is
+// measure/grading.hpp.
 #pragma once
 #include <span>
 #include <string>
@@ -35,21 +38,18 @@
 
 namespace tg::measure {
 
-// R10 preferred numbers from 0.1 to 2.5 mm (ratio 10^(1/10) ~ 1.26).
-std::vector<double> default_sieves_mm();
-
 // Percent passing (0..100) at each sieve (ascending, > 0). sizes and masses
 // have one entry per particle; masses >= 0 with a positive total.
 std::vector<double> percent_passing(std::span<const double> sizes, std::span<const double> masses,
                                     std::span<const double> sieves);
 
-// Size at which the curve reaches p percent (log-linear), NaN outside.
+// Size at which the sieve curve reaches p percent (log-linear), NaN outside.
+// (The stages' D-values come from the sorted table: measure/grading.hpp.)
 double grading_quantile(std::span<const double> sieves, std::span<const double> passing, double p);
 
 struct GradingSummary {
-  double d10 = 0, d50 = 0, d60 = 0, cu = 0;
+  double d10 = 0, d50 = 0, d60 = 0, cu = 0;  // mm; cu = d60 / d10
 };
-GradingSummary grading_summary(std::span<const double> sieves, std::span<const double> passing);
 
 // Percent of values in each class [t_{k-1}, t_k), t_0 = -inf, t_last = +inf:
 // thresholds.size() + 1 classes.

@@ -22,11 +22,9 @@ TEST(Psd, PercentPassingHandTable) {
 
 TEST(Psd, QuantilesLogLinear) {
   const std::vector<double> s{0.1, 0.2, 0.4, 0.8, 1.6}, p{0, 10, 40, 80, 100};
-  const auto g = grading_summary(s, p);
-  EXPECT_NEAR(g.d10, 0.2, 1e-12);                              // on a sieve
-  EXPECT_NEAR(g.d50, 0.4 * std::pow(2.0, 0.25), 1e-12);        // 1/4 of the way 40 -> 80 in log size
-  EXPECT_NEAR(g.d60, 0.4 * std::pow(2.0, 0.5), 1e-12);
-  EXPECT_NEAR(g.cu, 2 * std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(grading_quantile(s, p, 10), 0.2, 1e-12);                        // on a sieve
+  EXPECT_NEAR(grading_quantile(s, p, 50), 0.4 * std::pow(2.0, 0.25), 1e-12);  // 1/4 of the way 40 -> 80 in log size
+  EXPECT_NEAR(grading_quantile(s, p, 60), 0.4 * std::pow(2.0, 0.5), 1e-12);
   EXPECT_TRUE(std::isnan(grading_quantile(s, std::vector<double>{20, 30, 40, 80, 100}, 10)));  // below the finest sieve
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numbers>
 
 #include "core/errors.hpp"
@@ -53,6 +54,39 @@ Particle make_cluster(uint32_t id, uint32_t parent, std::vector<Sphere> spheres)
   p.kind = Kind::cluster;
   for (const Sphere& s : spheres) p.pieces.push_back(Piece{s, {}});
   return p;
+}
+
+std::vector<Particle> particles_from_spheres(const SphereTable& s, const Geometry& g,
+                                             std::vector<int64_t>* particle_of_label) {
+  if (!g.has_voxel_size() || !g.isotropic())
+    throw UsageError(s.source + ": mapping spheres to voxels needs an isotropic voxel size");
+  const double v = g.voxel_size_m[0];
+  std::map<int64_t, size_t> slot;  // particle id -> index in `groups`
+  std::vector<std::vector<Sphere>> groups;
+  std::vector<int64_t> ids;
+  for (size_t q = 0; q < s.size(); ++q) {
+    auto [it, fresh] = slot.try_emplace(s.particle[q], groups.size());
+    if (fresh) {
+      groups.emplace_back();
+      ids.push_back(s.particle[q]);
+    }
+    groups[it->second].push_back(Sphere{{(s.z_m[q] - g.origin_m[0]) / v, (s.y_m[q] - g.origin_m[1]) / v,
+                                         (s.x_m[q] - g.origin_m[2]) / v},
+                                        s.r_m[q] / v});
+  }
+  if (groups.size() >= std::numeric_limits<uint32_t>::max()) throw InputError(s.source + ": too many particles");
+  std::vector<Particle> out;
+  out.reserve(groups.size());
+  for (size_t n = 0; n < groups.size(); ++n) {
+    const auto id = static_cast<uint32_t>(n + 1);
+    out.push_back(groups[n].size() == 1 ? make_grain(id, groups[n][0].c, groups[n][0].r)
+                                        : make_cluster(id, id, std::move(groups[n])));
+  }
+  if (particle_of_label) {
+    particle_of_label->assign(1, -1);
+    particle_of_label->insert(particle_of_label->end(), ids.begin(), ids.end());
+  }
+  return out;
 }
 
 void bounding_box(const Particle& p, Vec3& lo, Vec3& hi) {

@@ -23,6 +23,9 @@
 #include <string>
 #include <vector>
 
+#include "core/sphere_table.hpp"
+#include "core/volume.hpp"
+
 namespace tg::synth {
 
 using Vec3 = std::array<double, 3>;  // (z, y, x), voxel units
@@ -63,6 +66,16 @@ Particle make_grain(uint32_t id, Vec3 c, double r);
 Particle make_cap(uint32_t id, Kind kind, uint32_t parent, const Sphere& s, Vec3 n, double offset);
 // Union of spheres, one id.
 Particle make_cluster(uint32_t id, uint32_t parent, std::vector<Sphere> spheres);
+
+// A DEM sphere table (core/sphere_table.hpp, metres) as particles in the voxel
+// coordinates of `geometry` (isotropic voxel size required): the spheres that
+// share a particle id become one particle — a lone sphere a `grain`, several a
+// `cluster` — with ids 1..n in the order the particle ids first appear. The
+// one mapping used by `synth --particles`, `voxelise` and `compare`, so the
+// three see the same particles. particle_of_label (optional) receives the
+// input id of label l at index l (index 0 unused: -1).
+std::vector<Particle> particles_from_spheres(const SphereTable& s, const Geometry& geometry,
+                                             std::vector<int64_t>* particle_of_label = nullptr);
 
 // Axis-aligned bounding box [lo, hi] of a particle (voxel units).
 void bounding_box(const Particle& p, Vec3& lo, Vec3& hi);

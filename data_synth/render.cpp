@@ -103,4 +103,19 @@ Rendered render(const std::vector<Particle>& particles, Shape shape, const Geome
   return out;
 }
 
+double mean_solid_fraction(const Volume<float>& solid) {
+  const Shape sh = solid.shape();
+  std::vector<double> per(static_cast<size_t>(sh.nz), 0.0);
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < sh.nz; ++k) {
+    double a = 0;
+    const float* p = solid.data() + k * sh.slice_voxels();
+    for (int64_t q = 0; q < sh.slice_voxels(); ++q) a += p[q];
+    per[static_cast<size_t>(k)] = a;
+  }
+  double tot = 0;
+  for (double v : per) tot += v;
+  return tot / static_cast<double>(std::max<int64_t>(1, solid.size()));
+}
+
 }  // namespace tg::synth

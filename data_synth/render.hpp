@@ -46,4 +46,8 @@ struct Rendered {
 Rendered render(const std::vector<Particle>& particles, Shape shape, const Geometry& geometry = {},
                 const RenderOptions& options = {});
 
+// Mean of a solid-fraction volume, summed slice by slice in a fixed order
+// (the same value for any thread count); 0 for an empty volume.
+double mean_solid_fraction(const Volume<float>& solid);
+
 }  // namespace tg::synth

@@ -10,6 +10,7 @@
 
 #include "core/errors.hpp"
 #include "core/io/hdf5.hpp"
+#include "core/io/volume_io.hpp"
 #include "core/memory.hpp"
 #include "data_synth/truth.hpp"
 
@@ -150,37 +151,24 @@ Grid make_grid(const Scene& s) {
 }
 
 std::vector<Particle> read_particles(const std::string& path, const Grid& g) {
+  // DEM sphere tables (a CSV with x_m, or an HDF5 file without a /truth
+  // table: a DEM snapshot) go through the one sphere-table reader and the one
+  // spheres-to-particles mapping that voxelise and compare use.
   Table t;
-  const auto h5 = path.find(".h5");
-  if (h5 != std::string::npos) {
-    const std::string file = path.substr(0, h5 + 3);
-    const std::string group = h5 + 3 < path.size() && path[h5 + 3] == ':' ? path.substr(h5 + 4) : "truth";
-    t = H5Reader(file).read_table(group);
+  if (is_hdf5(path)) {
+    const auto [file, group] = split_dataset_spec(path);
+    H5Reader rd(file);
+    bool truth = !group.empty();
+    for (const std::string& d : rd.datasets()) truth = truth || d.rfind("/truth/", 0) == 0;
+    if (!truth) return particles_from_spheres(read_spheres(path), g.geometry);
+    t = rd.read_table(group.empty() ? "truth" : group);
     t.source = path;
   } else {
     t = read_csv(path);
   }
   std::vector<Particle> out;
   if (t.has("x_m")) {
-    const auto &x = t.num("x_m"), &y = t.num("y_m"), &z = t.num("z_m"), &r = t.num("r_m");
-    std::map<double, std::vector<Sphere>> clusters;
-    std::vector<double> order;
-    for (int64_t q = 0; q < t.rows(); ++q) {
-      if (!(r[q] > 0) || !std::isfinite(x[q] + y[q] + z[q]))
-        throw InputError(path + ": row " + std::to_string(q + 2) + ": radius must be > 0 and positions finite");
-      const Sphere s{{(z[q] * 1e3 - g.origin_mm[0]) / g.voxel_mm, (y[q] * 1e3 - g.origin_mm[1]) / g.voxel_mm,
-                      (x[q] * 1e3 - g.origin_mm[2]) / g.voxel_mm},
-                     r[q] * 1e3 / g.voxel_mm};
-      const double key = t.has("cluster") ? t.num("cluster")[q] : static_cast<double>(q);
-      if (!clusters.count(key)) order.push_back(key);
-      clusters[key].push_back(s);
-    }
-    uint32_t id = 1;
-    for (double key : order) {
-      const auto& members = clusters[key];
-      out.push_back(members.size() == 1 ? make_grain(id, members[0].c, members[0].r) : make_cluster(id, id, members));
-      ++id;
-    }
+    return particles_from_spheres(spheres_from_table(t), g.geometry);
   } else if (t.has("cz_vox")) {
     const auto &z = t.num("cz_vox"), &y = t.num("cy_vox"), &x = t.num("cx_vox"), &r = t.num("radius_vox");
     for (int64_t q = 0; q < t.rows(); ++q) {
@@ -225,21 +213,7 @@ WriteResult render_and_write(const std::vector<Particle>& particles, const Grid&
   ro.progress = true;
   Rendered r = render(particles, grid.shape, grid.geometry, ro);
   res.t.render_s = seconds_since(t0);
-  // Mean solid fraction, summed slice by slice in a fixed order (thread independent).
-  {
-    const Shape sh = grid.shape;
-    std::vector<double> per(static_cast<size_t>(sh.nz), 0.0);
-#pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < sh.nz; ++k) {
-      double a = 0;
-      const float* p = r.solid.data() + k * sh.slice_voxels();
-      for (int64_t q = 0; q < sh.slice_voxels(); ++q) a += p[q];
-      per[k] = a;
-    }
-    double tot = 0;
-    for (double v : per) tot += v;
-    res.solid_fraction_voxels = tot / static_cast<double>(std::max<int64_t>(1, r.solid.size()));
-  }
+  res.solid_fraction_voxels = mean_solid_fraction(r.solid);
   t0 = std::chrono::steady_clock::now();
   const Table truth = truth_table(particles, r.labels, grid.shape, grid.geometry);
   res.t.truth_s = seconds_since(t0);

@@ -24,7 +24,7 @@
 //   [specimen] container ("cylinder"|"box"), diameter_mm, height_mm, box_y_mm,
 //              box_x_mm, d50_mm, cu, target_fraction, pores_per_grain,
 //              pore_radius_fraction, particles (CSV or H5 file: x_m,y_m,z_m,r_m
-//              [,cluster] as the DEM writes, or cz_vox,cy_vox,cx_vox,radius_vox)
+//              [,particle] as the DEM writes, or cz_vox,cy_vox,cx_vox,radius_vox)
 //   [grid]     voxel_um, size, field_mm
 //   [imaging]  void_grey, solid_grey, psf_sigma_vox, noise_sigma,
 //              poisson_counts_per_grey, cupping, rings, ring_amplitude
@@ -84,9 +84,11 @@ struct Grains {
 };
 Grains make_grains(const Scene& scene, const Grid& grid);
 
-// Reads sphere lists: DEM form (x_m, y_m, z_m, r_m, optional `cluster` grouping
-// spheres into one particle) mapped through the grid, or voxel truth form
-// (cz_vox, cy_vox, cx_vox, radius_vox, optional id).
+// Reads sphere lists: DEM form (core/sphere_table.hpp: x_m, y_m, z_m, r_m,
+// optional `particle` grouping spheres into one particle, `cluster` read as a
+// synonym), a CSV or an HDF5 snapshot, mapped through the grid by
+// synth::particles_from_spheres (the mapping voxelise uses); or voxel truth
+// form (cz_vox, cy_vox, cx_vox, radius_vox, optional id).
 std::vector<Particle> read_particles(const std::string& path, const Grid& grid);
 
 struct Timings {

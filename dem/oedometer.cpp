@@ -8,8 +8,8 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <numbers>
-#include <sstream>
 
 #include "core/atomic_file.hpp"
 #include "core/errors.hpp"
@@ -18,10 +18,13 @@
 #include "dem/checkpoint.hpp"
 #include "dem/neighbor_grid.hpp"
 #include "dem/packing_io.hpp"
+#include "dem/run_folder.hpp"
 #include "dem/snapshot.hpp"
 #include "dem/time_step.hpp"
 
 namespace tg::dem {
+
+using json = nlohmann::json;
 
 OedometerSetup read_oedometer_config(Config& cfg, const std::filesystem::path& base_dir) {
   OedometerSetup s;
@@ -146,36 +149,71 @@ struct Scene {
   }
 };
 
-struct History {
-  std::vector<std::string> names{"step", "time_s", "strain", "top_stress_Pa", "bottom_stress_Pa", "lateral_stress_Pa",
-                                 "K0", "kinetic_energy_J", "coordination", "contacts", "porosity", "platen_z_m"};
-  std::vector<std::vector<double>> cols = std::vector<std::vector<double>>(12);
-  void add_breakage_columns() {
-    for (const char* n : {"grains_broken", "splits_gen0", "splits_gen1", "splits_gen2", "splits_gen3", "bonds_broken",
-                          "bonds_dropped", "bonds_intact", "spheres", "particles", "volume_lost_m3", "time_step_s",
-                          "fines_removed", "fines_volume_m3", "added_mass_fraction"})
-      names.push_back(n);
-    cols.resize(names.size());
+// The specimen of a new run: read or pluviated, masses scaled (recorded in
+// run.json), every sphere inside the cylinder and above the bottom platen,
+// and no overlap the engine would refuse at its first step (InputError
+// naming the spheres, their rows and the file).
+Particles load_specimen(const OedometerSetup& s, const EngineOptions& eo) {
+  const double R = s.engine.walls.cylinder_radius;
+  Particles p;
+  if (!s.packing_csv.empty()) {
+    p = read_packing_csv(s.packing_csv, eo.material.density_kg_m3);
+  } else {
+    p = pluviate(s.pluviation, eo).particles;
   }
-  void add(const std::vector<double>& row) {  // missing trailing values are 0 (filled by the caller)
-    for (size_t c = 0; c < cols.size(); ++c) cols[c].push_back(c < row.size() ? row[c] : 0.0);
+  for (int64_t i = 0; i < p.size(); ++i) {  // explicit, recorded mass scaling
+    p.m[i] *= s.mass_scaling;
+    p.inertia[i] *= s.mass_scaling;
+    const double rho = std::hypot(p.x[i], p.y[i]);
+    // Settled grains press slightly into the walls: allow 1 % of a radius.
+    if (rho + p.r[i] > R + 0.01 * p.r[i] || p.z[i] < 0.99 * p.r[i])
+      throw InputError((s.packing_csv.empty() ? std::string("pluviated packing") : s.packing_csv) + ": sphere " +
+                       std::to_string(i) + " crosses the cylinder (radius " + fmt17(R) + " m) or the bottom platen");
   }
-  void write(const std::filesystem::path& path) const {
-    Table t;
-    for (size_t c = 0; c < cols.size(); ++c) t.add(names[c], cols[c]);
-    write_csv(t, path);
+  {
+    // Overlaps beyond the engine's limit would stop the run at its first
+    // step: name the spheres and the file now.
+    const PairListCSR pl = build_pairs_grid(p, 0.0);
+    for (int64_t i = 0; i + 1 < static_cast<int64_t>(pl.offsets.size()); ++i)
+      for (int64_t k = pl.offsets[i]; k < pl.offsets[i + 1]; ++k) {
+        const int64_t j = pl.j[k];
+        const double d = std::sqrt(std::pow(p.x[j] - p.x[i], 2) + std::pow(p.y[j] - p.y[i], 2) + std::pow(p.z[j] - p.z[i], 2));
+        const double ov = (p.r[i] + p.r[j] - d) / std::min(p.r[i], p.r[j]);
+        if (ov > eo.overlap_limit)
+          throw InputError((s.packing_csv.empty() ? std::string("pluviated packing") : s.packing_csv) + ": spheres " +
+                           std::to_string(i) + " and " + std::to_string(j) + " (rows " + std::to_string(i + 2) + " and " +
+                           std::to_string(j + 2) + ") overlap by " + fmt17(ov) + " of the smaller radius (limit run.overlap_limit = " +
+                           fmt17(eo.overlap_limit) + ")");
+      }
   }
-  void read_until(const std::filesystem::path& path, int64_t step) {
-    if (!std::filesystem::exists(path)) return;
-    const Table t = read_csv(path, names);
-    for (int64_t r = 0; r < t.rows(); ++r) {
-      if (t.num("step")[r] > static_cast<double>(step)) break;
-      std::vector<double> row;
-      for (const auto& n : names) row.push_back(t.num(n)[r]);
-      add(row);
-    }
+  return p;
+}
+
+// run.json: every choice that changes the physics.
+void write_run_record(const std::filesystem::path& rundir, const OedometerSetup& s, const EngineOptions& eo,
+                      int64_t spheres, double h0, double porosity, double critical_time_step) {
+  json rec = {{"spheres", spheres},
+              {"initial_height_m", h0},
+              {"initial_porosity", porosity},
+              {"time_step_s", eo.time_step},
+              {"critical_time_step_s", critical_time_step},
+              {"critical_step_reference_overlap", s.reference_overlap},
+              {"mass_scaling", s.mass_scaling},
+              {"damping", {{"viscous_restitution", eo.restitution}, {"local", eo.local_damping}}},
+              {"contact", "hertz_mindlin"},
+              {"contact_kernel", kernels_name(eo.kernel_isa)},
+              {"threads", omp_get_max_threads()},
+              {"specimen", s.packing_csv.empty() ? std::string("pluviation") : s.packing_csv}};
+  if (s.breakage) {
+    const breakage::BreakageOptions& b = s.breakage_options;
+    rec["breakage"] = {{"min_split_diameter_m", b.min_split_diameter_m},
+                       {"density_scaling_min_time_step_s", b.min_time_step_s},
+                       {"time_step_safety", b.time_step_safety},
+                       {"sublimit_policy", b.sublimit == breakage::SublimitPolicy::kKeep ? "keep" : "remove"},
+                       {"fines_overlap", b.fines_overlap}};
   }
-};
+  write_file_atomic(rundir / "run.json", rec.dump(2) + "\n");
+}
 
 }  // namespace
 
@@ -189,7 +227,7 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
   OedometerSummary sum;
   EngineOptions eo = s.engine;
   Scene scene;
-  History hist;
+  HistoryTable hist(s.breakage);
   std::optional<Engine> eng;
   double vsolid = 0;
   if (c.restart) {
@@ -202,37 +240,7 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
     fs::create_directories(rundir / "snapshots");
     hist.read_until(rundir / "history.csv", eng->step_count());
   } else {
-    Particles p;
-    if (!s.packing_csv.empty()) {
-      p = read_packing_csv(s.packing_csv, eo.material.density_kg_m3);
-    } else {
-      p = pluviate(s.pluviation, eo).particles;
-    }
-    for (int64_t i = 0; i < p.size(); ++i) {  // explicit, recorded mass scaling
-      p.m[i] *= s.mass_scaling;
-      p.inertia[i] *= s.mass_scaling;
-      const double rho = std::hypot(p.x[i], p.y[i]);
-      // Settled grains press slightly into the walls: allow 1 % of a radius.
-      if (rho + p.r[i] > R + 0.01 * p.r[i] || p.z[i] < 0.99 * p.r[i])
-        throw InputError((s.packing_csv.empty() ? std::string("pluviated packing") : s.packing_csv) + ": sphere " +
-                         std::to_string(i) + " crosses the cylinder (radius " + fmt17(R) + " m) or the bottom platen");
-    }
-    {
-      // Overlaps beyond the engine's limit would stop the run at its first
-      // step: name the spheres and the file now.
-      const PairListCSR pl = build_pairs_grid(p, 0.0);
-      for (int64_t i = 0; i + 1 < static_cast<int64_t>(pl.offsets.size()); ++i)
-        for (int64_t k = pl.offsets[i]; k < pl.offsets[i + 1]; ++k) {
-          const int64_t j = pl.j[k];
-          const double d = std::sqrt(std::pow(p.x[j] - p.x[i], 2) + std::pow(p.y[j] - p.y[i], 2) + std::pow(p.z[j] - p.z[i], 2));
-          const double ov = (p.r[i] + p.r[j] - d) / std::min(p.r[i], p.r[j]);
-          if (ov > eo.overlap_limit)
-            throw InputError((s.packing_csv.empty() ? std::string("pluviated packing") : s.packing_csv) + ": spheres " +
-                             std::to_string(i) + " and " + std::to_string(j) + " (rows " + std::to_string(i + 2) + " and " +
-                             std::to_string(j + 2) + ") overlap by " + fmt17(ov) + " of the smaller radius (limit run.overlap_limit = " +
-                             fmt17(eo.overlap_limit) + ")");
-        }
-    }
+    Particles p = load_specimen(s, eo);
     double por = 0;
     packing_height_porosity(p, R, scene.h0, por);
     const CriticalTimeStep ct = critical_time_step(p, eo.material, {s.reference_overlap});
@@ -246,32 +254,7 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
     eng.emplace(std::move(p), eo);
     fs::create_directories(rundir / "snapshots");
     write_packing_csv(eng->particles(), rundir / "packing_initial.csv");
-    // The run record: every choice that changes the physics.
-    std::ostringstream js;
-    js << "{\n  \"spheres\": " << eng->particles().size() << ",\n  \"initial_height_m\": " << fmt17(scene.h0)
-       << ",\n  \"initial_porosity\": " << fmt17(por) << ",\n  \"time_step_s\": " << fmt17(eo.time_step)
-       << ",\n  \"critical_time_step_s\": " << fmt17(sum.critical_time_step)
-       << ",\n  \"critical_step_reference_overlap\": " << fmt17(s.reference_overlap)
-       << ",\n  \"mass_scaling\": " << fmt17(s.mass_scaling) << ",\n  \"damping\": {\"viscous_restitution\": "
-       << fmt17(eo.restitution) << ", \"local\": " << fmt17(eo.local_damping)
-       << "},\n  \"contact\": \"hertz_mindlin\",\n  \"contact_kernel\": \"" << kernels_name(eo.kernel_isa)
-       << "\",\n  \"threads\": " << omp_get_max_threads()
-       << ",\n  \"specimen\": \"" << (s.packing_csv.empty() ? std::string("pluviation") : s.packing_csv) << "\"";
-    if (s.breakage) {
-      const breakage::BreakageOptions& b = s.breakage_options;
-      js << ",\n  \"breakage\": {\"min_split_diameter_m\": " << fmt17(b.min_split_diameter_m)
-         << ", \"density_scaling_min_time_step_s\": " << fmt17(b.min_time_step_s)
-         << ", \"time_step_safety\": " << fmt17(b.time_step_safety) << ", \"sublimit_policy\": \""
-         << (b.sublimit == breakage::SublimitPolicy::kKeep ? "keep" : "remove") << "\", \"fines_overlap\": "
-         << fmt17(b.fines_overlap) << "}";
-    }
-    js << "\n}\n";
-    AtomicPath rec(rundir / "run.json");
-    {
-      std::ofstream os(rec.temp());
-      os << js.str();
-    }
-    rec.commit();
+    write_run_record(rundir, s, eo, eng->particles().size(), scene.h0, por, sum.critical_time_step);
   }
   Engine& e = *eng;
   // The initial grains: the packing now, or packing_initial.csv on a restart
@@ -293,12 +276,6 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
     }
     brk.emplace(e, bo);
     if (c.restart) brk->restore(scene.breakage_state);
-    hist.add_breakage_columns();
-    if (c.restart) {  // re-read with the breakage columns
-      hist = History{};
-      hist.add_breakage_columns();
-      hist.read_until(rundir / "history.csv", e.step_count());
-    }
   }
   sum.time_step = eo.time_step;
   sum.spheres = e.particles().size();
@@ -326,56 +303,33 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
                               static_cast<double>(r.bonds_intact), static_cast<double>(r.spheres),
                               static_cast<double>(r.particles), r.volume_lost_m3, e.options().time_step,
                               static_cast<double>(r.fines_removed), r.fines_volume_m3, r.added_mass_fraction};
-      for (size_t k = 0; k < row.size(); ++k) hist.cols[12 + k].back() = row[k];
+      for (size_t k = 0; k < row.size(); ++k) hist.last(HistoryTable::base_columns().size() + k) = row[k];
     }
   };
+  // The snapshot index (dem/run_folder.hpp): on a restart, the entries the
+  // checkpoint had already written.
+  std::vector<SnapshotEntry> index = c.restart ? read_snapshot_index(rundir, e.step_count()) : std::vector<SnapshotEntry>{};
   auto snapshot = [&] {
     const double target = s.snapshot_strains[static_cast<size_t>(scene.next_snapshot)];
     char name[64];
     std::snprintf(name, sizeof name, "strain_%05.2fpct.h5", 100 * target);
-    write_snapshot(e.particles(), rundir / "snapshots" / name,
-                   "{\"requested_strain\": " + fmt17(target) + ", \"strain\": " + fmt17(strain()) +
-                       ", \"time_s\": " + fmt17(e.time()) + ", \"step\": " + std::to_string(e.step_count()) + "}");
+    const json attr = {{"requested_strain", target}, {"strain", strain()}, {"time_s", e.time()}, {"step", e.step_count()}};
+    write_snapshot(e.particles(), rundir / "snapshots" / name, attr.dump());
+    SnapshotEntry entry{std::string("snapshots/") + name, e.step_count(), e.time(), strain(), target, ""};
     if (brk) {
-      Table t;
-      std::vector<double> a, b2, fn, fs, mt, mb;
-      for (int64_t k = 0; k < brk->bond_count(); ++k) {
-        const breakage::BondState& st = brk->bond_state(k);
-        a.push_back(static_cast<double>(brk->bond_a(k)));
-        b2.push_back(static_cast<double>(brk->bond_b(k)));
-        fn.push_back(st.fn);
-        fs.push_back(norm(st.fs));
-        mt.push_back(st.mt);
-        mb.push_back(norm(st.mb));
-      }
-      t.add("sphere_a", a);
-      t.add("sphere_b", b2);
-      t.add("normal_force_N", fn);
-      t.add("shear_force_N", fs);
-      t.add("twist_moment_Nm", mt);
-      t.add("bending_moment_Nm", mb);
       std::string bn = name;
       bn.replace(bn.size() - 3, 3, "_bonds.csv");
-      write_csv(t, rundir / "snapshots" / bn);
+      write_bonds_csv(*brk, rundir / "snapshots" / bn);
+      entry.bonds = "snapshots/" + bn;
     }
+    index.push_back(entry);
+    write_snapshot_index(rundir, index);
     ++scene.next_snapshot;
   };
   auto checkpoint = [&] {
     hist.write(rundir / "history.csv");
-    if (brk) {  // one row per split of this process (a restart starts a new list)
-      Table t;
-      std::vector<double> cols[11];
-      for (const breakage::SplitEvent& ev : brk->events()) {
-        const double v[11] = {static_cast<double>(ev.step), ev.time_s, static_cast<double>(ev.generation), ev.diameter_m,
-                              ev.position.x, ev.position.y, ev.position.z, ev.f_max_N, ev.stress_Pa, ev.strength_Pa,
-                              ev.volume_retained_m3};
-        for (int k = 0; k < 11; ++k) cols[k].push_back(v[k]);
-      }
-      const char* names[11] = {"step", "time_s", "generation", "diameter_m", "x_m", "y_m", "z_m", "f_max_N", "stress_Pa",
-                               "strength_Pa", "volume_retained_m3"};
-      for (int k = 0; k < 11; ++k) t.add(names[k], cols[k]);
-      write_csv(t, rundir / (c.restart ? "splits_after_restart.csv" : "splits.csv"));
-    }
+    if (brk)  // one row per split of this process (a restart starts a new list)
+      write_splits_csv(brk->events(), rundir / (c.restart ? "splits_after_restart.csv" : "splits.csv"));
     save_checkpoint(e, brk ? scene.encode() + " " + brk->encode() : scene.encode(), ckpt);
   };
 

@@ -1,33 +1,27 @@
 #include "dem/packing_io.hpp"
 
-#include <cmath>
-
-#include "core/errors.hpp"
-#include "core/table.hpp"
-
 namespace tg::dem {
 
-Particles read_packing_csv(const std::filesystem::path& path, double density) {
-  const Table t = read_csv(path, {"x_m", "y_m", "z_m", "r_m"});
-  const auto &x = t.num("x_m"), &y = t.num("y_m"), &z = t.num("z_m"), &r = t.num("r_m");
-  const bool has_id = t.has("particle") && !t.columns()[static_cast<size_t>(t.find("particle"))].is_text;
+Particles particles_from_spheres(const SphereTable& s, double density) {
   Particles p;
-  for (int64_t i = 0; i < t.rows(); ++i) {
-    if (!(r[i] > 0) || !std::isfinite(r[i] + x[i] + y[i] + z[i]))
-      throw InputError(path.string() + ":" + std::to_string(i + 2) + ": sphere needs finite x_m,y_m,z_m and r_m > 0");
-    p.append_sphere(x[i], y[i], z[i], r[i], density, has_id ? static_cast<int64_t>(t.num("particle")[i]) : i);
-  }
-  if (p.size() == 0) throw InputError(path.string() + ": packing has no spheres");
+  for (size_t i = 0; i < s.size(); ++i) p.append_sphere(s.x_m[i], s.y_m[i], s.z_m[i], s.r_m[i], density, s.particle[i]);
   return p;
 }
 
-void write_packing_csv(const Particles& p, const std::filesystem::path& path) {
-  Table t;
-  t.add("x_m", p.x);
-  t.add("y_m", p.y);
-  t.add("z_m", p.z);
-  t.add("r_m", p.r);
-  write_csv(t, path);
+Particles read_packing_csv(const std::filesystem::path& path, double density) {
+  return particles_from_spheres(read_spheres(path.string()), density);
 }
+
+SphereTable spheres_of(const Particles& p) {
+  SphereTable s;
+  s.x_m = p.x;
+  s.y_m = p.y;
+  s.z_m = p.z;
+  s.r_m = p.r;
+  s.particle = p.particle;
+  return s;
+}
+
+void write_packing_csv(const Particles& p, const std::filesystem::path& path) { write_spheres(spheres_of(p), path); }
 
 }  // namespace tg::dem

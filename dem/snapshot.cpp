@@ -1,10 +1,8 @@
 #include "dem/snapshot.hpp"
 
-#include <fstream>
 #include <sstream>
 
 #include "core/atomic_file.hpp"
-#include "core/errors.hpp"
 #include "core/io/hdf5.hpp"
 #include "core/table.hpp"
 
@@ -44,13 +42,7 @@ void write_snapshot(const Particles& p, const std::filesystem::path& path, const
   x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
   std::filesystem::path xmf = path;
   xmf.replace_extension(".xmf");
-  AtomicPath out(xmf);
-  {
-    std::ofstream os(out.temp());
-    os << x.str();
-    if (!os) throw InputError(xmf.string() + ": write failed");
-  }
-  out.commit();
+  write_file_atomic(xmf, x.str());
 }
 
 }  // namespace tg::dem

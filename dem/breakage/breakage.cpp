@@ -32,10 +32,9 @@ BreakageModel::BreakageModel(Engine& engine, const BreakageOptions& opt) : eng_(
   law_ = make_hertz_mindlin(eng_.options().material, eng_.options().material, 0.0, 1.0);
   const Particles& p = eng_.particles();
   const int64_t n = p.size();
-  strength_.resize(n);
-  key_.resize(n);
-  generation_.assign(n, 0);
-  mass_factor_.assign(n, 1.0);
+  for_each_sphere_field([&](auto& v) { v.resize(n); });
+  std::fill(generation_.begin(), generation_.end(), 0);
+  std::fill(mass_factor_.begin(), mass_factor_.end(), 1.0);
   for (int64_t s = 0; s < n; ++s) {
     key_[s] = static_cast<uint64_t>(s);
     strength_[s] = sphere_strength(opt_.strength, key_[s], 2 * p.r[s]);
@@ -99,18 +98,10 @@ void BreakageModel::compact_bonds(int64_t* counter) {
       ++*counter;
       continue;
     }
-    ba_[w] = ba_[b];
-    bb_[w] = bb_[b];
-    section_[w] = section_[b];
-    state_[w] = state_[b];
-    broken_[w] = 0;
+    for_each_bond_field([&](auto& v) { v[w] = v[b]; });  // broken_[b] is 0 here
     ++w;
   }
-  ba_.resize(w);
-  bb_.resize(w);
-  section_.resize(w);
-  state_.resize(w);
-  broken_.resize(w);
+  for_each_bond_field([&](auto& v) { v.resize(w); });
   bonds_changed_ = true;
 }
 
@@ -280,10 +271,7 @@ Replacement BreakageModel::split(int64_t s, const SplittingPlane& plane) {
   const double m_mother = p.m[s], r_mother = p.r[s];
   const uint64_t mother_key = key_[s];
   const double factor_mother = mass_factor_[s];
-  strength_.resize(n0 + count - 1);
-  key_.resize(n0 + count - 1);
-  generation_.resize(n0 + count - 1);
-  mass_factor_.resize(n0 + count - 1);
+  for_each_sphere_field([&](auto& v) { v.resize(n0 + count - 1); });
   for (int64_t k = 0; k < count; ++k) {
     const NewSphere& ns = rep.spheres[k];
     const int64_t t = idx[k];
@@ -369,16 +357,10 @@ void BreakageModel::remove_fines(const std::vector<int64_t>& spheres) {
   for (int64_t s = 0; s < n; ++s) {
     const int64_t t = map[s];
     if (t < 0 || t == s) continue;
-    strength_[t] = strength_[s];
-    key_[t] = key_[s];
-    generation_[t] = generation_[s];
-    mass_factor_[t] = mass_factor_[s];
+    for_each_sphere_field([&](auto& v) { v[t] = v[s]; });
   }
   const int64_t kept = p.size();
-  strength_.resize(kept);
-  key_.resize(kept);
-  generation_.resize(kept);
-  mass_factor_.resize(kept);
+  for_each_sphere_field([&](auto& v) { v.resize(kept); });
   bonds_changed_ = true;
   relabel_particles();
   rec_.spheres = kept;
@@ -509,10 +491,7 @@ void BreakageModel::restore(const std::string& state) {
   if (!(is >> tag >> dt >> n) || tag != "breakage2") fail("missing or of an unknown version");
   const Particles& p = eng_.particles();
   if (n != p.size()) fail("has " + std::to_string(n) + " spheres, the checkpoint " + std::to_string(p.size()));
-  key_.resize(n);
-  generation_.resize(n);
-  strength_.resize(n);
-  mass_factor_.resize(n);
+  for_each_sphere_field([&](auto& v) { v.resize(n); });
   for (int64_t s = 0; s < n; ++s) {
     if (!(is >> key_[s] >> generation_[s] >> mass_factor_[s]) || !(mass_factor_[s] >= 1)) fail("truncated (spheres)");
     strength_[s] = sphere_strength(opt_.strength, key_[s], 2 * p.r[s]);
@@ -526,11 +505,7 @@ void BreakageModel::restore(const std::string& state) {
     if (!(is >> c)) fail("truncated (generations)");
   size_t nb = 0;
   if (!(is >> nb)) fail("truncated (bonds)");
-  ba_.assign(nb, 0);
-  bb_.assign(nb, 0);
-  state_.assign(nb, BondState{});
-  section_.assign(nb, BondSection{});
-  broken_.assign(nb, 0);
+  for_each_bond_field([&](auto& v) { v.assign(nb, {}); });
   for (size_t b = 0; b < nb; ++b) {
     BondState& st = state_[b];
     if (!(is >> ba_[b] >> bb_[b] >> st.fn >> st.fs.x >> st.fs.y >> st.fs.z >> st.mt >> st.mb.x >> st.mb.y >> st.mb.z))

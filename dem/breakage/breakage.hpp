@@ -174,17 +174,26 @@ class BreakageModel {
   BreakageOptions opt_;
   BreakageRecord rec_;
   std::vector<SplitEvent> events_;
-  // Per sphere.
+  // Per sphere, in the engine's sphere order. The declared list below drives
+  // every resize and move, as Particles::for_each_field does for the spheres.
   std::vector<double> strength_;
   std::vector<uint64_t> key_;
   std::vector<int> generation_;
   std::vector<double> mass_factor_;  // density scaling, inherited by fragments
+  template <class F>
+  void for_each_sphere_field(F&& f) {
+    f(strength_), f(key_), f(generation_), f(mass_factor_);
+  }
   HertzMindlin law_;                 // for the per-sphere critical step
-  // Bonds (structure of arrays).
+  // Bonds (structure of arrays), with their declared list.
   std::vector<int64_t> ba_, bb_;
   std::vector<BondSection> section_;
   std::vector<BondState> state_;
   std::vector<uint8_t> broken_;
+  template <class F>
+  void for_each_bond_field(F&& f) {
+    f(ba_), f(bb_), f(section_), f(state_), f(broken_);
+  }
   std::vector<BondLoads> loads_;  // scratch, one per bond
   bool bonds_changed_ = false;
 };

@@ -1,6 +1,7 @@
 // The oedometer scene: config strictness, run folder contents, and restart
 // from a checkpoint continuing bit for bit.
 #include "dem/oedometer.hpp"
+#include "dem/run_folder.hpp"
 
 #include <gtest/gtest.h>
 
@@ -102,6 +103,22 @@ TEST(Oedometer, RunFolderHasHistoryAndSnapshots) {
   const Particles p0 = read_packing_csv(d / "packing.csv", 2180);
   const Table t0 = H5Reader((d / "run" / "snapshots" / "strain_00.00pct.h5").string()).read_table("spheres");
   EXPECT_EQ(t0.num("z_m"), p0.z);
+  // The snapshot index (dem/run_folder.hpp), read back the way compare reads it.
+  const RunFolder run = read_run_folder(d / "run");
+  ASSERT_EQ(run.snapshots.size(), 3u);
+  const double requested[3] = {0.0, 0.02, 0.05};
+  for (size_t k = 0; k < 3; ++k) {
+    const SnapshotEntry& e = run.snapshots[k];
+    EXPECT_EQ(e.requested_strain, requested[k]);
+    // Taken at the first step at or past the requested strain: one platen step beyond it at most.
+    EXPECT_GE(e.axial_strain, requested[k] - 1e-12);
+    EXPECT_LE(e.axial_strain, requested[k] + 0.5 * r.time_step / r.initial_height_m + 1e-12);
+    EXPECT_TRUE(fs::exists(run.snapshot_path(k))) << e.file;
+    EXPECT_EQ(e.bonds.empty(), !s.breakage);  // the bonds sidecar is declared when the run breaks grains
+    if (!e.bonds.empty()) EXPECT_TRUE(fs::exists(d / "run" / e.bonds)) << e.bonds;
+  }
+  EXPECT_EQ(run.history.rows(), h.rows());
+  EXPECT_THROW(read_run_folder(d), InputError);  // no snapshots.csv: not a run folder
   fs::remove_all(d);
 }
 

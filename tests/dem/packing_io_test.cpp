@@ -22,12 +22,13 @@ TEST(PackingIO, RoundTripIsExact) {
   std::ifstream is(f);
   std::string header;
   std::getline(is, header);
-  EXPECT_EQ(header, "x_m,y_m,z_m,r_m");
+  EXPECT_EQ(header, "x_m,y_m,z_m,r_m,particle");
   const Particles q = read_packing_csv(f, 2180);
   EXPECT_EQ(q.x, p.x);
   EXPECT_EQ(q.y, p.y);
   EXPECT_EQ(q.z, p.z);
   EXPECT_EQ(q.r, p.r);
+  EXPECT_EQ(q.particle, p.particle);
   EXPECT_NEAR(q.m[0], 2180 * 4.0 / 3.0 * std::numbers::pi * std::pow(0.68e-3, 3), 1e-18);
   EXPECT_NEAR(q.inertia[0], 0.4 * q.m[0] * 0.68e-3 * 0.68e-3, 1e-24);
   fs::remove(f);
@@ -40,7 +41,7 @@ TEST(PackingIO, RejectsBadRadiusAndMissingColumns) {
     read_packing_csv(f, 2180);
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(":3:"), std::string::npos) << e.what();  // names the line
+    EXPECT_NE(std::string(e.what()).find("row 3"), std::string::npos) << e.what();  // names the line
   }
   { std::ofstream(f) << "x_m,y_m,r_m\n0,0,0.001\n"; }
   EXPECT_THROW(read_packing_csv(f, 2180), InputError);

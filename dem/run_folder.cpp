@@ -1,0 +1,147 @@
+#include "dem/run_folder.hpp"
+
+#include "core/errors.hpp"
+#include "dem/breakage/breakage.hpp"
+
+namespace tg::dem {
+namespace fs = std::filesystem;
+
+const std::vector<std::string>& HistoryTable::base_columns() {
+  static const std::vector<std::string> n{"step", "time_s", "strain", "top_stress_Pa", "bottom_stress_Pa",
+                                          "lateral_stress_Pa", "K0", "kinetic_energy_J", "coordination", "contacts",
+                                          "porosity", "platen_z_m"};
+  return n;
+}
+
+const std::vector<std::string>& HistoryTable::breakage_columns() {
+  static const std::vector<std::string> n{"grains_broken", "splits_gen0", "splits_gen1", "splits_gen2", "splits_gen3",
+                                          "bonds_broken", "bonds_dropped", "bonds_intact", "spheres", "particles",
+                                          "volume_lost_m3", "time_step_s", "fines_removed", "fines_volume_m3",
+                                          "added_mass_fraction"};
+  return n;
+}
+
+HistoryTable::HistoryTable(bool breakage) : names_(base_columns()) {
+  if (breakage) names_.insert(names_.end(), breakage_columns().begin(), breakage_columns().end());
+  cols_.resize(names_.size());
+}
+
+void HistoryTable::add(const std::vector<double>& row) {
+  for (size_t c = 0; c < cols_.size(); ++c) cols_[c].push_back(c < row.size() ? row[c] : 0.0);
+}
+
+void HistoryTable::write(const fs::path& path) const {
+  Table t;
+  for (size_t c = 0; c < cols_.size(); ++c) t.add(names_[c], cols_[c]);
+  write_csv(t, path);
+}
+
+void HistoryTable::read_until(const fs::path& path, int64_t step) {
+  if (!fs::exists(path)) return;
+  const Table t = read_csv(path, names_);
+  for (int64_t r = 0; r < t.rows(); ++r) {
+    if (t.num("step")[r] > static_cast<double>(step)) break;
+    std::vector<double> row;
+    for (const auto& n : names_) row.push_back(t.num(n)[r]);
+    add(row);
+  }
+}
+
+void write_bonds_csv(const breakage::BreakageModel& brk, const fs::path& path) {
+  std::vector<double> a, b, fn, fs_, mt, mb;
+  for (int64_t k = 0; k < brk.bond_count(); ++k) {
+    const breakage::BondState& st = brk.bond_state(k);
+    a.push_back(static_cast<double>(brk.bond_a(k)));
+    b.push_back(static_cast<double>(brk.bond_b(k)));
+    fn.push_back(st.fn);
+    fs_.push_back(norm(st.fs));
+    mt.push_back(st.mt);
+    mb.push_back(norm(st.mb));
+  }
+  Table t;
+  t.add("sphere_a", a);
+  t.add("sphere_b", b);
+  t.add("normal_force_N", fn);
+  t.add("shear_force_N", fs_);
+  t.add("twist_moment_Nm", mt);
+  t.add("bending_moment_Nm", mb);
+  write_csv(t, path);
+}
+
+void write_splits_csv(const std::vector<breakage::SplitEvent>& events, const fs::path& path) {
+  Table t;
+  std::vector<double> cols[11];
+  for (const breakage::SplitEvent& ev : events) {
+    const double v[11] = {static_cast<double>(ev.step), ev.time_s, static_cast<double>(ev.generation), ev.diameter_m,
+                          ev.position.x, ev.position.y, ev.position.z, ev.f_max_N, ev.stress_Pa, ev.strength_Pa,
+                          ev.volume_retained_m3};
+    for (int k = 0; k < 11; ++k) cols[k].push_back(v[k]);
+  }
+  const char* names[11] = {"step", "time_s", "generation", "diameter_m", "x_m", "y_m", "z_m", "f_max_N", "stress_Pa",
+                           "strength_Pa", "volume_retained_m3"};
+  for (int k = 0; k < 11; ++k) t.add(names[k], cols[k]);
+  write_csv(t, path);
+}
+
+void write_snapshot_index(const fs::path& rundir, const std::vector<SnapshotEntry>& entries) {
+  std::vector<std::string> file, bonds;
+  std::vector<double> step, time, strain, requested;
+  for (const SnapshotEntry& e : entries) {
+    file.push_back(e.file);
+    step.push_back(static_cast<double>(e.step));
+    time.push_back(e.time_s);
+    strain.push_back(e.axial_strain);
+    requested.push_back(e.requested_strain);
+    bonds.push_back(e.bonds);
+  }
+  Table t;
+  t.add_text("file", file);
+  t.add("step", step);
+  t.add("time_s", time);
+  t.add("axial_strain", strain);
+  t.add("requested_strain", requested);
+  t.add_text("bonds", bonds);
+  write_csv(t, rundir / "snapshots.csv");
+}
+
+std::vector<SnapshotEntry> read_snapshot_index(const fs::path& rundir, int64_t max_step) {
+  const fs::path path = rundir / "snapshots.csv";
+  std::vector<SnapshotEntry> out;
+  if (!fs::exists(path)) return out;
+  const Table t = read_csv(path, {"step", "time_s", "axial_strain", "requested_strain"});
+  if (t.rows() == 0) return out;
+  // A column of empty cells (no bonds anywhere) reads as text; one of file
+  // names too. Both are required.
+  const auto& file = t.text("file");
+  const auto& bonds = t.text("bonds");
+  for (int64_t r = 0; r < t.rows(); ++r) {
+    SnapshotEntry e;
+    e.file = file[static_cast<size_t>(r)];
+    e.step = static_cast<int64_t>(t.num("step")[r]);
+    e.time_s = t.num("time_s")[r];
+    e.axial_strain = t.num("axial_strain")[r];
+    e.requested_strain = t.num("requested_strain")[r];
+    e.bonds = bonds[static_cast<size_t>(r)];
+    if (e.step > max_step) continue;
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
+RunFolder read_run_folder(const fs::path& dir) {
+  if (!fs::is_directory(dir)) throw InputError(dir.string() + ": not a folder (DEM run)");
+  if (!fs::exists(dir / "snapshots.csv"))
+    throw InputError(dir.string() + ": not a DEM run folder (no snapshots.csv; `tomograin dem oedometer` writes one)");
+  RunFolder r;
+  r.dir = dir;
+  r.snapshots = read_snapshot_index(dir);
+  if (r.snapshots.empty()) throw InputError((dir / "snapshots.csv").string() + ": lists no snapshot");
+  for (size_t k = 0; k < r.snapshots.size(); ++k)
+    if (!fs::exists(r.snapshot_path(k)))
+      throw InputError((dir / "snapshots.csv").string() + ": row " + std::to_string(k + 2) + ": " +
+                       r.snapshots[k].file + " does not exist");
+  if (fs::exists(dir / "history.csv")) r.history = read_csv(dir / "history.csv", {kHistoryStrain, kHistoryTopStress});
+  return r;
+}
+
+}  // namespace tg::dem

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -31,7 +32,7 @@ struct VoxOpts {
 };
 
 int run_voxelise(const VoxOpts& o) {
-  if (fs::path(o.out).extension() != ".h5") throw UsageError("-o " + o.out + ": expected an .h5 file");
+  if (!is_hdf5(o.out)) throw UsageError("-o " + o.out + ": expected an .h5 file");
   compare::VoxeliseOptions vo;
   vo.voxel_m = o.voxel_um * 1e-6;
   vo.field = o.field == "cylinder" ? compare::FieldOfView::cylinder : compare::FieldOfView::spheres;
@@ -56,19 +57,21 @@ int run_voxelise(const VoxOpts& o) {
   if (o.noise >= 0) vo.imaging.noise_sigma = o.noise;
   if (o.psf >= 0) vo.imaging.psf_sigma = o.psf;
 
-  const compare::SphereTable s = compare::read_spheres(o.in);
+  const SphereTable s = read_spheres(o.in);
   compare::Voxelised v = compare::voxelise(s, vo);
-  const std::string prov =
-      fmt::format(R"({{"voxelise": "{}", "voxel_um": {}, "void_grey": {}, "solid_grey": {}, "noise_sigma": {}, )"
-                  R"("psf_sigma_vox": {}, "imaging": "{}"}})",
-                  o.in, o.voxel_um, vo.imaging.void_grey, vo.imaging.solid_grey, vo.imaging.noise_sigma,
-                  vo.imaging.psf_sigma, like_note);
+  const nlohmann::json prov = {{"voxelise", o.in},
+                               {"voxel_um", o.voxel_um},
+                               {"void_grey", vo.imaging.void_grey},
+                               {"solid_grey", vo.imaging.solid_grey},
+                               {"noise_sigma", vo.imaging.noise_sigma},
+                               {"psf_sigma_vox", vo.imaging.psf_sigma},
+                               {"imaging", like_note}};
   {
     H5Writer w(o.out);
     if (vo.grey) w.write_volume("/volume", v.grey);
     w.write_volume("/labels", v.labels);
     if (o.truth) w.write_table("/truth", v.truth);
-    w.write_attribute("voxelise", prov);
+    w.write_attribute("voxelise", prov.dump());
     w.commit();
   }
   const std::string truth_csv = (fs::path(o.out).parent_path() / (fs::path(o.out).stem().string() + "_truth.csv")).string();
@@ -190,9 +193,9 @@ static tg::app::Registrar reg_cmp{{"compare", 80, [](CLI::App& app, CLI::App*& s
       "weighted by mass, W1 in mm; FR, AR by number) for experiment-vs-imaged, experiment-vs-ideal and\n"
       "ideal-vs-imaged (= segmentation bias). Plus the DEM stress-strain curve (RUNDIR/history.csv) beside\n"
       "an experimental curve (--curve CSV with axial_strain and axial_stress_Pa/kPa/MPa).\n\n"
-      "DEM run folder: history.csv and snapshots in RUNDIR/snapshots/ (or RUNDIR) as .csv/.h5 sphere tables;\n"
-      "snapshot strains from --dem-strains, RUNDIR/snapshots.csv (file,axial_strain), or each snapshot's\n"
-      "axial_strain column/attribute; XCT strains from --xct-strains or synth provenance; else by order.\n\n"
+      "DEM run folder (--dem, written by `tomograin dem oedometer`): its snapshot index snapshots.csv\n"
+      "(file, step, axial_strain, ...) and history.csv; or explicit sphere tables (--dem-snapshots, with\n"
+      "--dem-strains or matched by order). XCT strains from --xct-strains or synth provenance; else by order.\n\n"
       "Output REPORT_DIR: index.html (self-contained, images embedded), PNGs, report.json, summary.csv, psd.csv,\n"
       "shape_classes.csv, distances.csv, stress_strain.csv, broken.csv, particles/*.csv, slices/*.npy.\n"
       "Plots need Debian's /usr/bin/python3 with python3-matplotlib.\n\n"
@@ -202,12 +205,13 @@ static tg::app::Registrar reg_cmp{{"compare", 80, [](CLI::App& app, CLI::App*& s
   auto o = std::make_shared<CmpOpts>();
   sub->add_option("--xct", o->xct, "XCT stages in loading order: scans (.h5/.tif/.json) or particle tables (.csv)")
       ->required();
-  sub->add_option("--dem", o->dem, "DEM run folder (history.csv + snapshots)")->required();
+  sub->add_option("--dem", o->dem, "DEM run folder (snapshots.csv index, snapshots, history.csv)");
   sub->add_option("-o,--output", o->out, "Report folder")->required();
   sub->add_option("--xct-strains", o->xct_strains, "Axial strain of each XCT stage (fraction, e.g. 0.044)");
   sub->add_option("--names", o->names, "Stage names shown in the report");
-  sub->add_option("--dem-snapshots", o->dem_snapshots, "Explicit snapshot files (instead of searching RUNDIR)");
-  sub->add_option("--dem-strains", o->dem_strains, "Axial strain of each snapshot");
+  sub->add_option("--dem-snapshots", o->dem_snapshots,
+                  "Explicit sphere tables (x_m,y_m,z_m,r_m[,particle]) instead of the run folder's index");
+  sub->add_option("--dem-strains", o->dem_strains, "Axial strain of each snapshot (overrides the index)");
   sub->add_option("--curve", o->curve, "Experimental stress-strain CSV");
   sub->add_option("--voxel-um", o->voxel_um, "Voxelising voxel size (default: each scan's own)");
   sub->add_option("--grain-radius-vox", o->grain_radius_vox,

@@ -46,9 +46,10 @@
 #include <string>
 #include <vector>
 
+#include "compare/distances.hpp"
 #include "compare/imaging_estimate.hpp"
-#include "compare/stage_metrics.hpp"
 #include "compare/voxelise.hpp"
+#include "measure/grading.hpp"
 #include "measure/particles.hpp"
 #include "segmentation/segment.hpp"
 
@@ -62,16 +63,14 @@ struct CompareInputs {
   std::vector<double> xct_strains;   // optional, one per stage; else the file's synth
                                      // provenance (axial_strain), else matched by order
   std::vector<std::string> stage_names;  // optional; default "stage N (ε = …)"
-  // DEM run folder: history.csv (strain, top_stress_Pa or another axial
-  // stress column, optional grains_broken) and the snapshots: RUNDIR/snapshots/*.{csv,h5}, else
-  // RUNDIR/*.{csv,h5} other than history.csv and snapshots.csv; CSVs count only when their
-  // header has x_m and r_m (the DEM's bond tables beside the snapshots are skipped).
+  // DEM run folder (dem/run_folder.hpp): its snapshot index (snapshots.csv:
+  // file, axial_strain, …) and history.csv (strain, top_stress_Pa, optional
+  // grains_broken), read through dem::read_run_folder.
   std::string dem_run;
-  std::vector<std::string> dem_snapshots;  // optional explicit list (overrides the search)
-  // Snapshot strains: this list, else RUNDIR/snapshots.csv (file, axial_strain),
-  // else the snapshot's own: dem/snapshot.hpp's root attribute "snapshot" (JSON "strain"),
-  // an HDF5 attribute axial_strain, or a CSV column axial_strain/strain.
-  std::vector<double> dem_strains;
+  // Or explicit sphere tables (core/sphere_table.hpp) instead of the run
+  // folder's index; their strains from dem_strains, else matched by order.
+  std::vector<std::string> dem_snapshots;
+  std::vector<double> dem_strains;  // optional: overrides the index's strains
   std::string experimental_curve;  // optional CSV: axial strain + axial stress columns
   std::string report_dir;          // output folder (created; files inside are replaced)
   std::string title = "tomograin: experiment vs DEM";
@@ -104,7 +103,7 @@ struct StageReport {
   std::string xct_source, dem_snapshot;
   bool synthetic = false;
   int64_t n_experiment = 0, n_ideal = 0, n_imaged = 0;
-  StageMetrics experiment, ideal, imaged;
+  measure::StageGrading experiment, ideal, imaged;
   Distances exp_vs_imaged, exp_vs_ideal, ideal_vs_imaged;
   double seconds = 0;
 };

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <vector>
@@ -82,6 +83,22 @@ double wasserstein1(std::span<const double> a, std::span<const double> b, std::s
     prev_x = x;
     prev_diff = std::abs(fa - fb);
   });
+  return d;
+}
+
+Distances sample_distances(const measure::GradingSample& a, const measure::GradingSample& b) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  Distances d{nan, nan, nan, nan, nan, nan};
+  if (!a.size_mm.empty() && !b.size_mm.empty()) {
+    d.psd_ks = ks_distance(a.size_mm, b.size_mm, a.mass, b.mass);
+    d.psd_w1_mm = wasserstein1(a.size_mm, b.size_mm, a.mass, b.mass);
+  }
+  if (!a.fr.empty() && !b.fr.empty()) {
+    d.fr_ks = ks_distance(a.fr, b.fr);
+    d.fr_w1 = wasserstein1(a.fr, b.fr);
+    d.ar_ks = ks_distance(a.ar, b.ar);
+    d.ar_w1 = wasserstein1(a.ar, b.ar);
+  }
   return d;
 }
 

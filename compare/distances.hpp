@@ -18,6 +18,8 @@
 #pragma once
 #include <span>
 
+#include "measure/grading.hpp"
+
 namespace tg::compare {
 
 // Throws UsageError when a sample is empty, sizes differ, a value is not
@@ -27,5 +29,13 @@ double ks_distance(std::span<const double> a, std::span<const double> b, std::sp
                    std::span<const double> wb = {});
 double wasserstein1(std::span<const double> a, std::span<const double> b, std::span<const double> wa = {},
                     std::span<const double> wb = {});
+
+// The distances the report shows between two stages' samples
+// (measure/grading.hpp): PSD = d_med weighted by mass; FR, AR by number.
+struct Distances {
+  double psd_ks = 0, psd_w1_mm = 0, fr_ks = 0, fr_w1 = 0, ar_ks = 0, ar_w1 = 0;
+};
+// NaN for a distribution that is empty on either side.
+Distances sample_distances(const measure::GradingSample& a, const measure::GradingSample& b);
 
 }  // namespace tg::compare

@@ -7,7 +7,6 @@
 #include <map>
 
 #include "core/errors.hpp"
-#include "core/io/hdf5.hpp"
 #include "data_synth/truth.hpp"
 
 namespace tg::compare {
@@ -18,89 +17,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }
 
 }  // namespace
-
-SphereTable spheres_from_table(const Table& t) {
-  const auto &x = t.num("x_m"), &y = t.num("y_m"), &z = t.num("z_m"), &r = t.num("r_m");
-  const std::vector<double>* ids = t.has("particle") ? &t.num("particle") : t.has("cluster") ? &t.num("cluster") : nullptr;
-  SphereTable s;
-  s.source = t.source;
-  for (int64_t q = 0; q < t.rows(); ++q) {
-    const std::string row = t.source + ": row " + std::to_string(q + 2);
-    if (!std::isfinite(x[q]) || !std::isfinite(y[q]) || !std::isfinite(z[q]))
-      throw InputError(row + ": sphere position must be finite");
-    if (!(r[q] > 0) || !std::isfinite(r[q])) throw InputError(row + ": r_m must be > 0");
-    int64_t id = q;
-    if (ids) {
-      const double v = (*ids)[q];
-      if (!std::isfinite(v) || v != std::floor(v) || std::abs(v) > 9e15)
-        throw InputError(row + ": particle id must be an integer");
-      id = static_cast<int64_t>(v);
-    }
-    s.x_m.push_back(x[q]);
-    s.y_m.push_back(y[q]);
-    s.z_m.push_back(z[q]);
-    s.r_m.push_back(r[q]);
-    s.particle.push_back(id);
-  }
-  if (s.size() == 0) throw InputError(t.source + ": no spheres");
-  return s;
-}
-
-SphereTable read_spheres(const std::string& path) {
-  const auto h5 = path.find(".h5");
-  if (h5 == std::string::npos) {
-    Table t = read_csv(path, {"x_m", "y_m", "z_m", "r_m"});
-    return spheres_from_table(t);
-  }
-  const std::string file = path.substr(0, h5 + 3);
-  std::string group = h5 + 3 < path.size() && path[h5 + 3] == ':' ? path.substr(h5 + 4) : "";
-  H5Reader rd(file);
-  if (group.empty()) {
-    for (const std::string& d : rd.datasets()) {
-      const auto slash = d.rfind('/');
-      if (slash != std::string::npos && d.substr(slash + 1) == "x_m") {
-        group = d.substr(0, slash);
-        break;
-      }
-    }
-    if (group.empty()) throw InputError(file + ": no table with an x_m column (expected DEM spheres x_m,y_m,z_m,r_m)");
-  }
-  Table t = rd.read_table(group);
-  t.source = file + ":" + group;
-  return spheres_from_table(t);
-}
-
-std::vector<synth::Particle> to_particles(const SphereTable& s, const Geometry& g,
-                                          std::vector<int64_t>* particle_of_label) {
-  if (!g.has_voxel_size() || !g.isotropic()) throw UsageError("voxelise: an isotropic voxel size is needed");
-  const double v = g.voxel_size_m[0];
-  std::map<int64_t, size_t> slot;  // particle id -> index in `groups`
-  std::vector<std::vector<synth::Sphere>> groups;
-  std::vector<int64_t> ids;
-  for (size_t q = 0; q < s.size(); ++q) {
-    auto [it, fresh] = slot.try_emplace(s.particle[q], groups.size());
-    if (fresh) {
-      groups.emplace_back();
-      ids.push_back(s.particle[q]);
-    }
-    groups[it->second].push_back(synth::Sphere{{(s.z_m[q] - g.origin_m[0]) / v, (s.y_m[q] - g.origin_m[1]) / v,
-                                                (s.x_m[q] - g.origin_m[2]) / v},
-                                               s.r_m[q] / v});
-  }
-  if (groups.size() >= std::numeric_limits<uint32_t>::max()) throw InputError(s.source + ": too many particles");
-  std::vector<synth::Particle> out;
-  out.reserve(groups.size());
-  for (size_t n = 0; n < groups.size(); ++n) {
-    const auto id = static_cast<uint32_t>(n + 1);
-    out.push_back(groups[n].size() == 1 ? synth::make_grain(id, groups[n][0].c, groups[n][0].r)
-                                        : synth::make_cluster(id, id, groups[n]));
-  }
-  if (particle_of_label) {
-    particle_of_label->assign(1, -1);
-    particle_of_label->insert(particle_of_label->end(), ids.begin(), ids.end());
-  }
-  return out;
-}
 
 std::pair<Shape, Geometry> voxel_grid(const SphereTable& s, const VoxeliseOptions& opt) {
   if (!(opt.voxel_m > 0) || !std::isfinite(opt.voxel_m)) throw UsageError("voxelise: voxel size must be > 0");
@@ -162,7 +78,7 @@ bool members_disjoint(const synth::Piece* begin, const synth::Piece* end, double
 Voxelised voxelise(const SphereTable& s, const VoxeliseOptions& opt) {
   const auto [shape, geom] = voxel_grid(s, opt);
   Voxelised out;
-  const std::vector<synth::Particle> particles = to_particles(s, geom, &out.particle_of_label);
+  const std::vector<synth::Particle> particles = synth::particles_from_spheres(s, geom, &out.particle_of_label);
   // What the renderer gets: clusters with disjoint members as separate spheres
   // (render ids 1..n), with label_of[render id] = particle label.
   std::vector<synth::Particle> render_list;
@@ -197,20 +113,7 @@ Voxelised voxelise(const SphereTable& s, const VoxeliseOptions& opt) {
     for (int64_t q = 0; q < n; ++q) lab[q] = label_of[lab[q]];
   }
   out.render_s = seconds_since(t0);
-  {
-    // Mean solid fraction, per slice then in slice order (thread independent).
-    std::vector<double> per(static_cast<size_t>(shape.nz), 0.0);
-#pragma omp parallel for schedule(static)
-    for (int64_t k = 0; k < shape.nz; ++k) {
-      double acc = 0;
-      const float* p = r.solid.data() + k * shape.slice_voxels();
-      for (int64_t q = 0; q < shape.slice_voxels(); ++q) acc += p[q];
-      per[static_cast<size_t>(k)] = acc;
-    }
-    double tot = 0;
-    for (double v : per) tot += v;
-    out.solid_fraction = tot / static_cast<double>(r.solid.size());
-  }
+  out.solid_fraction = synth::mean_solid_fraction(r.solid);
   if (opt.truth) {
     out.truth = synth::truth_table(particles, r.labels, shape, geom);
     std::vector<double> pid(out.particle_of_label.begin() + 1, out.particle_of_label.end());

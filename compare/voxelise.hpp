@@ -32,6 +32,7 @@
 #include <string>
 #include <vector>
 
+#include "core/sphere_table.hpp"
 #include "core/table.hpp"
 #include "core/volume.hpp"
 #include "data_synth/geometry.hpp"
@@ -39,22 +40,6 @@
 #include "data_synth/render.hpp"
 
 namespace tg::compare {
-
-// Spheres of a DEM snapshot or packing, SI units.
-struct SphereTable {
-  std::vector<double> x_m, y_m, z_m, r_m;
-  std::vector<int64_t> particle;  // particle id of each sphere (the row index when the file has none)
-  std::string source;             // file name, for messages
-  size_t size() const { return r_m.size(); }
-};
-
-// From a table with columns x_m, y_m, z_m, r_m and optionally `particle`
-// (or `cluster`, data_synth's name for the same thing). Radii must be > 0,
-// positions finite, ids integers (InputError naming the row otherwise).
-SphereTable spheres_from_table(const Table& t);
-// A CSV file, or an HDF5 file "snap.h5[:/group]": without a group, the
-// group holding an x_m dataset (the first, in file order).
-SphereTable read_spheres(const std::string& path);
 
 enum class FieldOfView { spheres, cylinder };
 
@@ -85,12 +70,6 @@ struct Voxelised {
   int64_t saturated = 0;      // grey voxels clipped at 0 or 65535
   double render_s = 0, imaging_s = 0;
 };
-
-// The spheres as data_synth particles in the voxel coordinates of `geometry`
-// (isotropic voxel size required): a lone sphere becomes a `grain`, a group of
-// spheres a `cluster`. Ids 1..n in order of first appearance.
-std::vector<synth::Particle> to_particles(const SphereTable& s, const Geometry& geometry,
-                                          std::vector<int64_t>* particle_of_label = nullptr);
 
 // The grid voxelise() uses (shape + geometry) for these spheres and options.
 std::pair<Shape, Geometry> voxel_grid(const SphereTable& s, const VoxeliseOptions& opt);

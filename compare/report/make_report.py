@@ -27,8 +27,6 @@ SERIES_STYLE = {
     "dem_ideal": dict(color="tab:blue", ls="--", marker="s", label="DEM ideal (truth labels)"),
     "dem_imaged": dict(color="tab:red", ls="-.", marker="^", label="DEM imaged (segmented)"),
 }
-FR_CLASSES = ["<0.4", "0.4-0.8", "0.8-0.9", ">=0.9"]
-AR_CLASSES = ["<2", "2-3", ">=3"]
 
 
 def read_csv(path):
@@ -227,9 +225,9 @@ def main():
 
     figs = [
         (plot_psd(out, stages, psd), "PSD by mass on Dmed, per stage"),
-        (plot_classes(out, stages, cls, "fr", FR_CLASSES, "Flatness ratio FR = Dmin/Dmed (study's classes)"),
+        (plot_classes(out, stages, cls, "fr", meta["fr_classes"], "Flatness ratio FR = Dmin/Dmed (study's classes)"),
          "FR classes per stage"),
-        (plot_classes(out, stages, cls, "ar", AR_CLASSES, "Aspect ratio AR = Dmax/Dmin (study's classes)"),
+        (plot_classes(out, stages, cls, "ar", meta["ar_classes"], "Aspect ratio AR = Dmax/Dmin (study's classes)"),
          "AR classes per stage"),
         (plot_stress(out, ss), "Axial stress vs axial strain"),
         (plot_broken(out, br), "Fraction of grains broken vs axial strain"),

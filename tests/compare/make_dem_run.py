@@ -15,6 +15,8 @@ and for measuring the segmentation bias on fragment clusters.
                                     a central sphere rc = 0.44948, ring B of 8
                                     spheres rb = 0.16097 at 45 degrees), splitting
                                     plane normal drawn at random; column strain
+  RUN/snapshots.csv                 the snapshot index (dem/run_folder.hpp: file, step,
+                                    time_s, axial_strain, requested_strain, bonds)
   RUN/history.csv                   strain, top_stress_Pa, grains_broken (invented curve; DEM column names)
   EXP.csv                           an invented experimental curve (axial_strain,
                                     axial_stress_MPa)
@@ -70,6 +72,7 @@ def write_h5(path, strain):
         f.attrs["snapshot"] = np.bytes_(json.dumps({"strain": strain, "requested_strain": strain}))
 
 
+index = []  # rows of RUN/snapshots.csv
 rng = np.random.default_rng(11)
 order = rng.permutation(len(rad))  # grains break in this order as the strain grows
 n_broken = []
@@ -78,6 +81,7 @@ for s, (strain, frac) in enumerate(zip(strains, broken)):
     n_broken.append(nb)
     if s == 0 and nb == 0:
         write_h5(os.path.join(run, "snapshots", "strain_00.00pct.h5"), strain)
+        index.append(("snapshots/strain_00.00pct.h5", strain))
         continue
     split = set(order[:nb].tolist())
     out, pid = [], 0
@@ -101,6 +105,13 @@ for s, (strain, frac) in enumerate(zip(strains, broken)):
         w.writerow(["x_m", "y_m", "z_m", "r_m", "particle", "strain"])
         for row in out:
             w.writerow([repr(float(v)) for v in row[:4]] + [row[4], strain])
+    index.append(("snapshots/" + name, strain))
+
+with open(os.path.join(run, "snapshots.csv"), "w", newline="") as f:
+    w = csv.writer(f)
+    w.writerow(["file", "step", "time_s", "axial_strain", "requested_strain", "bonds"])
+    for k, (name, strain) in enumerate(index):
+        w.writerow([name, k * 1000, k * 1e-4, strain, strain, ""])
 
 e = np.linspace(0, max(strains) * 1.05, 41)
 with open(os.path.join(run, "history.csv"), "w", newline="") as f:

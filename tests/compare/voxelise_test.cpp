@@ -19,7 +19,7 @@
 
 namespace {
 using namespace tg;
-using compare::SphereTable;
+using tg::SphereTable;
 constexpr double kPi = std::numbers::pi;
 
 SphereTable table(std::vector<std::array<double, 5>> rows) {  // x, y, z, r, particle
@@ -77,7 +77,7 @@ TEST(Voxelise, PartialVolumeSumsAreExactVolumes) {
   o.voxel_m = v;
   const auto [shape, g] = compare::voxel_grid(s, o);
   std::vector<int64_t> ids;
-  const auto ps = compare::to_particles(s, g, &ids);
+  const auto ps = synth::particles_from_spheres(s, g, &ids);
   ASSERT_EQ(ps.size(), 2u);
   EXPECT_EQ(ids, (std::vector<int64_t>{-1, 7, 3}));
   EXPECT_EQ(ps[1].kind, synth::Kind::cluster);
@@ -280,14 +280,14 @@ TEST(Voxelise, ReadsCsvAndHdf5Tables) {
   t.add("r_m", {1e-4, 1e-4, 1e-4});
   t.add("particle", {4, 9, 9});
   write_csv(t, dir / "snap.csv");
-  const SphereTable a = compare::read_spheres((dir / "snap.csv").string());
+  const SphereTable a = tg::read_spheres((dir / "snap.csv").string());
   EXPECT_EQ(a.particle, (std::vector<int64_t>{4, 9, 9}));
   {
     H5Writer w((dir / "snap.h5").string());
     w.write_table("/spheres", t);
     w.commit();
   }
-  const SphereTable b = compare::read_spheres((dir / "snap.h5").string());
+  const SphereTable b = tg::read_spheres((dir / "snap.h5").string());
   EXPECT_EQ(b.x_m, a.x_m);
   EXPECT_EQ(b.particle, a.particle);
   Table bad = t;
@@ -298,7 +298,7 @@ TEST(Voxelise, ReadsCsvAndHdf5Tables) {
   neg.add("z_m", {0});
   neg.add("r_m", {-1});
   neg.source = "neg.csv";
-  EXPECT_THROW(compare::spheres_from_table(neg), InputError);
+  EXPECT_THROW(tg::spheres_from_table(neg), InputError);
   std::filesystem::remove_all(dir);
 }
 

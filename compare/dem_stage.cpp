@@ -1,0 +1,89 @@
+#include "compare/dem_stage.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "compare/report_files.hpp"
+#include "compare/voxelise.hpp"
+#include "core/errors.hpp"
+#include "dem/run_folder.hpp"
+
+namespace tg::compare {
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+DemInputs load_dem_inputs(const CompareInputs& in) {
+  DemInputs d;
+  if (!in.dem_snapshots.empty()) {
+    d.snapshots = in.dem_snapshots;
+    if (!in.dem_strains.empty() && in.dem_strains.size() != d.snapshots.size())
+      throw UsageError("compare: " + std::to_string(d.snapshots.size()) + " DEM snapshots but " +
+                       std::to_string(in.dem_strains.size()) + " strains");
+    d.strains = in.dem_strains.empty() ? std::vector<double>(d.snapshots.size(), std::numeric_limits<double>::quiet_NaN())
+                                       : in.dem_strains;
+    if (!in.dem_run.empty() && fs::exists(fs::path(in.dem_run) / "history.csv"))
+      d.history = history_curve(read_csv(fs::path(in.dem_run) / "history.csv"));
+    return d;
+  }
+  const dem::RunFolder run = dem::read_run_folder(in.dem_run);
+  for (size_t k = 0; k < run.snapshots.size(); ++k) {
+    d.snapshots.push_back(run.snapshot_path(k).string());
+    d.strains.push_back(run.snapshots[k].axial_strain);
+  }
+  if (!in.dem_strains.empty()) {
+    if (in.dem_strains.size() != d.snapshots.size())
+      throw UsageError("compare: " + std::to_string(d.snapshots.size()) + " DEM snapshots but " +
+                       std::to_string(in.dem_strains.size()) + " strains");
+    d.strains = in.dem_strains;
+  }
+  d.history = history_curve(run.history);
+  return d;
+}
+
+ParticleScale particle_scale(const SphereTable& s) {
+  std::map<int64_t, double> vol;
+  for (size_t q = 0; q < s.size(); ++q) vol[s.particle[q]] += std::pow(s.r_m[q], 3);
+  std::vector<double> r;
+  for (const auto& [id, v] : vol) r.push_back(std::cbrt(v));  // equal-volume sphere radius
+  std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2), r.end());
+  return {r[r.size() / 2], static_cast<int64_t>(vol.size())};
+}
+
+DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth::ImagingOptions& imaging,
+                        const std::string& imaging_from, const CompareOptions& opt, const SegmentOptions& so,
+                        const fs::path& slices, const std::string& stem) {
+  VoxeliseOptions vo = opt.voxelise;
+  vo.voxel_m = voxel_m;
+  vo.grey = opt.imaged_path;
+  vo.imaging = imaging;
+  Voxelised v = voxelise(read_spheres(snapshot), vo);
+  DemStage d;
+  d.particles = static_cast<int64_t>(v.particle_of_label.size()) - 1;
+  d.ideal.particles = measure_labels(v.labels, opt.measure);
+  d.ideal.sample = measure::grading_sample(d.ideal.particles);
+  write_mid_slices(v.labels, slices, stem + "_dem_ideal_labels");
+  if (opt.imaged_path) {
+    write_mid_slices(v.grey, slices, stem + "_dem_grey");
+    SegmentResult r = segment(std::move(v.grey), so);
+    d.imaged.info["segment"] = json::parse(summary_json(r, so), nullptr, false);
+    write_mid_slices(r.labels, slices, stem + "_dem_imaged_labels");
+    d.imaged.particles = measure_labels(r.labels, opt.measure);
+    d.imaged.sample = measure::grading_sample(d.imaged.particles);
+  }
+  d.ideal.info["voxelise"] = {{"snapshot", snapshot},
+                              {"voxel_um", voxel_m * 1e6},
+                              {"shape", {v.labels.shape().nz, v.labels.shape().ny, v.labels.shape().nx}},
+                              {"solid_fraction", v.solid_fraction},
+                              {"render_s", v.render_s},
+                              {"imaging_s", v.imaging_s},
+                              {"void_grey", vo.imaging.void_grey},
+                              {"solid_grey", vo.imaging.solid_grey},
+                              {"noise_sigma", vo.imaging.noise_sigma},
+                              {"psf_sigma_vox", vo.imaging.psf_sigma},
+                              {"imaging_from", imaging_from}};
+  return d;
+}
+
+}  // namespace tg::compare

@@ -1,0 +1,273 @@
+#include "compare/report_files.hpp"
+
+#include <fmt/core.h>
+
+#include <cmath>
+#include <cstdlib>
+
+#include "core/atomic_file.hpp"
+#include "core/errors.hpp"
+#include "core/table.hpp"
+#include "measure/grading.hpp"
+
+#ifndef TOMOGRAIN_REPORT_SCRIPT
+#define TOMOGRAIN_REPORT_SCRIPT ""
+#endif
+
+namespace tg::compare {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+// JSON has no NaN: null instead.
+json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+json distances_json(const Distances& d) {
+  return {{"psd_ks", num(d.psd_ks)}, {"psd_w1_mm", num(d.psd_w1_mm)}, {"fr_ks", num(d.fr_ks)},
+          {"fr_w1", num(d.fr_w1)},   {"ar_ks", num(d.ar_ks)},         {"ar_w1", num(d.ar_w1)}};
+}
+
+template <class T>
+const char* npy_descr();
+template <>
+const char* npy_descr<uint16_t>() { return "<u2"; }
+template <>
+const char* npy_descr<uint32_t>() { return "<u4"; }
+
+// NumPy format 1.0: magic, header length, a Python dict literal padded so the
+// data starts on a 64-byte boundary, then the raw little-endian values.
+template <class T>
+void write_npy(const fs::path& path, const std::vector<T>& v, int64_t rows, int64_t cols) {
+  std::string dict = fmt::format("{{'descr': '{}', 'fortran_order': False, 'shape': ({}, {}), }}", npy_descr<T>(),
+                                 rows, cols);
+  const size_t unpadded = 10 + dict.size() + 1;
+  dict.append((64 - unpadded % 64) % 64, ' ');
+  dict.push_back('\n');
+  std::string bytes("\x93NUMPY\x01\x00", 8);
+  const auto hl = static_cast<uint16_t>(dict.size());
+  bytes.push_back(static_cast<char>(hl & 0xff));
+  bytes.push_back(static_cast<char>(hl >> 8));
+  bytes += dict;
+  bytes.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+  write_file_atomic(path, bytes);
+}
+
+}  // namespace
+
+template <class T>
+void write_mid_slices(const Volume<T>& v, const fs::path& dir, const std::string& stem) {
+  const Shape s = v.shape();
+  const int64_t k0 = s.nz / 2, j0 = s.ny / 2, i0 = s.nx / 2;
+  std::vector<T> a;
+  for (int64_t j = 0; j < s.ny; ++j)
+    for (int64_t i = 0; i < s.nx; ++i) a.push_back(v(k0, j, i));
+  write_npy(dir / (stem + "_z.npy"), a, s.ny, s.nx);
+  a.clear();
+  for (int64_t k = 0; k < s.nz; ++k)
+    for (int64_t i = 0; i < s.nx; ++i) a.push_back(v(k, j0, i));
+  write_npy(dir / (stem + "_y.npy"), a, s.nz, s.nx);
+  a.clear();
+  for (int64_t k = 0; k < s.nz; ++k)
+    for (int64_t j = 0; j < s.ny; ++j) a.push_back(v(k, j, i0));
+  write_npy(dir / (stem + "_x.npy"), a, s.nz, s.ny);
+}
+template void write_mid_slices(const Volume<uint16_t>&, const fs::path&, const std::string&);
+template void write_mid_slices(const Volume<uint32_t>&, const fs::path&, const std::string&);
+
+void write_report_tables(const fs::path& out, const ReportData& d) {
+  const Report& rep = *d.report;
+  const auto& sv = rep.sieves_mm;
+  const auto fr_names = measure::class_labels(measure::fr_thresholds());
+  const auto ar_names = measure::class_labels(measure::ar_thresholds());
+  std::vector<std::string> c_stage, c_series, c_method;
+  std::vector<double> c_strain, c_n, c_d10, c_d50, c_d60, c_cu, c_br, c_bf;
+  std::vector<std::string> p_stage, p_series;
+  std::vector<double> p_sieve, p_pass;
+  std::vector<std::string> h_stage, h_series, h_metric, h_class;
+  std::vector<double> h_pct;
+  std::vector<std::string> b_series;
+  std::vector<double> b_strain, b_frac;
+  for (size_t n = 0; n < rep.stages.size(); ++n)
+    for (int k = 0; k < 3; ++k) {
+      if (!d.series[n][static_cast<size_t>(k)]) continue;
+      const Series& s = *d.series[n][static_cast<size_t>(k)];
+      const std::string& st = rep.stages[n].name;
+      const double e = k == 0 ? rep.stages[n].xct_strain : rep.stages[n].dem_strain;
+      c_stage.push_back(st);
+      c_series.push_back(kSeriesNames[k]);
+      c_method.push_back(s.broken_method);
+      c_strain.push_back(e);
+      c_n.push_back(static_cast<double>(s.metrics.particles));
+      c_d10.push_back(s.metrics.d.d10);
+      c_d50.push_back(s.metrics.d.d50);
+      c_d60.push_back(s.metrics.d.d60);
+      c_cu.push_back(s.metrics.d.cu);
+      c_br.push_back(s.metrics.hardin_br);
+      c_bf.push_back(s.broken_fraction);
+      for (size_t q = 0; q < sv.size(); ++q) {
+        p_stage.push_back(st);
+        p_series.push_back(kSeriesNames[k]);
+        p_sieve.push_back(sv[q]);
+        p_pass.push_back(s.metrics.passing[q]);
+      }
+      const auto add_classes = [&](const char* metric, const std::vector<std::string>& names,
+                                   const std::vector<double>& pct) {
+        for (size_t q = 0; q < pct.size(); ++q) {
+          h_stage.push_back(st);
+          h_series.push_back(kSeriesNames[k]);
+          h_metric.push_back(metric);
+          h_class.push_back(names[q]);
+          h_pct.push_back(pct[q]);
+        }
+      };
+      add_classes("fr", fr_names, s.metrics.fr_classes);
+      add_classes("ar", ar_names, s.metrics.ar_classes);
+      if (k != 2) {  // broken fraction: one point per stage for experiment and DEM
+        b_series.push_back(k == 0 ? "experiment" : "dem");
+        b_strain.push_back(e);
+        b_frac.push_back(s.broken_fraction);
+      }
+    }
+  Table sum;
+  sum.add_text("stage", c_stage);
+  sum.add_text("series", c_series);
+  sum.add("axial_strain", c_strain);
+  sum.add("particles", c_n);
+  sum.add("d10_mm", c_d10);
+  sum.add("d50_mm", c_d50);
+  sum.add("d60_mm", c_d60);
+  sum.add("cu", c_cu);
+  sum.add("hardin_br", c_br);
+  sum.add("broken_fraction", c_bf);
+  sum.add_text("broken_method", c_method);
+  write_csv(sum, out / "summary.csv");
+  Table psd;
+  psd.add_text("stage", p_stage);
+  psd.add_text("series", p_series);
+  psd.add("sieve_mm", p_sieve);
+  psd.add("passing_pct", p_pass);
+  write_csv(psd, out / "psd.csv");
+  Table cls;
+  cls.add_text("stage", h_stage);
+  cls.add_text("series", h_series);
+  cls.add_text("metric", h_metric);
+  cls.add_text("class", h_class);
+  cls.add("percent", h_pct);
+  write_csv(cls, out / "shape_classes.csv");
+
+  std::vector<std::string> d_stage, d_pair;
+  std::vector<double> dv[6];
+  for (const StageReport& st : rep.stages) {
+    const std::pair<const char*, const Distances*> pairs[3] = {{"experiment_vs_dem_imaged", &st.exp_vs_imaged},
+                                                               {"experiment_vs_dem_ideal", &st.exp_vs_ideal},
+                                                               {"dem_ideal_vs_dem_imaged", &st.ideal_vs_imaged}};
+    for (const auto& [name, ds] : pairs) {
+      d_stage.push_back(st.name);
+      d_pair.push_back(name);
+      const double vals[6] = {ds->psd_ks, ds->psd_w1_mm, ds->fr_ks, ds->fr_w1, ds->ar_ks, ds->ar_w1};
+      for (int q = 0; q < 6; ++q) dv[q].push_back(vals[q]);
+    }
+  }
+  Table dist;
+  dist.add_text("stage", d_stage);
+  dist.add_text("pair", d_pair);
+  const char* dn[6] = {"psd_ks", "psd_w1_mm", "fr_ks", "fr_w1", "ar_ks", "ar_w1"};
+  for (int q = 0; q < 6; ++q) dist.add(dn[q], dv[q]);
+  write_csv(dist, out / "distances.csv");
+
+  std::vector<std::string> s_series;
+  std::vector<double> s_strain, s_stress;
+  const Curve& hist = d.history;
+  for (size_t q = 0; q < hist.strain.size(); ++q) {
+    s_series.push_back("dem");
+    s_strain.push_back(hist.strain[q]);
+    s_stress.push_back(hist.stress_mpa[q]);
+    if (!hist.broken.empty()) {
+      b_series.push_back("dem_history");
+      b_strain.push_back(hist.strain[q]);
+      b_frac.push_back(hist.broken[q] / static_cast<double>(d.initial_dem_particles));
+    }
+  }
+  for (size_t q = 0; q < d.experiment_curve.strain.size(); ++q) {
+    s_series.push_back("experiment");
+    s_strain.push_back(d.experiment_curve.strain[q]);
+    s_stress.push_back(d.experiment_curve.stress_mpa[q]);
+  }
+  Table ss;
+  ss.add_text("series", s_series);
+  ss.add("axial_strain", s_strain);
+  ss.add("stress_mpa", s_stress);
+  write_csv(ss, out / "stress_strain.csv");
+  Table br;
+  br.add_text("series", b_series);
+  br.add("axial_strain", b_strain);
+  br.add("broken_fraction", b_frac);
+  write_csv(br, out / "broken.csv");
+}
+
+void write_report_json(const fs::path& out, const ReportData& d, json meta) {
+  const Report& rep = *d.report;
+  meta["stages"] = json::array();
+  for (size_t n = 0; n < rep.stages.size(); ++n) {
+    const StageReport& st = rep.stages[n];
+    const Series& x = *d.series[n][0];
+    json j;
+    j["index"] = n;
+    j["name"] = st.name;
+    j["slices"] = "stage" + std::to_string(n);
+    j["experiment"] = {{"source", st.xct_source}, {"strain", num(st.xct_strain)}, {"synthetic", st.synthetic},
+                       {"particles", st.n_experiment}, {"info", x.info}};
+    if (const GreyEstimate* g = d.grey[n])
+      j["experiment"]["grey_estimate"] = {{"void_grey", g->void_grey},
+                                          {"solid_grey", g->solid_grey},
+                                          {"noise_sigma", g->noise_sigma},
+                                          {"otsu_threshold", g->threshold},
+                                          {"method", g->method}};
+    const json none = json::object();
+    j["dem"] = {{"snapshot", st.dem_snapshot},
+                {"strain", num(st.dem_strain)},
+                {"particles_ideal", st.n_ideal},
+                {"particles_imaged", st.n_imaged},
+                {"ideal", d.series[n][1]->info},
+                {"imaged", d.series[n][2] ? d.series[n][2]->info : none}};
+    j["distances"] = {{"experiment_vs_dem_imaged", distances_json(st.exp_vs_imaged)},
+                      {"experiment_vs_dem_ideal", distances_json(st.exp_vs_ideal)},
+                      {"dem_ideal_vs_dem_imaged", distances_json(st.ideal_vs_imaged)}};
+    j["seconds"] = st.seconds;
+    meta["stages"].push_back(j);
+  }
+  meta["sieves_mm"] = rep.sieves_mm;
+  meta["fr_classes"] = measure::class_labels(measure::fr_thresholds());
+  meta["ar_classes"] = measure::class_labels(measure::ar_thresholds());
+  meta["has_experimental_curve"] = !d.experiment_curve.strain.empty();
+  meta["has_history"] = !d.history.strain.empty();
+  meta["history_stress_column"] = d.history.stress_column;
+  meta["initial_dem_particles"] = d.initial_dem_particles;
+  write_file_atomic(out / "report.json", meta.dump(2) + "\n");
+}
+
+fs::path run_plot_script(const fs::path& out, const std::string& python, const std::string& script_opt) {
+  fs::path script = script_opt;
+  if (script.empty()) {
+    const char* e = std::getenv("TOMOGRAIN_REPORT_SCRIPT");
+    script = e && *e ? fs::path(e) : fs::path(TOMOGRAIN_REPORT_SCRIPT);
+  }
+  if (script.empty() || !fs::exists(script))
+    throw ResourceError("compare: report script not found (" + script.string() +
+                        "); set TOMOGRAIN_REPORT_SCRIPT to compare/report/make_report.py");
+  const auto quote = [](const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+  };
+  const std::string cmd = quote(python) + " " + quote(script.string()) + " " + quote(out.string());
+  const int rc = std::system(cmd.c_str());
+  if (rc != 0)
+    throw ResourceError("compare: the report script failed (" + cmd + ", status " + std::to_string(rc) +
+                        "); it needs Debian's python3-matplotlib and python3-numpy. The CSV/JSON data are in " +
+                        out.string());
+  return out / "index.html";
+}
+
+}  // namespace tg::compare

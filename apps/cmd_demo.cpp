@@ -15,6 +15,7 @@
 
 #include "apps/command.hpp"
 #include "compare/comparison.hpp"
+#include "core/atomic_file.hpp"
 #include "core/config.hpp"
 #include "core/io/volume_io.hpp"
 #include "core/stats.hpp"
@@ -91,7 +92,7 @@ std::vector<std::string> stage_xct(const fs::path& dir, int64_t size) {
 // still leaves its snapshots and history, which the report uses.
 std::string stage_dem(const fs::path& run) {
   const fs::path cfg_path = run.parent_path() / "dem.toml";
-  std::ofstream(cfg_path) << kDemoDem;
+  tg::write_file_atomic(cfg_path, kDemoDem);
   tg::Config cfg = tg::Config::from_file(cfg_path);
   const tg::dem::OedometerSetup setup = tg::dem::read_oedometer_config(cfg, run.parent_path());
   fs::create_directories(run);

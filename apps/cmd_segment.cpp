@@ -54,7 +54,7 @@ int run_segment(SegmentJob& o) {
   } else {
     if (!geom.has_voxel_size())
       throw tg::UsageError(o.in + ": no voxel size in the file; give --voxel-um or --grain-radius-vox");
-    s.grain_radius_vox = o.grain_diameter_um * 1e-6 / 2.0 / geom.voxel_size_m[2];
+    s.grain_radius_vox = tg::grain_radius_in_voxels(o.grain_diameter_um * 1e-6 / 2.0, geom);
   }
   const auto r = s.resolved();
   fmt::print("segmenting {} ({}), expected grain radius {:.3g} voxels\n", o.in, grey.shape().str(), r.grain_radius_vox);
@@ -86,14 +86,7 @@ int run_segment(SegmentJob& o) {
   }
   std::string summary = o.summary;
   if (summary.empty()) summary = std::filesystem::path(path).replace_extension(".segment.json").string();
-  {
-    tg::AtomicPath ap(summary);
-    std::ofstream f(ap.temp());
-    f << tg::summary_json(res, s) << "\n";
-    f.close();
-    if (!f) throw tg::InputError(summary + ": cannot write the summary");
-    ap.commit();
-  }
+  tg::write_file_atomic(summary, tg::summary_json(res, s) + "\n");
   fmt::print("wrote {} (/labels, uint32) and {}\n", path, summary);
   return 0;
 }

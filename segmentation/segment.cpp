@@ -14,6 +14,11 @@
 #include "segmentation/neighbourhood.hpp"
 
 namespace tg {
+
+double grain_radius_in_voxels(double radius_m, const Geometry& g) {
+  if (!g.has_voxel_size()) throw UsageError("segment: a grain radius in metres needs the voxel size");
+  return radius_m / std::min({g.voxel_size_m[0], g.voxel_size_m[1], g.voxel_size_m[2]});
+}
 namespace {
 
 class StageClock {

@@ -42,8 +42,14 @@
 
 namespace tg {
 
+// A physical grain radius in the distance map's unit, the finest voxel edge
+// (an anisotropic scan's z edge may be the finest, not x). UsageError when
+// the geometry has no voxel size.
+double grain_radius_in_voxels(double radius_m, const Geometry& geometry);
+
 struct SegmentOptions {
-  // Expected grain radius in voxels: the scale the defaults below derive from.
+  // Expected grain radius in voxels of the finest edge (grain_radius_in_voxels):
+  // the scale the defaults below derive from.
   double grain_radius_vox = 20.0;
 
   ThresholdMethod threshold = ThresholdMethod::moments;

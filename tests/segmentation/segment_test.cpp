@@ -150,4 +150,16 @@ TEST(Segment, ResolvedDefaultsFollowTheGrainRadius) {
 }
 
 }  // namespace
+
+// The distance map is in units of the FINEST voxel edge, so a physical grain
+// radius converts with that edge (a scan whose z edge is the finest is
+// common for stitched or binned stacks); with the x edge it was wrong.
+TEST(Segment, GrainRadiusConvertsWithTheFinestEdge) {
+  Geometry g;
+  g.voxel_size_m = {5e-6, 10e-6, 20e-6};  // z finest
+  EXPECT_DOUBLE_EQ(grain_radius_in_voxels(100e-6, g), 20.0);
+  g.voxel_size_m = {12e-6, 12e-6, 6e-6};  // x finest
+  EXPECT_DOUBLE_EQ(grain_radius_in_voxels(120e-6, g), 20.0);
+  EXPECT_THROW(grain_radius_in_voxels(1e-4, Geometry{}), UsageError);
+}
 }  // namespace tg

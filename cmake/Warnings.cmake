@@ -13,13 +13,28 @@ function(tomograin_module name)
   tomograin_warnings(tg_${name})
 endfunction()
 
-# A GoogleTest suite: tomograin_test(NAME SOURCES... DEPS ...), registered with ctest.
+# A GoogleTest suite: tomograin_test(NAME SOURCES... DEPS ... [SLOW filter]),
+# registered with ctest, one ctest test per TEST. SLOW is a GoogleTest filter
+# (patterns joined by ':', e.g. "SynthAccuracy.*:Pluviation.Press*") of the
+# tests that take over ~10 s in Release (minutes under the sanitizers): they
+# get the label `slow` instead of `unit`, and the sanitizer stage of
+# `make test` leaves them out (-LE slow); the Release stage runs them.
 function(tomograin_test name)
-  cmake_parse_arguments(T "" "" "SOURCES;DEPS;LABELS" ${ARGN})
+  cmake_parse_arguments(T "" "SLOW" "SOURCES;DEPS;LABELS" ${ARGN})
   add_executable(${name} ${T_SOURCES})
   target_link_libraries(${name} PRIVATE ${T_DEPS} GTest::gtest GTest::gtest_main)
   tomograin_warnings(${name})
   include(GoogleTest)
-  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
-    PROPERTIES LABELS "unit;${T_LABELS}" ENVIRONMENT "TOMOGRAIN_SOURCE_DIR=${PROJECT_SOURCE_DIR}")
+  set(env "TOMOGRAIN_SOURCE_DIR=${PROJECT_SOURCE_DIR}")
+  if(T_SLOW)
+    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 TEST_FILTER "-${T_SLOW}"
+      PROPERTIES LABELS "unit;${T_LABELS}" ENVIRONMENT "${env}")
+    # One label only: GoogleTestAddTests.cmake (CMake 3.25) flattens a list
+    # value into separate arguments ("LABELS unit slow" sets no label slow).
+    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 TEST_FILTER "${T_SLOW}"
+      PROPERTIES LABELS "slow" ENVIRONMENT "${env}")
+  else()
+    gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
+      PROPERTIES LABELS "unit;${T_LABELS}" ENVIRONMENT "${env}")
+  endif()
 endfunction()

@@ -64,6 +64,7 @@ OedometerSetup read_oedometer_config(Config& cfg, const std::filesystem::path& b
   p.press_speed_m_s = cfg.get("pluviation.press_speed_m_s", p.press_speed_m_s);
   p.press_max_stress_Pa = cfg.get("pluviation.press_max_stress_Pa", p.press_max_stress_Pa);
   p.kinetic_energy_tol_J = cfg.get("pluviation.kinetic_energy_tol_J", p.kinetic_energy_tol_J);
+  p.rest_window_s = cfg.get("pluviation.rest_window_s", p.rest_window_s);
   p.max_time_s = cfg.get("pluviation.max_time_s", p.max_time_s);
   p.cylinder_radius_m = e.walls.cylinder_radius;
   s.platen_speed = cfg.get("oedometer.platen_speed_m_s", s.platen_speed);

@@ -82,13 +82,18 @@ PluviationResult pluviate(const PluviationOptions& o, EngineOptions eo) {
   // and loosened the frictionless deposit: 45.53 % vs 45.22 %, README.)
   // Each settling phase (the deposit; after pressing, held and released)
   // gets max_time_s of simulated time.
+  // At rest: below the tolerance at every check over rest_window_s.
+  if (!(o.rest_window_s >= 0) || !std::isfinite(o.rest_window_s)) throw InputError("pluviation: rest window must be >= 0 s");
+  const int64_t quiet_checks = 1 + static_cast<int64_t>(std::round(o.rest_window_s / (chunk * eo.time_step)));
   auto settle = [&](double t_min) {
     const double t_end = e.time() + o.max_time_s;
+    int64_t quiet = 0;
     while (e.time() < t_end) {
       e.run(chunk);
       bar.update(e.time());
       res.kinetic_energy_J = e.kinetic_energy();
-      if (e.time() > t_min && res.kinetic_energy_J < o.kinetic_energy_tol_J) return true;
+      quiet = res.kinetic_energy_J < o.kinetic_energy_tol_J ? quiet + 1 : 0;
+      if (e.time() > t_min && quiet >= quiet_checks) return true;
     }
     return false;
   };
@@ -117,6 +122,8 @@ PluviationResult pluviate(const PluviationOptions& o, EngineOptions eo) {
     w.top_vz = 0;
     if (res.press_stop_stress_Pa == 0) w.top_z = o.target_height_m;
     res.settled = settle(e.time());
+    double ignored = 0;
+    packing_height_porosity(e.particles(), o.cylinder_radius_m, res.held_height_m, ignored);
     w.top = false;
     res.settled = res.settled && settle(e.time());
     res.pressed = true;

@@ -1,14 +1,19 @@
 #!/usr/bin/python3
 """Crash safety of a DEM run (issue 9): SIGKILL at random moments, restart.
 
-1. A small oedometer with breakage on (126 grains from `dem pack` of the demo
-   cell, weak grains so that splits, fragments and bonds exist early, a
-   checkpoint every 4000 steps) runs to the end once, uninterrupted (ref/).
-2. The same run again (run/) is killed with SIGKILL three times at moments
-   drawn from a seeded RNG (uniform in [0.04, 0.18] x the reference wall
-   time after each start; at least one kill after a checkpoint exists) and
-   restarted each time with --restart (or afresh when it died before its first
-   checkpoint, as a user would) until it ends.
+1. A small oedometer with breakage on (the 126-grain packing committed as
+   tests/apps/data/crash_pack.csv, see PACK_CFG; weak grains so that splits,
+   fragments and bonds exist early, a checkpoint every 4000 steps) runs to the
+   end once, uninterrupted (ref/).
+2. The same run again (run/) is killed with SIGKILL three times, each when
+   history.csv holds a number of rows drawn from a seeded RNG (one in each
+   third of [5 %, 85 %] of the reference's rows; the last one after the first
+   checkpoint), and restarted each time with --restart (or afresh when it died
+   before its first checkpoint, as a user would) until it ends. The rows
+   reach the disk with each checkpoint, so each kill then waits a seeded
+   fraction of the interval between the last two checkpoint writes of the
+   same run: no fraction of a reference run's wall time, which a faster
+   later run (under ctest -j) outran before its third kill.
 3. Bit for bit against the reference: history.csv (every line, not only
    those after the last checkpoint), every snapshot (each HDF5 dataset's bytes,
    dtype and shape, and every attribute), the snapshot bond tables and XDMF
@@ -22,6 +27,9 @@
    (same names, sizes, bytes and mtimes).
 
 Usage: crash_restart_test.py TOMOGRAIN [SEED]
+Regenerate the packing: tomograin dem pack pack.toml -o crash_pack.csv with
+PACK_CFG as pack.toml (the test does not pour it: a packing poured and pressed
+at test time changed with the engine, and a loose one saw no split).
 """
 import hashlib
 import os
@@ -47,6 +55,9 @@ def check(cond, what):
     if not cond:
         failures.append(what)
 
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+PACKING = os.path.join(HERE, "data", "crash_pack.csv")
 
 PACK_CFG = """# the demo cell (dem/examples/demo.toml)
 [walls]
@@ -163,7 +174,7 @@ def main():
             f.write(PACK_CFG)
         with open("cfg.toml", "w") as f:
             f.write(RUN_CFG)
-        subprocess.run([TG, "dem", "pack", "pack.toml", "-o", "pack.csv"], env=ENV, check=True, stdout=subprocess.DEVNULL)
+        shutil.copyfile(PACKING, "pack.csv")
 
         # 1. Uninterrupted reference.
         t0 = time.monotonic()
@@ -179,9 +190,29 @@ def main():
         header = open("ref/history.csv").readline().strip().split(",")
         broken = float(rows[-1].split(",")[header.index("grains_broken")])
         check(broken >= 2, f"the reference run splits grains ({broken:.0f}), so bonds and fragments are in its checkpoints")
+        # history every 200 steps, checkpoint every 4000 (RUN_CFG): 20 rows apart
+        ckpt_rows = 4000 // 200
 
-        # 2. Killed three times, restarted until it ends.
+        # 2. Killed three times, restarted until it ends. Kill i comes when
+        # history.csv holds target[i] rows: one target drawn in each third
+        # of [5 %, 85 %] of the reference's rows (increasing, so every start
+        # makes progress; a restart resumes from its checkpoint, at most one
+        # checkpoint interval before the rows it had).
         rng = random.Random(SEED)
+        n = len(rows)
+        lo, hi = int(0.05 * n), int(0.85 * n)
+        bands = [(lo + k * (hi - lo) // 3, lo + (k + 1) * (hi - lo) // 3 - 1) for k in range(3)]
+        targets = [rng.randint(a, b) for a, b in bands]
+        fractions = [rng.random() for _ in bands]
+        check(bands[2][0] > ckpt_rows, f"the last kill ({bands[2]}) comes after the first checkpoint (row {ckpt_rows})")
+
+        def history_rows():
+            try:
+                with open("run/history.csv") as f:
+                    return sum(1 for _ in f) - 1
+            except FileNotFoundError:
+                return 0
+
         kills, after_ckpt, starts = 0, 0, 0
         log = open("run.log", "w")
         while True:
@@ -189,13 +220,22 @@ def main():
             p = oedometer("run", restart, log)
             starts += 1
             if kills < 3:
-                if kills == 2 and after_ckpt == 0:  # the last kill must find a checkpoint
-                    while not os.path.exists("run/checkpoint.bin") and p.poll() is None:
-                        time.sleep(0.01)
-                # Three delays sum to < 0.55 of a full run: the run cannot end
-                # before its third kill even if the machine gets 1.8x faster.
-                delay = rng.uniform(0.04, 0.18) * t_ref
-                time.sleep(delay)
+                # history.csv reaches the disk with each checkpoint (20 rows
+                # at a time): after the target row is there, wait a seeded
+                # fraction of the last interval between two such writes,
+                # timed in this same run (so a faster machine shortens both),
+                # so that the kill can land anywhere between checkpoints.
+                seen, t_seen, interval = history_rows(), time.monotonic(), None
+                while seen < targets[kills] and p.poll() is None:
+                    time.sleep(0.002)
+                    now_rows = history_rows()
+                    if now_rows != seen:
+                        now = time.monotonic()
+                        if seen > 0:
+                            interval = now - t_seen
+                        seen, t_seen = now_rows, now
+                if interval is not None:
+                    time.sleep(fractions[kills] * interval)
                 had_ckpt = os.path.exists("run/checkpoint.bin")
                 if p.poll() is None:
                     p.send_signal(signal.SIGKILL)
@@ -203,11 +243,12 @@ def main():
                 if rc == -signal.SIGKILL:
                     kills += 1
                     after_ckpt += had_ckpt
-                    hist = sum(1 for _ in open("run/history.csv")) - 1 if os.path.exists("run/history.csv") else 0
-                    print(f"     kill {kills} after {delay:.2f} s ({'restart' if restart else 'fresh'} start; "
-                          f"checkpoint on disk: {'yes' if had_ckpt else 'no'}; history rows on disk: {hist})", flush=True)
+                    print(f"     kill {kills} at {history_rows()} history rows (target {targets[kills - 1]}, then "
+                          f"{fractions[kills - 1]:.2f} of a checkpoint interval; "
+                          f"{'restart' if restart else 'fresh'} start; checkpoint on disk: {'yes' if had_ckpt else 'no'})",
+                          flush=True)
                     continue
-                check(rc == 0, f"run ends before its kill (rc {rc})")
+                check(rc == 0, f"run ends before its kill at {targets[kills]} rows (rc {rc})")
                 break
             rc = p.wait()
             check(rc == 0, f"last restart runs to the end (rc {rc})")

@@ -290,8 +290,28 @@ TEST(Voxelise, ReadsCsvAndHdf5Tables) {
   const SphereTable b = tg::read_spheres((dir / "snap.h5").string());
   EXPECT_EQ(b.x_m, a.x_m);
   EXPECT_EQ(b.particle, a.particle);
-  Table bad = t;
-  bad.add("r_bad", {1, 1, 1});
+  // A table whose radius column is misnamed is refused, naming the column
+  // it lacks; so is a particle id that is not an integer.
+  Table misnamed;
+  misnamed.add("x_m", {0});
+  misnamed.add("y_m", {0});
+  misnamed.add("z_m", {0});
+  misnamed.add("r_bad", {1e-4});
+  misnamed.source = "misnamed.csv";
+  try {
+    compare::spheres_from_table(misnamed);
+    ADD_FAILURE() << "a table without r_m was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("r_m"), std::string::npos) << e.what();
+  }
+  Table fractional;
+  fractional.add("x_m", {0, 1e-3});
+  fractional.add("y_m", {0, 0});
+  fractional.add("z_m", {0, 0});
+  fractional.add("r_m", {1e-4, 1e-4});
+  fractional.add("particle", {4, 9.5});  // not an id
+  fractional.source = "fractional.csv";
+  EXPECT_THROW(compare::spheres_from_table(fractional), InputError);
   Table neg;
   neg.add("x_m", {0});
   neg.add("y_m", {0});

@@ -65,8 +65,38 @@ TEST(Render, LabelsAreConsistentWithCoverage) {
   EXPECT_NEAR(static_cast<double>(count[2]), v1, 0.5 * area * 0.5);
   // Every voxel whose centre is deep inside grain 2 is labelled 2.
   EXPECT_EQ(r.labels(10, 12, 24), 2u);
-  EXPECT_EQ(r.labels(24, 21, 18), 0u + r.labels(24, 21, 18));  // defined
   EXPECT_EQ(r.solid(0, 0, 0), 0.0f);
+  // The two half caps 3 and 4 of one sphere (centre c, radius 7.1) are cut by
+  // planes n.(p - c) = +-0.75: a voxel whose centre lies well inside the
+  // sphere is labelled 3 beyond +1.75 (its cube, half-diagonal 0.87, lies
+  // wholly in cap 3), 4 below -1.75, and 0 inside the 1.5-wide gap (|s| < 0.25:
+  // less than half of its cube reaches a cap). Computed here from the
+  // geometry, independently of the renderer.
+  const double c[3] = {24.6, 20.2, 18.5}, len = std::sqrt(0.2 * 0.2 + 0.9 * 0.9 + 0.3 * 0.3);
+  const double n[3] = {0.2 / len, 0.9 / len, -0.3 / len};
+  int64_t seen3 = 0, seen4 = 0, seen_gap = 0;
+  for (int64_t k = 0; k < shape.nz; ++k)
+    for (int64_t j = 0; j < shape.ny; ++j)
+      for (int64_t i = 0; i < shape.nx; ++i) {
+        const double d[3] = {k + 0.5 - c[0], j + 0.5 - c[1], i + 0.5 - c[2]};
+        if (std::hypot(d[0], d[1], d[2]) > 7.1 - 1) continue;
+        const double s = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
+        if (s > 1.75) {
+          EXPECT_EQ(r.labels(k, j, i), 3u) << k << ' ' << j << ' ' << i;
+          ++seen3;
+        }
+        if (s < -1.75) {
+          EXPECT_EQ(r.labels(k, j, i), 4u) << k << ' ' << j << ' ' << i;
+          ++seen4;
+        }
+        if (std::abs(s) < 0.25) {
+          EXPECT_EQ(r.labels(k, j, i), 0u) << k << ' ' << j << ' ' << i;
+          ++seen_gap;
+        }
+      }
+  EXPECT_GT(seen3, 200);
+  EXPECT_GT(seen4, 200);
+  EXPECT_GT(seen_gap, 20);
 }
 
 TEST(Render, RejectsDuplicateIds) {

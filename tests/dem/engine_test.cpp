@@ -94,18 +94,55 @@ TEST(Engine, HeadOnImpactMatchesHertz) {
               r.max_overlap / dmax - 1, r.max_force / fmax - 1, v_out / v - 1);
 }
 
-// With viscous damping the rebound is slower; Tsuji's coefficient makes the
-// restitution independent of the impact speed (a property of the Hertz
-// dashpot with c ∝ δ^{1/4}), which this checks at two speeds 10x apart.
-TEST(Engine, ViscousDampingRestitutionIsSpeedIndependent) {
+// The restitution of the Hertz–Tsuji dashpot, integrated here independently
+// of the engine: the overlap u of a head-on impact obeys
+//   m* u'' = -max(0, 4/3 E* sqrt(R*) u^{3/2} + c(u) u'),
+//   c(u) = 2 sqrt(5/6) beta sqrt(kn(u) m*), kn(u) = 2 E* sqrt(R* u),
+//   beta = -ln e / sqrt(ln^2 e + pi^2),
+// from u = 0, u' = v0 until u returns to 0; restitution = -u'(end) / v0.
+// Classical RK4 with 2e5 steps per Hertz contact time (converged to 1e-6).
+double tsuji_restitution(const EngineOptions& o, double v0) {
+  const double m = o.material.density_kg_m3 * 4.0 / 3.0 * std::numbers::pi * kR * kR * kR;
+  const double mstar = m / 2, rstar = kR / 2;
+  const double nu = o.material.poisson_ratio, estar = o.material.youngs_modulus() / (2 * (1 - nu * nu));
+  const double le = std::log(o.restitution), beta = -le / std::sqrt(le * le + std::numbers::pi * std::numbers::pi);
+  auto accel = [&](double u, double w) {
+    if (u <= 0) return 0.0;
+    const double kn = 2 * estar * std::sqrt(rstar * u);
+    const double c = 2 * std::sqrt(5.0 / 6.0) * beta * std::sqrt(kn * mstar);
+    return -std::max(0.0, 4.0 / 3.0 * estar * std::sqrt(rstar) * std::pow(u, 1.5) + c * w) / mstar;
+  };
+  const double dmax = std::pow(15 * mstar * v0 * v0 / (16 * estar * std::sqrt(rstar)), 0.4);
+  const double h = 3.3 * dmax / v0 / 2e5;  // tc ~ 3.2 dmax / v0
+  double u = 0, w = v0;
+  for (int64_t s = 0; s < 10000000 && (u > 0 || w > 0); ++s) {
+    const double k1u = w, k1w = accel(u, w);
+    const double k2u = w + 0.5 * h * k1w, k2w = accel(u + 0.5 * h * k1u, k2u);
+    const double k3u = w + 0.5 * h * k2w, k3w = accel(u + 0.5 * h * k2u, k3u);
+    const double k4u = w + h * k3w, k4w = accel(u + h * k3u, k4u);
+    u += h / 6 * (k1u + 2 * k2u + 2 * k3u + k4u);
+    w += h / 6 * (k1w + 2 * k2w + 2 * k3w + k4w);
+  }
+  return -w / v0;
+}
+
+// With viscous damping the rebound is slower. The engine's restitution must
+// be the dashpot's, integrated above (for the nominal e = 0.5 it is not 0.5:
+// Tsuji's coefficient is fitted to a linear spring), and, a property of the
+// Hertz dashpot with c ~ u^{1/4}, the same at two impact speeds 10x apart.
+TEST(Engine, ViscousDampingRestitutionIsTheDashpots) {
   EngineOptions o = free_space(1e-9);
   o.restitution = 0.5;
   const Impact a = collide(0.1, 0, o), b = collide(1.0, 0, o);
   const double ea = (a.after.vx[1] - a.after.vx[0]) / 0.1, eb = (b.after.vx[1] - b.after.vx[0]) / 1.0;
-  EXPECT_GT(ea, 0.3);
-  EXPECT_LT(ea, 0.7);
-  EXPECT_NEAR(ea, eb, 0.01);
-  std::printf("[measured] restitution for e=0.5: %.4f at 0.1 m/s, %.4f at 1 m/s\n", ea, eb);
+  const double ode = tsuji_restitution(o, 0.1);
+  std::printf("[measured] restitution for e=0.5: %.5f at 0.1 m/s, %.5f at 1 m/s; dashpot ODE %.5f (at 1 m/s %.5f)\n", ea,
+              eb, ode, tsuji_restitution(o, 1.0));
+  EXPECT_NEAR(tsuji_restitution(o, 1.0), ode, 1e-6);  // speed-independent by construction
+  // The engine's error: velocity Verlet at 1e-9 s (~17000 steps per contact)
+  // and the first/last step straddling u = 0.
+  EXPECT_NEAR(ea, ode, 2e-3);
+  EXPECT_NEAR(eb, ode, 2e-3);
 }
 
 // Oblique impact on the bottom platen in the sliding regime (a flat wall
@@ -362,42 +399,39 @@ TEST(Engine, RunGivesTheBitsOfSingleSteps) {
 
 // The contact loop is compiled for SSE2, AVX2 and AVX-512 (2, 4 and 8
 // lanes), and the engine takes the widest the CPU has. Every kernel must
-// give the SSE2 kernel's bits on the pressed lattice, run with each kernel
-// this machine can run.
-TEST(Engine, EveryContactKernelGivesTheSameBits) {
-  auto run = [](KernelIsa isa) {
-    auto [p, o] = pressed_lattice();
-    o.kernel_isa = isa;
-    Engine e(std::move(p), o);
-    int64_t most = 0;  // the lattice's overlaps push it apart: most contacts early on
-    std::vector<double> walls;
-    for (int c = 0; c < 200; ++c) {
-      e.run(10);
-      most = std::max(most, e.contact_count());
-      walls.insert(walls.end(), {e.wall_forces().bottom_z, e.wall_forces().top_z, e.wall_forces().cylinder_radial});
-    }
-    return std::make_tuple(e.particles(), e.pair_history().xi, most, walls);
-  };
-  const auto [a, xa, ca, wa] = run(KernelIsa::kSse2);
+// give the SSE2 kernel's bits on the pressed lattice. One test per wider
+// kernel: on a CPU without its instruction set the test is reported as
+// SKIPPED (never as a pass that compared nothing).
+auto run_pressed_lattice_with(KernelIsa isa) {
+  auto [p, o] = pressed_lattice();
+  o.kernel_isa = isa;
+  Engine e(std::move(p), o);
+  int64_t most = 0;  // the lattice's overlaps push it apart: most contacts early on
+  std::vector<double> walls;
+  for (int c = 0; c < 200; ++c) {
+    e.run(10);
+    most = std::max(most, e.contact_count());
+    walls.insert(walls.end(), {e.wall_forces().bottom_z, e.wall_forces().top_z, e.wall_forces().cylinder_radial});
+  }
+  return std::make_tuple(e.particles(), e.pair_history().xi, most, walls);
+}
+
+void expect_kernel_gives_sse2_bits(KernelIsa isa) {
+  if (!kernels_available(isa)) GTEST_SKIP() << "this CPU cannot run the " << kernels_name(isa) << " kernel";
+  const auto [a, xa, ca, wa] = run_pressed_lattice_with(KernelIsa::kSse2);
   EXPECT_GT(ca, 200);  // dense: the lanes carry many touching pairs
   EXPECT_LT(wa[0], 0);  // and every wall is loaded
   EXPECT_GT(wa[1], 0);
   EXPECT_GT(wa[2], 0);
-  int tested = 0;
-  for (KernelIsa isa : {KernelIsa::kAvx2, KernelIsa::kAvx512}) {
-    if (!kernels_available(isa)) {
-      std::printf("[ note ] the %s kernel is not available here: not compared\n", kernels_name(isa).c_str());
-      continue;
-    }
-    const auto [b, xb, cb, wb] = run(isa);
-    ++tested;
-    EXPECT_EQ(cb, ca) << kernels_name(isa);
-    EXPECT_EQ(wb, wa) << kernels_name(isa) << ": wall forces differ";
-    EXPECT_EQ(xb, xa) << kernels_name(isa) << ": tangential histories differ";
-    expect_same_spheres(a, b, kernels_name(isa));
-  }
-  std::printf("[ note ] %d wider kernel(s) compared with sse2\n", tested);
+  const auto [b, xb, cb, wb] = run_pressed_lattice_with(isa);
+  EXPECT_EQ(cb, ca) << kernels_name(isa);
+  EXPECT_EQ(wb, wa) << kernels_name(isa) << ": wall forces differ";
+  EXPECT_EQ(xb, xa) << kernels_name(isa) << ": tangential histories differ";
+  expect_same_spheres(a, b, kernels_name(isa));
 }
+
+TEST(Engine, Avx2ContactKernelGivesTheSse2Bits) { expect_kernel_gives_sse2_bits(KernelIsa::kAvx2); }
+TEST(Engine, Avx512ContactKernelGivesTheSse2Bits) { expect_kernel_gives_sse2_bits(KernelIsa::kAvx512); }
 
 TEST(Engine, UnknownContactKernelNameIsAnInputError) {
   setenv("TOMOGRAIN_SIMD", "avx9", 1);

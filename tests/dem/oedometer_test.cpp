@@ -5,12 +5,16 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <numbers>
 
 #include "core/errors.hpp"
 #include "core/io/hdf5.hpp"
 #include "core/table.hpp"
 #include "dem/packing_io.hpp"
+#include "dem/pluviation.hpp"
 
 namespace tg::dem {
 namespace {
@@ -119,6 +123,96 @@ TEST(Oedometer, RunFolderHasHistoryAndSnapshots) {
   }
   EXPECT_EQ(run.history.rows(), h.rows());
   EXPECT_THROW(read_run_folder(d), InputError);  // no snapshots.csv: not a run folder
+  fs::remove_all(d);
+}
+
+// The stress columns against computations made here. A settled
+// frictionless specimen (grains and walls μ = 0, so that no wall friction
+// carries weight: no Janssen arching) under a platen creeping at 0.1 mm/s:
+//  * bottom - top stress = the grains' weight / floor area, in the dynamic
+//    form the creeping platen needs (impulse balance, below: single rows
+//    swing by 6 % as the specimen rattles);
+//  * at the last row, bottom and lateral stress equal the wall forces of the
+//    final snapshot (same state), summed here: Hertz + Tsuji dashpot of each
+//    sphere-floor and sphere-cylinder overlap (F = 2/3 kn d + c v,
+//    kn = 2 E* sqrt(r d), E* = E / (2 (1 - nu^2)) for a wall of the grains'
+//    material, m* = m), over the floor area and the wall area 2 pi R h;
+//  * K0 = lateral / mean of top and bottom.
+TEST(Oedometer, StressColumnsAtRestAreTheWeightAndTheWallForces) {
+  const fs::path d = scratch("stress");
+  PluviationOptions po;
+  po.cylinder_radius_m = 2.5e-3;
+  po.generation_height_m = 6e-3;
+  po.target_height_m = 2e-3;
+  po.max_time_s = 0.3;
+  po.press_to_target_height = false;
+  EngineOptions eo;
+  const PluviationResult pr = pluviate(po, eo);
+  ASSERT_TRUE(pr.settled);
+  write_packing_csv(pr.particles, d / "packing.csv");
+  Config cfg = Config::from_string(
+      "[walls]\ncylinder_radius_m = 2.5e-3\nplaten_friction = 0.0\ncylinder_friction = 0.0\n[contact]\nfriction = 0.0\n"
+      "[specimen]\npacking_csv = \"packing.csv\"\n[breakage]\nenabled = false\n"
+      "[oedometer]\nplaten_speed_m_s = 1e-4\ntarget_strain = 2e-4\nsnapshot_strains = [2e-4]\n"
+      "history_every_steps = 100\n",
+      "stress.toml");
+  const OedometerSetup s = read_oedometer_config(cfg, d);
+  RunControl c;
+  c.quiet = true;
+  const OedometerSummary r = run_oedometer(s, d / "run", c);
+  ASSERT_TRUE(r.finished);
+  const Table h = read_csv(d / "run" / "history.csv");
+  const Table t = H5Reader((d / "run" / "snapshots" / "strain_00.02pct.h5").string()).read_table("spheres");
+  const Material m = s.engine.material;
+  const double R = 2.5e-3, area = std::numbers::pi * R * R, g = 9.81;
+  const double estar = m.youngs_modulus() / (2 * (1 - m.poisson_ratio * m.poisson_ratio));
+  const double le = std::log(s.engine.restitution), beta = -le / std::sqrt(le * le + std::numbers::pi * std::numbers::pi);
+  double weight = 0, f_floor = 0, f_wall = 0;
+  for (int64_t i = 0; i < t.rows(); ++i) {
+    const double x = t.num("x_m")[i], y = t.num("y_m")[i], z = t.num("z_m")[i], rr = t.num("r_m")[i];
+    const double mass = m.density_kg_m3 * 4.0 / 3.0 * std::numbers::pi * rr * rr * rr;
+    weight += mass * g;
+    // Hertz + Tsuji dashpot against a wall (m* = m, R* = r), approach speed v.
+    auto wall_force = [&](double delta, double v) {
+      const double kn = 2 * estar * std::sqrt(rr * delta);
+      return std::max(0.0, 2.0 / 3.0 * kn * delta + 2 * std::sqrt(5.0 / 6.0) * beta * std::sqrt(kn * mass) * v);
+    };
+    if (z < rr) f_floor += wall_force(rr - z, -t.num("vz_m_s")[i]);
+    const double rho = std::hypot(x, y), over = rho + rr - R;
+    if (over > 0) f_wall += wall_force(over, (x * t.num("vx_m_s")[i] + y * t.num("vy_m_s")[i]) / rho);
+  }
+  const double h0 = h.num("platen_z_m")[h.rows() - 1];  // wall height at the last row
+  const int64_t last = h.rows() - 1;
+  const double top = h.num("top_stress_Pa")[last], bottom = h.num("bottom_stress_Pa")[last], lateral = h.num("lateral_stress_Pa")[last];
+  std::printf("last row: top %.6g Pa, bottom %.6g Pa (weight/area %.6g, floor Hertz %.6g), lateral %.6g Pa (wall Hertz %.6g), K0 %.6g\n",
+              top, bottom, weight / area, f_floor / area, lateral, f_wall / (2 * std::numbers::pi * R * h0), h.num("K0")[last]);
+  EXPECT_GT(f_wall, 0.0);  // a settled specimen presses on the cylinder
+  EXPECT_NEAR(bottom, f_floor / area, 1e-4 * bottom);  // measured 1.4e-5 (snapshot velocities half a step apart)
+  EXPECT_NEAR(lateral, f_wall / (2 * std::numbers::pi * R * h0), 1e-4 * lateral);
+  EXPECT_NEAR(h.num("K0")[last], lateral / (0.5 * (top + bottom)), 1e-12);
+  // Impulse balance, the dynamic form of "bottom - top = weight / area": the
+  // grains' vertical momentum P obeys dP/dt = (bottom - top) A - W, so
+  //   integral over the run of (bottom - top) dt = (W T + P(T) - P(0)) / A,
+  // P(0) = 0 (the packing file holds no velocities), P(T) = sum m vz of the
+  // final snapshot. The history integrated by the trapezoid rule (rows every
+  // 100 steps; row 0 is written before the first force evaluation and reads
+  // 0, see bench/dem/RESULTS.md, so from row 1: 1/600 of the run missing).
+  double p_end = 0;
+  for (int64_t i = 0; i < t.rows(); ++i)
+    p_end += m.density_kg_m3 * 4.0 / 3.0 * std::numbers::pi * std::pow(t.num("r_m")[i], 3) * t.num("vz_m_s")[i];
+  const auto& time = h.num("time_s");
+  const auto& tops = h.num("top_stress_Pa");
+  const auto& bots = h.num("bottom_stress_Pa");
+  ASSERT_GE(h.rows(), 100);
+  double integral = 0, worst = 0;
+  for (int64_t q = 2; q < h.rows(); ++q)
+    integral += 0.5 * (time[q] - time[q - 1]) * (bots[q] - tops[q] + bots[q - 1] - tops[q - 1]);
+  for (int64_t q = 1; q < h.rows(); ++q) worst = std::max(worst, std::abs((bots[q] - tops[q]) / (weight / area) - 1));
+  const double span = time.back() - time[1];
+  const double expected = (weight * span + p_end) / area;  // P(t1) ~ 0: 100 steps after rest
+  std::printf("integral of (bottom - top) dt %.6g Pa s, impulse balance %.6g Pa s (weight alone %.6g); rows within %.1f %% of "
+              "weight / area\n", integral, expected, weight * span / area, 100 * worst);
+  EXPECT_NEAR(integral, expected, 1e-3 * weight * span / area);  // measured 1.3e-4
   fs::remove_all(d);
 }
 

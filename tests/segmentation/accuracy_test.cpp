@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <string>
 
 #include "core/io/hdf5.hpp"
 #include "data_synth/scene.hpp"
@@ -57,12 +58,12 @@ struct SynthScan {
 
 // Both stages come from one run (one packing: the slow part). ctest runs
 // each TEST in its own process, so both checks live in one TEST below.
-std::vector<SynthScan> make_scans() {
+std::vector<SynthScan> make_scans(uint64_t seed) {
   {
     auto scene = synth::preset_scene("zeolite-stages");
     scene.voxel_um = 30;
     scene.size = 144;
-    scene.seed = 11;
+    scene.seed = seed;
     scene.stage.strains = {0.0, 0.1548};
     scene.stage.broken = {0.0, 0.7};
     const fs::path dir = fs::temp_directory_path() / ("tg_seg_acc_" + std::to_string(::getpid()));
@@ -89,19 +90,30 @@ SegmentOptions zeolite_options() {
 // across, i.e. (pi/6) (200/30)^3 = 155 voxels (slivers cut by the crop fall below).
 const AccuracyOptions kCounted{155};
 
-void intact_porous_grains_are_found_once_each(const SynthScan& s) {
+// Tuning and asserting (docs/testing.md). The defaults of SegmentOptions
+// (marker depth h = 0.7, pore filter, merge ratio) were tuned on seed 11 of
+// this scene: F1 0.989 intact / 0.980 broken (segmentation/segment.hpp).
+// The bounds are asserted on seeds 12 and 13, which no parameter was chosen
+// on. Recorded there (issue 25): intact F1 0.9927 / 0.9774, broken F1
+// 0.9965 / 0.9963, split halves 5/5 and 6/6, over-segmented intact grains
+// 0 / 1 (seed 13: one grain of 66 split at a pore; the tuning seed had none).
+// Asserted: F1 0.02 below the lower recorded figure (the two seeds differ by
+// 0.015), at most 2 % of the intact grains over-segmented.
+constexpr double kIntactBound = 0.9774 - 0.02, kBrokenBound = 0.9963 - 0.02;
+
+void intact_porous_grains_are_found_once_each(const SynthScan& s, double f1_bound) {
   const auto res = segment(s.grey, zeolite_options());
   const auto a = evaluate_labels(s.truth, res.labels, kCounted);
   std::printf("intact: true %lld, labels %lld, F1 %.4f, over %lld, under %lld, median volume error %.4f, pores filled %lld\n",
               (long long)a.n_true, (long long)a.n_pred, a.f1, (long long)a.over_segmented,
               (long long)a.under_segmenting, a.median_volume_error, (long long)res.pores.filled);
-  EXPECT_GE(a.f1, 0.98);
-  EXPECT_EQ(a.over_segmented, 0);  // no pore-induced splits
+  EXPECT_GE(a.f1, f1_bound);
+  EXPECT_LE(double(a.over_segmented), 0.02 * double(a.n_true));  // pore-induced splits: rare
   EXPECT_GT(res.pores.filled, 0);
   EXPECT_LT(std::abs(a.median_volume_error), 0.03);
 }
 
-void split_halves_are_recovered_as_two_particles(const SynthScan& s) {
+void split_halves_are_recovered_as_two_particles(const SynthScan& s, double f1_bound) {
   const auto res = segment(s.grey, zeolite_options());
   const auto a = evaluate_labels(s.truth, res.labels, kCounted);
   // Pairs of halves of one parent, both inside the field of view.
@@ -124,18 +136,21 @@ void split_halves_are_recovered_as_two_particles(const SynthScan& s) {
               (long long)a.under_segmenting, recovered, pairs);
   ASSERT_GE(pairs, 3);
   EXPECT_GE(double(recovered), 0.9 * pairs);
-  EXPECT_GE(a.f1, 0.98);
+  EXPECT_GE(a.f1, f1_bound);
 }
 
 TEST(SynthAccuracy, ZeoliteIntactAndBrokenStages) {
-  const auto scans = make_scans();
-  {
-    SCOPED_TRACE("intact stage: F1 >= 0.98, no pore-induced over-segmentation");
-    intact_porous_grains_are_found_once_each(scans[0]);
-  }
-  {
-    SCOPED_TRACE("broken stage: F1 >= 0.98, >= 90 % of split halves as two particles");
-    split_halves_are_recovered_as_two_particles(scans[1]);
+  for (uint64_t seed : {12u, 13u}) {
+    SCOPED_TRACE("seed " + std::to_string(seed) + " (not a tuning seed)");
+    const auto scans = make_scans(seed);
+    {
+      SCOPED_TRACE("intact stage: F1 bound, no pore-induced over-segmentation");
+      intact_porous_grains_are_found_once_each(scans[0], kIntactBound);
+    }
+    {
+      SCOPED_TRACE("broken stage: F1 bound, >= 90 % of split halves as two particles");
+      split_halves_are_recovered_as_two_particles(scans[1], kBrokenBound);
+    }
   }
 }
 

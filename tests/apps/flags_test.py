@@ -1,0 +1,289 @@
+#!/usr/bin/python3
+"""Every flag of segment, measure, synth, convert, info, voxelise and dem, once (issue 25).
+
+Table-driven: each row runs one command with one flag (or one value of a
+choice) added to a base invocation and checks a visible effect, computed
+here from the outputs with numpy/h5py: mostly "the output differs from the
+base run's" (the flag reached an option), and where the effect is known, the
+effect itself (a dtype, a file, a count, a column). A flag whose wiring is
+broken (parsed but never copied into the options) leaves the output as the
+base run's and fails its row. Not here: `psd` and `compare` (the report's
+own tests), `analyse` and `demo` (tests/apps/analyse_test.sh, cli.demo).
+
+Inputs are made at test time, small: `synth --preset spheres --size 64`
+(a few seconds), its labels for measure, a 4-grain packing for voxelise and
+the committed 126-grain packing (tests/apps/data/crash_pack.csv) for dem.
+
+Usage: flags_test.py TOMOGRAIN
+"""
+import csv
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+import h5py
+import numpy as np
+
+TG = os.path.abspath(sys.argv[1])
+HERE = os.path.dirname(os.path.abspath(__file__))
+ENV = dict(os.environ, TOMOGRAIN_QUIET="1", OMP_NUM_THREADS="1")
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what, flush=True)
+    if not cond:
+        failures.append(what)
+
+
+def run(args, ok=True):
+    r = subprocess.run([TG] + args, env=ENV, capture_output=True, text=True)
+    if ok and r.returncode != 0:
+        check(False, f"{' '.join(args)}: exit {r.returncode}: {r.stderr.strip()[:200]}")
+    return r
+
+
+def digest(path, dataset=None):
+    """Hash of a dataset's values (HDF5) or of the file's bytes."""
+    if dataset:
+        with h5py.File(path, "r") as f:
+            a = f[dataset][()]
+            return hashlib.sha256(np.ascontiguousarray(a).tobytes() + str(a.dtype).encode()).hexdigest()
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
+
+
+def info(path):
+    return json.loads(run(["info", path, "--json"]).stdout)
+
+
+def rows(path):
+    return list(csv.DictReader(open(path)))
+
+
+def segment_rows(base):
+    # (flags, what must hold) -- "differs": /labels differ from the base run's.
+    return [
+        (["--threshold", "otsu"], "differs"),
+        (["--threshold", "manual", "--manual-value", "20000"], "differs"),
+        (["--no-pores"], "differs"),
+        (["--pore-max-vox", "1"], "differs"),
+        (["--pore-min-sphericity", "0.99"], ("pores", "min_sphericity", 0.99)),  # no pore of this crop is that round
+        (["--h", "3"], "differs"),
+        (["--connectivity", "6"], "differs"),
+        (["--no-lines"], "differs"),
+        (["--buckets-per-voxel", "1"], "differs"),
+        (["--no-merge"], ("merge", "enabled", False)),  # intact grains: nothing to merge
+        (["--merge-ratio", "0.2"], "differs"),
+        (["--min-size", "5000"], "differs"),
+        # The scale: recorded in the summary (the labels of this crop do not
+        # move with it: it sets only the default pore size limit).
+        (["--grain-radius-vox", "10"], ("grain_radius_vox", None, 10.0)),
+        (["--grain-diameter-um", "400"], ("grain_radius_vox", None, 400 / 2 / 30)),
+        (["--compress", "0"], "bigger"),
+        (["--summary", "other.json"], "summary"),
+    ]
+
+
+def main():
+    w = tempfile.mkdtemp(prefix="tg_flags_")
+    try:
+        os.chdir(w)
+        # ------------------------------------------------------------ synth
+        run(["synth", "--preset", "spheres", "--size", "64", "-o", "s.h5"])
+        base_grey = digest("s.h5", "/volume")
+        for flags, what in [(["--seed", "2"], "differs"), (["--voxel-um", "7"], "voxel"),
+                            (["--size", "48"], "shape"), (["--float"], "float")]:
+            out = "syn_" + flags[0].strip("-") + ".h5"
+            size = [] if flags[0] == "--size" else ["--size", "64"]
+            run(["synth", "--preset", "spheres", "-o", out] + size + flags)
+            with h5py.File(out, "r") as f:
+                if what == "differs":
+                    check(digest(out, "/volume") != base_grey, f"synth {' '.join(flags)}: another scan")
+                elif what == "voxel":
+                    vs = info(out)["voxel_size_um_zyx"]
+                    check(vs == [7.0, 7.0, 7.0], f"synth --voxel-um 7: voxel size {vs}")
+                elif what == "shape":
+                    check(f["/volume"].shape == (48, 48, 48), f"synth --size 48: shape {f['/volume'].shape}")
+                elif what == "float":
+                    check("/reconstruction" in f and f["/reconstruction"].dtype == np.float32,
+                          "synth --float: /reconstruction is float32")
+        scene = "scene.toml"
+        with open(scene, "w") as f:
+            f.write("seed = 5\n")
+        r = run(["synth", "--preset", "spheres", "--size", "64", "--scene", scene, "-o", "syn_scene.h5"], ok=False)
+        check(r.returncode == 0 and digest("syn_scene.h5", "/volume") != base_grey,
+              f"synth --scene (seed 5): another scan (exit {r.returncode}: {r.stderr.strip()[:120]})")
+        r = run(["synth", "--preset", "extremes", "--size", "48", "-o", "ext"], ok=False)
+        check(r.returncode == 0, f"synth --preset extremes (exit {r.returncode})")
+        # The extremes through segment and measure: each ends with exit 0 and
+        # a table, or refuses with exit 2 and one line naming the file.
+        for name in ("tiny", "border", "empty", "solid", "saturated"):
+            scan = f"ext_{name}.h5"
+            r = run(["segment", scan, "-o", f"ext_{name}_seg.h5", "--grain-radius-vox", "5"], ok=False)
+            lines = r.stderr.strip().splitlines()
+            if r.returncode != 0:
+                check(r.returncode == 2 and len(lines) == 1 and scan in lines[0],
+                      f"segment {scan}: refused cleanly (exit {r.returncode}: {r.stderr.strip()[:160]})")
+                continue
+            r = run(["measure", f"ext_{name}_seg.h5", "-o", f"ext_{name}.csv"], ok=False)
+            ok = r.returncode == 0 and os.path.exists(f"ext_{name}.csv")
+            t = rows(f"ext_{name}.csv") if ok else []
+            if name in ("empty", "solid"):
+                # No grains to find: the segmenter still cuts the noise
+                # (empty: 8 labels) but says so in its summary.
+                notes = json.load(open(f"ext_{name}_seg.segment.json"))["notes"]
+                ok = ok and any("bimodal" in n for n in notes)
+            if name == "border":
+                ok = ok and any(x["touches_border"] in ("1", "1.0", "true") for x in t)
+            check(ok, f"segment + measure {scan}: exit {r.returncode}, {len(t)} particles {r.stderr.strip()[:120]}")
+
+        # ---------------------------------------------------------- segment
+        # A crop of the zeolite specimen (intra-granular pores, grains of
+        # radius ~22 voxels that touch): every segment option has work to do.
+        run(["synth", "--preset", "zeolite", "--voxel-um", "30", "--size", "80", "-o", "z.h5"])
+        run(["segment", "z.h5", "-o", "zseg.h5", "--grain-radius-vox", "22"])
+        base_lab = digest("zseg.h5", "/labels")
+        size0 = os.path.getsize("zseg.h5")
+        for k, (flags, what) in enumerate(segment_rows(base_lab)):
+            out = f"seg_{k}.h5"
+            extra = [] if any(f.startswith("--grain") for f in flags) else ["--grain-radius-vox", "22"]
+            run(["segment", "z.h5", "-o", out] + extra + flags)
+            name = "segment " + " ".join(flags)
+            if what == "differs":
+                check(digest(out, "/labels") != base_lab, f"{name}: other labels")
+            elif what == "bigger":
+                check(os.path.getsize(out) > size0 and digest(out, "/labels") == base_lab,
+                      f"{name}: same labels, uncompressed file ({os.path.getsize(out)} vs {size0} bytes)")
+            elif isinstance(what, tuple):  # recorded in the summary: (section, key, value)
+                j = json.load(open(out.replace(".h5", ".segment.json")))[what[0]]
+                v = j if what[1] is None else j[what[1]]
+                same = v == what[2] if isinstance(what[2], bool) else abs(v - what[2]) < 1e-9
+                check(same, f"{name}: summary {what[0]} {what[1] or ''} = {v} (expected {what[2]})")
+            elif what == "summary":
+                check(os.path.exists("other.json") and json.load(open("other.json")), f"{name}: the summary is there")
+
+        # ---------------------------------------------------------- measure
+        run(["segment", "s.h5", "-o", "seg.h5", "--grain-diameter-um", "400"])
+        run(["measure", "seg.h5", "-o", "m.csv"])
+        base = rows("m.csv")
+        col = lambda t, c: [float(r[c]) for r in t]
+        checks = [
+            (["--feret", "exact"], lambda t: t[0]["sizing"] == "feret-exact" and col(t, "d_min_mm") != col(base, "d_min_mm")),
+            (["--feret", "12"], lambda t: t[0]["sizing"] == "feret-12"),
+            (["--sizing", "obb"], lambda t: t[0]["sizing"] == "obb" and col(t, "d_max_mm") == col(t, "obb_max_mm")),
+            (["--detection-limit-mm", "10"], lambda t: all(r["below_limit"] in ("1", "1.0", "true") for r in t)),
+            (["--face-offset", "0.9"], lambda t: col(t, "d_max_mm") != col(base, "d_max_mm")),
+            (["--no-box"], lambda t: all(float(r["obb_max_mm"]) == 0 for r in t)),
+            (["--seed", "7"], lambda t: col(t, "obb_max_mm") != col(base, "obb_max_mm") or
+             col(t, "obb_min_mm") != col(base, "obb_min_mm")),
+            (["--voxel-um", "10"], lambda t: abs(float(t[0]["volume_mm3"]) /
+                                                 float(base[0]["volume_mm3"]) - (10 / voxel_um()) ** 3) < 1e-9),
+            (["--threads", "2"], lambda t: t == base),  # no effect by design: results do not depend on it
+        ]
+
+        def voxel_um():
+            return info("seg.h5")["voxel_size_um_zyx"][0]
+
+        for flags, ok in checks:
+            out = "m_" + flags[0].strip("-") + ".csv"
+            run(["measure", "seg.h5", "-o", out] + flags)
+            check(os.path.exists(out) and ok(rows(out)), "measure " + " ".join(flags))
+        # Two outputs at once.
+        run(["measure", "seg.h5", "-o", "m2.csv", "-o", "m2.h5"])
+        with h5py.File("m2.h5", "r") as f:
+            check("/particles" in f or any("particles" in k for k in f.keys()), "measure -o a.csv -o a.h5: the .h5 holds the table")
+
+        # ---------------------------------------------------------- convert
+        run(["convert", "s.h5", "-o", "c.tif"])
+        run(["convert", "c.tif", "-o", "c_f.h5", "--to", "float32"])
+        with h5py.File("c_f.h5", "r") as f:
+            check(f["/volume"].dtype == np.float32, "convert --to float32")
+        run(["convert", "c_f.h5", "-o", "c_u.h5", "--to", "uint16", "--range", "0,65535"])
+        run(["convert", "c_f.h5", "-o", "c_u2.h5", "--to", "uint16"])
+        check(digest("c_u.h5", "/volume") != digest("c_u2.h5", "/volume"), "convert --range 0,65535 vs auto: other grey values")
+        run(["convert", "s.h5", "-o", "c0.h5", "--compress", "0"])
+        run(["convert", "s.h5", "-o", "c9.h5", "--compress", "9"])
+        check(os.path.getsize("c0.h5") > os.path.getsize("c9.h5"), "convert --compress 0 vs 9: bigger file")
+
+        # ------------------------------------------------------------- info
+        r = run(["info", "s.h5", "--json"])
+        try:
+            j = json.loads(r.stdout)
+            check(j["shape_zyx"] == [64, 64, 64] and j["dtype"] == "uint16", f"info --json: shape and dtype ({r.stdout[:100]!r})")
+        except json.JSONDecodeError:
+            check(False, f"info --json: not JSON ({r.stdout[:100]!r})")
+
+        # --------------------------------------------------------- voxelise
+        with open("spheres.csv", "w") as f:
+            f.write("x_m,y_m,z_m,r_m,particle\n0,0,0.5e-3,2e-4,1\n4e-4,0,0.5e-3,2e-4,1\n0,5e-4,0.5e-3,2e-4,2\n"
+                    "-5e-4,-2e-4,0.5e-3,1.5e-4,3\n")
+        run(["voxelise", "spheres.csv", "-o", "v.h5", "--voxel-um", "20"])
+        vbase = digest("v.h5", "/volume")
+        vshape = h5py.File("v.h5", "r")["/volume"].shape
+        for flags, what in [
+            (["--voxel-um", "10"], "shape"), (["--margin", "5"], "shape"),
+            (["--field", "cylinder", "--cylinder-mm", "3"], "shape"),
+            (["--void-grey", "5000"], "grey"), (["--solid-grey", "30000"], "grey"), (["--noise", "0"], "grey"),
+            (["--psf", "0"], "grey"), (["--seed", "9"], "grey"), (["--field", "cylinder"], "grey"),
+            (["--like", "s.h5"], "grey"), (["--no-grey"], "nogrey")]:
+            out = "v_" + flags[0].strip("-") + ".h5"
+            args = ["voxelise", "spheres.csv", "-o", out] + (["--voxel-um", "20"] if flags[0] != "--voxel-um" else []) + flags
+            r = run(args, ok=False)
+            name = "voxelise " + " ".join(flags)
+            if r.returncode != 0:
+                check(False, f"{name}: exit {r.returncode}: {r.stderr.strip()[:160]}")
+                continue
+            with h5py.File(out, "r") as f:
+                if what == "shape":
+                    check(f["/labels"].shape != vshape if "/labels" in f else f["/volume"].shape != vshape, f"{name}: other shape")
+                elif what == "grey":
+                    check(digest(out, "/volume") != vbase, f"{name}: other grey values")
+                elif what == "nogrey":
+                    check("/volume" not in f and "/labels" in f, f"{name}: labels only")
+
+        # -------------------------------------------------------------- dem
+        shutil.copyfile(os.path.join(HERE, "data", "crash_pack.csv"), "pack.csv")
+        cfg = ("[walls]\ncylinder_radius_m = 4.0e-3\n[specimen]\npacking_csv = \"pack.csv\"\n[run]\nthreads = 1\n"
+               "[oedometer]\ntarget_strain = 0.002\nsnapshot_strains = [0.0, 0.002]\nhistory_every_steps = 200\n"
+               "checkpoint_every_steps = 2000\n[breakage]\nenabled = false\n")
+        open("o.toml", "w").write(cfg)
+        run(["dem", "oedometer", "o.toml", "-o", "oed"])
+        h = rows("oed/history.csv")
+        check(abs(float(h[-1]["strain"]) - 0.002) < 1e-4, f"dem oedometer -o: ran to 0.2 % ({h[-1]['strain']})")
+        # --restart: a run stopped by SIGKILL is tests/apps/crash_restart_test.py's;
+        # here, a fresh folder cannot be restarted (no checkpoint): exit 2.
+        r = run(["dem", "oedometer", "o.toml", "-o", "fresh", "--restart"], ok=False)
+        check(r.returncode == 2 and not os.path.exists("fresh/history.csv"),
+              f"dem oedometer --restart without a checkpoint: exit {r.returncode}, nothing written")
+        # Past the first split (5.3 % of d with the default strength draw).
+        run(["dem", "crush", "-o", "cr0.csv", "--travel", "0.08"])
+        c0 = rows("cr0.csv")
+        last = lambda t, c: float(t[-1][c])
+        for flags, ok in [
+            (["-d", "1.0e-3"], lambda t: t != c0),
+            (["--speed", "0.05"], lambda t: t != c0),
+            (["--travel", "0.02"], lambda t: len(t) < len(c0)),
+            (["--d0", "2e-3"], lambda t: t != c0),
+            (["--seed", "4"], lambda t: t != c0),
+            (["--min-split", "1e-2"], lambda t: t != c0),  # nothing that small splits... nor the grain
+            (["--min-dt", "1e-9"], lambda t: t != c0)]:
+            out = "cr_" + flags[0].strip("-") + ".csv"
+            args = ["dem", "crush", "-o", out] + (["--travel", "0.08"] if flags[0] != "--travel" else []) + flags
+            run(args)
+            check(os.path.exists(out) and ok(rows(out)), "dem crush " + " ".join(flags))
+    finally:
+        os.chdir("/")
+        if os.environ.get("TG_KEEP") is None:
+            shutil.rmtree(w, ignore_errors=True)
+        else:
+            print("kept", w)
+
+
+main()
+print(f"{'FAILED' if failures else 'passed'}: {len(failures)} failure(s)")
+sys.exit(1 if failures else 0)

@@ -65,7 +65,15 @@ Accuracy evaluate(const TrackResult& tracked, const std::vector<LineageRow>& tru
     auto it = truth_row.find({r.stage, q});
     const uint32_t tp = it == truth_row.end() ? 0 : it->second->parent_label;
     const uint32_t tg = it == truth_row.end() ? 0 : it->second->grain;
-    a.right_parent += map_label(maps, r.stage - 1, r.parent_label) == tp;
+    const bool ok = map_label(maps, r.stage - 1, r.parent_label) == tp;
+    a.right_parent += ok;
+    if (!ok && a.mistakes.size() < 50)
+      a.mistakes.push_back("stage " + std::to_string(r.stage) + " label " + std::to_string(r.label) + " (truth " +
+                           std::to_string(q) + ", " + (it == truth_row.end() ? "-" : event_name(it->second->event)) +
+                           "): parent " + std::to_string(r.parent_label) + " (truth " +
+                           std::to_string(map_label(maps, r.stage - 1, r.parent_label)) + "), truth parent " +
+                           std::to_string(tp) + ", tracked event " + event_name(r.event) + ", quality " +
+                           std::to_string(r.quality) + ", volume " + std::to_string(r.volume_vox));
     a.right_grain += map_label(maps, 0, r.grain) == tg;
   }
   const auto truth_events = derive_events(truth, stages);

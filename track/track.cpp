@@ -78,6 +78,8 @@ struct Overlap {
   int64_t n;
 };
 
+double r_eq(double v) { return std::cbrt(3 * v / (4 * std::numbers::pi)); }
+
 // ov(a, b): voxels of A particle a that land in B label b once moved by M x + shift[a].
 std::vector<Overlap> overlaps(const Volume<uint32_t>& A, const LabelIndex& ia, const Volume<uint32_t>& B,
                               const Eigen::Matrix3d& M, const std::vector<Eigen::Vector3d>& shift, int threads) {
@@ -152,8 +154,6 @@ void assign_parents(const std::vector<Overlap>& ov, const LabelIndex& ib, const 
     if (static_cast<double>(covered[q]) < min_fraction * static_cast<double>(b_rows[q].volume_vox)) parent[q] = -1;
 }
 
-double r_eq(double v) { return std::cbrt(3 * v / (4 * std::numbers::pi)); }
-
 }  // namespace
 
 const char* event_name(Event e) { return kEventNames[static_cast<int>(e)]; }
@@ -201,12 +201,11 @@ void Tracker::add_stage(Volume<uint32_t> labels, const std::string& name) {
 
     const LabelIndex ia(prev_rows_), ib(rows);
     std::vector<Eigen::Vector3d> shift(prev_rows_.size(), m.t);
-    std::vector<int32_t> parent;
-    std::vector<int64_t> covered;
-    for (int pass = 0; pass < (o_.refine ? 2 : 1); ++pass) {
-      const auto ov = overlaps(prev_, ia, labels, m.M, shift, o_.threads);
-      assign_parents(ov, ib, rows, o_.min_overlap_fraction, parent, covered);
-      if (pass == 1 || !o_.refine) break;
+    std::vector<int32_t> parent, parent1;
+    std::vector<int64_t> covered, covered1;
+    auto ov = overlaps(prev_, ia, labels, m.M, shift, o_.threads);
+    assign_parents(ov, ib, rows, o_.min_overlap_fraction, parent, covered);
+    if (o_.refine) {
       // Residual shift of each A particle: its children's volume-weighted centroid off its mapped centroid.
       std::vector<Eigen::Vector3d> sum(prev_rows_.size(), Eigen::Vector3d::Zero());
       std::vector<double> vol(prev_rows_.size(), 0);
@@ -218,6 +217,33 @@ void Tracker::add_stage(Volume<uint32_t> labels, const std::string& name) {
       }
       for (size_t a = 0; a < prev_rows_.size(); ++a)
         if (vol[a] > 0) shift[a] = m.t + sum[a] / vol[a] - m.apply(prev_rows_[a].centroid_vox);
+      parent1.swap(parent);
+      covered1.swap(covered);
+      ov = overlaps(prev_, ia, labels, m.M, shift, o_.threads);
+      assign_parents(ov, ib, rows, o_.min_overlap_fraction, parent, covered);
+      // A child missed by its parent's shift (a thin chip on the side the body's centroid moved
+      // away from) keeps its first-pass match: the better covered of the two passes wins.
+      for (size_t q = 0; q < rows.size(); ++q)
+        if (covered1[q] > covered[q] && parent1[q] >= 0) parent[q] = parent1[q], covered[q] = covered1[q];
+    }
+    // Particles no moved voxel covers (small pieces that drifted off their parent's voxels):
+    // the A particle (of at least a quarter of the child's volume) whose moved body,
+    // approximated as its equivalent sphere about its predicted centroid, the child's centroid
+    // lies in or nearest to, within nearest_slack_vox. Match quality stays 0.
+    for (size_t q = 0; q < rows.size(); ++q) {
+      if (parent[q] >= 0) continue;
+      const auto& c = rows[q].centroid_vox;
+      const Eigen::Vector3d y(c[0], c[1], c[2]);
+      const double vb = static_cast<double>(rows[q].volume_vox);
+      double best = o_.nearest_slack_vox * o_.nearest_slack_vox;
+      for (size_t a = 0; a < prev_rows_.size(); ++a) {
+        const double va = static_cast<double>(prev_rows_[a].volume_vox);
+        if (va < 0.25 * vb) continue;
+        const auto& ca = prev_rows_[a].centroid_vox;
+        // Distance from the child's centroid to the parent's moved equivalent sphere.
+        const double d = std::max(0.0, (m.M * Eigen::Vector3d(ca[0], ca[1], ca[2]) + shift[a] - y).norm() - r_eq(va));
+        if (d * d < best) best = d * d, parent[q] = static_cast<int32_t>(a);
+      }
     }
 
     // Children of every A particle, largest first.

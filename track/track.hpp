@@ -72,6 +72,7 @@ Event event_from_name(const std::string& name);  // InputError on an unknown nam
 struct TrackOptions {
   MapOptions map;
   double min_overlap_fraction = 0.2;  // a child's voxels covered by its parent, at least
+  double nearest_slack_vox = 2.0;     // uncovered children: centroid within the parent's moved sphere + this
   double surface_tolerance_vox = 1.0; // d above
   double min_volume_tolerance = 0.1;
   double chip_body_fraction = 0.7;    // f1 at or above this: chipping

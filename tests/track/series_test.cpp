@@ -10,8 +10,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <map>
 #include <random>
 
+#include "core/errors.hpp"
 #include "segmentation/segment.hpp"
 #include "series.hpp"
 #include "track/evaluate.hpp"
@@ -65,6 +68,10 @@ TEST(TrackSeries, TruthLabelsRightParents) {
     }
     for (size_t q = 0; q < a.pct_broken.size(); ++q) EXPECT_NEAR(a.pct_broken[q], a.pct_broken_truth[q], 2.0) << q;
     for (size_t q = 1; q < r.maps.size(); ++q) EXPECT_LT(r.maps[q].axial_scale(), 1.0);
+    // The same stages given last first: the specimen would lengthen.
+    Tracker back;
+    back.add_stage(s.labels[4].clone(), "stage4.h5");
+    EXPECT_THROW(back.add_stage(s.labels[3].clone(), "stage3.h5"), InputError);
   }
 }
 
@@ -116,13 +123,57 @@ TEST(TrackSeries, SegmentedLabels) {
   for (size_t q = 0; q < a.pct_broken.size(); ++q) EXPECT_NEAR(a.pct_broken[q], a.pct_broken_truth[q], 5.0) << q;
 }
 
-// The series itself: stages shorten, grains near the top move most, broken sets are nested.
+// The series itself (data_synth/motion.hpp): intact grains follow the axial
+// compression under the top platen (dz = -(strain increment) x height above
+// the bottom, within the jitter), fragments drift apart, the broken fraction
+// grows and fragments break again.
 TEST(TrackSeries, SeriesMovesLikeAnOedometer) {
   test::SeriesSpec sp;
   sp.seed = 2;
   const auto s = test::make_series(sp);
   int stages = 0;
   for (const auto& r : s.lineage) stages = std::max(stages, r.stage + 1);
+  std::map<std::pair<int, uint32_t>, const LineageRow*> at;
+  for (const auto& r : s.lineage) at[{r.stage, r.label}] = &r;
+  const auto& e = sp.stages.strains;
+  const double zb = static_cast<double>(sp.margin);
+  for (int q = 1; q < stages; ++q) {
+    // Least-squares slope of dz against height for the intact grains: -(e_q - e_{q-1}) / (1 - e_{q-1}).
+    double sxx = 0, sxy = 0;
+    int64_t n = 0;
+    std::map<uint32_t, std::vector<const LineageRow*>> kids;
+    for (const auto& r : s.lineage) {
+      if (r.stage != q || !r.parent_label) continue;
+      kids[r.parent_label].push_back(&r);
+      if (r.event != Event::intact || r.label != r.grain) continue;
+      const auto* p = at.at({q - 1, r.parent_label});
+      if (p->volume_vox < 0.9 * r.volume_vox || r.volume_vox < 0.9 * p->volume_vox) continue;  // cut by the border
+      const double h = p->centroid_vox[0] - zb, dz = r.centroid_vox[0] - p->centroid_vox[0];
+      sxx += h * h, sxy += h * dz, ++n;
+    }
+    ASSERT_GT(n, 5);
+    const double expect = -(e[q] - e[q - 1]) / (1 - e[q - 1]);
+    EXPECT_NEAR(sxy / sxx, expect, 0.15 * std::abs(expect) + 0.004) << "stage " << q;
+  }
+  // Split halves of one grain drift apart: their centroids' distance grows from stage to stage.
+  int64_t pairs = 0, growing = 0;
+  for (const auto& r : s.lineage) {
+    if (r.event != Event::split || r.stage + 1 >= stages || r.parent_label != r.grain) continue;
+    for (const auto& o : s.lineage) {
+      if (o.stage != r.stage || o.parent_label != r.parent_label || o.label <= r.label) continue;
+      auto a1 = at.find({r.stage + 1, r.label}), b1 = at.find({r.stage + 1, o.label});
+      if (a1 == at.end() || b1 == at.end() || a1->second->event != Event::intact || b1->second->event != Event::intact) continue;
+      auto dist = [](const LineageRow& x, const LineageRow& y) {
+        double d = 0;
+        for (int ax = 0; ax < 3; ++ax) d += (x.centroid_vox[ax] - y.centroid_vox[ax]) * (x.centroid_vox[ax] - y.centroid_vox[ax]);
+        return std::sqrt(d);
+      };
+      ++pairs;
+      growing += dist(*a1->second, *b1->second) > dist(r, o);
+    }
+  }
+  EXPECT_GT(pairs, 3);
+  EXPECT_GE(growing, pairs * 9 / 10);
   const auto ev = derive_events(s.lineage, stages);
   const auto sum = summarise(s.lineage, ev, stages);
   for (int q = 1; q < stages; ++q) EXPECT_GE(sum[q].pct_intact_broken, sum[q - 1].pct_intact_broken);

@@ -87,7 +87,12 @@ Accuracy evaluate(const TrackResult& tracked, const std::vector<LineageRow>& tru
     if (std::find(types.begin(), types.end(), e.type) == types.end()) continue;
     auto& sc = a.events[event_name(e.type)];
     ++sc.truth;
-    sc.found += tracked_keys.count({e.stage, e.parent_label, e.type});
+    const bool hit = tracked_keys.count({e.stage, e.parent_label, e.type}) > 0;
+    sc.found += hit;
+    if (!hit && a.missed_events.size() < 50)
+      a.missed_events.push_back("stage " + std::to_string(e.stage) + " parent " + std::to_string(e.parent_label) + " " +
+                                event_name(e.type) + " (" + std::to_string(e.children.size()) + " children, volume " +
+                                std::to_string(e.volume_before_vox) + " -> " + std::to_string(e.volume_after_vox) + ")");
   }
   for (const auto& e : tracked.events) {
     if (std::find(types.begin(), types.end(), e.type) == types.end()) continue;

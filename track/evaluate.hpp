@@ -40,7 +40,8 @@ struct Accuracy {
   int64_t particles = 0, right_parent = 0, right_grain = 0;  // tracked particles at stages >= 1
   std::map<std::string, EventScore> events;  // "split", "fragmentation", "chipping", "lost"
   std::vector<double> pct_broken, pct_broken_truth;  // per stage
-  std::vector<std::string> mistakes;  // the first 50 wrong parents, for diagnosis
+  std::vector<std::string> mistakes;       // the first 50 wrong parents, for diagnosis
+  std::vector<std::string> missed_events;  // the first 50 truth events not found
   double parent_fraction() const { return particles ? static_cast<double>(right_parent) / static_cast<double>(particles) : 1.0; }
   double grain_fraction() const { return particles ? static_cast<double>(right_grain) / static_cast<double>(particles) : 1.0; }
 };

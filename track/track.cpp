@@ -269,7 +269,8 @@ void Tracker::add_stage(Volume<uint32_t> labels, const std::string& name) {
       Event first = Event::intact, rest = Event::intact;
       if (k.size() == 1) {
         const bool cut = pr.touches_border || rows[k[0]].touches_border;
-        if (!cut && static_cast<double>(after) < (1 - tol) * static_cast<double>(pr.volume_vox)) first = Event::chipping;
+        const double kept = static_cast<double>(after) / static_cast<double>(pr.volume_vox);
+        if (!cut && kept < 1 - tol) first = kept <= o_.hidden_split_fraction ? Event::split : Event::chipping;
       } else if (f1 >= o_.chip_body_fraction) {
         first = Event::chipping, rest = Event::chip;
       } else {

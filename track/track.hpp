@@ -29,8 +29,11 @@
 //                          3 d / r_eq) (d = surface_tolerance_vox, the
 //                          segmentation's surface uncertainty: one voxel of
 //                          radius changes a sphere's volume by 3 d / r) and
-//                          neither stage cuts it at the border: chipping
-//                          with the chips unseen
+//                          neither stage cuts it at the border: then split
+//                          when it kept at most hidden_split_fraction of its
+//                          volume (a half whose twin is unseen: merged into a
+//                          neighbour's label by the segmentation, or below
+//                          its size limit), else chipping with the chips unseen
 //       two or more        chipping when f1 >= chip_body_fraction (the body
 //                          row says `chipping`, each small piece `chip`),
 //                          else split (2 children) or fragmentation (>= 3)
@@ -76,6 +79,7 @@ struct TrackOptions {
   double surface_tolerance_vox = 1.0; // d above
   double min_volume_tolerance = 0.1;
   double chip_body_fraction = 0.7;    // f1 at or above this: chipping
+  double hidden_split_fraction = 0.7; // one child keeping at most this share of the volume: split
   bool refine = true;                 // step 4
   bool allow_extension = false;       // accept stages whose map lengthens the specimen
   double extension_tolerance = 0.002;

@@ -47,6 +47,7 @@ void print(const Accuracy& a, const char* what) {
   for (size_t s = 0; s < a.pct_broken.size(); ++s)
     std::printf("  stage %zu: %% intact broken %.2f (truth %.2f)\n", s, a.pct_broken[s], a.pct_broken_truth[s]);
   for (const auto& m : a.mistakes) std::printf("  wrong: %s\n", m.c_str());
+  for (const auto& m : a.missed_events) std::printf("  missed: %s\n", m.c_str());
 }
 
 }  // namespace

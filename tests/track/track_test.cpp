@@ -83,6 +83,27 @@ TEST(Track, IntactGrainsFollowCompressionWithPermutedLabels) {
   EXPECT_EQ(r.summary[1].pct_intact_broken, 0.0);
 }
 
+// One thread or two: the same tables, byte for byte.
+TEST(Track, ThreadCountDoesNotChangeTheResult) {
+  std::string out[2];
+  for (int t = 1; t <= 2; ++t) {
+    Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage();
+    const auto c0 = centres(0), c1 = centres(0.05);
+    for (size_t q = 0; q < c0.size(); ++q) {
+      paint(s0, label_at(0, q), c0[q], 6);
+      paint(s1, label_at(1, q), c1[q], 6, [q](double, double, double x) { return q % 5 || std::abs(x) > 0.75; });
+    }
+    TrackOptions o;
+    o.threads = t;
+    Tracker tr(o);
+    tr.add_stage(std::move(s0), "s0");
+    tr.add_stage(std::move(s1), "s1");
+    const auto r = tr.result();
+    out[t - 1] = to_csv(lineage_table(r)) + to_csv(events_table(r)) + to_csv(summary_table(r));
+  }
+  EXPECT_EQ(out[0], out[1]);
+}
+
 // One grain of each kind of event, among intact ones; then a fragment breaks again.
 TEST(Track, ClassifiesEveryEventAndFragmentsBreakAgain) {
   const auto c0 = centres(0), c1 = centres(0.04), c2 = centres(0.08);

@@ -59,6 +59,8 @@ expect_bad out_of_order "out of loading order" -- "$TG" track run_stage2.h5 run_
 expect_bad other_shape "small_stage1.h5: shape" -- "$TG" track run_stage0.h5 small_stage1.h5 -o bad
 expect_bad other_voxel "fine_stage1.h5: voxel size" -- "$TG" track run_stage0.h5 fine_stage1.h5 -o bad
 expect_bad missing "nothere.h5" -- "$TG" track run_stage0.h5 nothere.h5 -o bad
+printf '[stages]\nmotion = "fast"\n' > badmotion.toml
+expect_bad bad_motion "stages.motion" -- "$TG" synth --preset zeolite-stages --scene badmotion.toml --size 16 -o bad
 "$TG" track --help | grep -q "tomograin track seg0.h5" || fail "--help has no example"
 "$TG" track run_stage2.h5 run_stage1.h5 --any-order -o anyorder > /dev/null 2>&1 || fail "--any-order"
 [[ $fails -eq 0 ]] && echo "all passed"

@@ -7,6 +7,8 @@ find_package(nlohmann_json 3 REQUIRED)
 find_package(CLI11 REQUIRED)
 find_package(fmt REQUIRED)
 find_package(tomlplusplus REQUIRED)
+# OpenCV: calib3d for estimateAffine3D (track/registration.cpp, the RANSAC map between stages).
+find_package(OpenCV REQUIRED COMPONENTS core calib3d)
 # CGAL first, then Eigen with NO_MODULE: CGAL's own FindEigen3 module would
 # otherwise shadow Eigen's config and no Eigen3::Eigen target would exist.
 set(CGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE TRUE)  # Debug is only for the sanitizer build

@@ -117,6 +117,16 @@ void apply_config(Scene& s, Config& c) {
   c.require(b.gap >= 0, "stages.gap_vox", "must be >= 0");
   c.require(0 < b.chip_min && b.chip_min <= b.chip_max && b.chip_max < 1, "stages.chip_min",
             "need 0 < chip_min <= chip_max < 1");
+  MotionOptions& mo = s.motion;
+  const std::string motion = c.get("stages.motion", std::string(mo.oedometer ? "oedometer" : "stretch"));
+  c.require(motion == "stretch" || motion == "oedometer", "stages.motion", "must be \"stretch\" or \"oedometer\"");
+  mo.oedometer = motion == "oedometer";
+  mo.jitter = c.get("stages.jitter", mo.jitter);
+  mo.rotation_deg = c.get("stages.rotation_deg", mo.rotation_deg);
+  mo.drift = c.get("stages.drift", mo.drift);
+  mo.rebreak = c.get("stages.rebreak", mo.rebreak);
+  c.require(mo.jitter >= 0 && mo.drift >= 0, "stages.jitter", "jitter and drift must be >= 0");
+  c.require(mo.rebreak >= 0 && mo.rebreak <= 1, "stages.rebreak", "must be in [0, 1]");
   RenderOptions& r = s.render;
   r.chord_order = c.get("render.chord_order", r.chord_order);
   r.depth = c.get("render.depth", r.depth);
@@ -217,6 +227,7 @@ WriteResult render_and_write(const std::vector<Particle>& particles, const Grid&
   t0 = std::chrono::steady_clock::now();
   const Table truth = truth_table(particles, r.labels, grid.shape, grid.geometry);
   res.t.truth_s = seconds_since(t0);
+  res.truth = truth;
   t0 = std::chrono::steady_clock::now();
   apply_imaging(r.solid, scene.imaging);
   U16Result u = to_u16(r.solid);
@@ -349,15 +360,30 @@ int run_synth(Scene scene, const std::string& out, bool write_float) {
   } else {
     const std::string prefix = strip_h5(out);
     const double emax = *std::max_element(scene.stage.strains.begin(), scene.stage.strains.end());
+    std::vector<std::vector<SeriesParticle>> series;  // oedometer motion: the truth lineage
+    std::vector<Table> truths;
     for (int s = 0; s < static_cast<int>(scene.stage.strains.size()); ++s) {
-      const auto ps = stage_particles(gr.particles, gr.z_bottom_vox, s, scene.stage);
+      std::vector<Particle> ps;
+      if (scene.motion.oedometer) {
+        series.push_back(oedometer_stage(gr.particles, gr.z_bottom_vox, s, scene.stage, scene.motion));
+        for (const auto& sp : series.back()) ps.push_back(sp.particle);
+      } else {
+        ps = stage_particles(gr.particles, gr.z_bottom_vox, s, scene.stage);
+      }
       j["stage"] = s;
       j["axial_strain"] = scene.stage.strains[s];
       j["broken_fraction"] = scene.stage.broken[s];
       j["specimen_height_mm"] = scene.packing.height * (1 - scene.stage.strains[s]);
       j["packing"]["solid_fraction"] = gr.packing.fraction * (1 - emax) / (1 - scene.stage.strains[s]);
+      j["motion"] = scene.motion.oedometer ? "oedometer" : "stretch";
       const std::string path = prefix + "_stage" + std::to_string(s) + ".h5";
-      report(path, render_and_write(ps, grid, scene, path, write_float, j.dump()), grid);
+      WriteResult w = render_and_write(ps, grid, scene, path, write_float, j.dump());
+      report(path, w, grid);
+      truths.push_back(std::move(w.truth));
+    }
+    if (scene.motion.oedometer) {
+      write_csv(lineage_truth(series, truths), prefix + "_lineage.csv");
+      std::printf("%s_lineage.csv: truth lineage of %zu stages\n", prefix.c_str(), series.size());
     }
   }
   std::printf("peak memory %s\n", human_bytes(static_cast<double>(peak_rss_bytes())).c_str());

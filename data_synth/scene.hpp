@@ -29,7 +29,10 @@
 //   [imaging]  void_grey, solid_grey, psf_sigma_vox, noise_sigma,
 //              poisson_counts_per_grey, cupping, rings, ring_amplitude
 //   [stages]   strains, broken (lists), gap_vox, mix_split, mix_multi,
-//              mix_chip, chip_min, chip_max
+//              mix_chip, chip_min, chip_max, motion ("stretch" | "oedometer"),
+//              jitter, rotation_deg, drift, rebreak (oedometer motion:
+//              data_synth/motion.hpp; it also writes PREFIX_lineage.csv, the
+//              truth lineage in the columns of `tomograin track`)
 //   [render]   chord_order, depth, slab
 #pragma once
 #include <cstdint>
@@ -41,6 +44,7 @@
 #include "core/volume.hpp"
 #include "data_synth/granule.hpp"
 #include "data_synth/imaging.hpp"
+#include "data_synth/motion.hpp"
 #include "data_synth/packing.hpp"
 #include "data_synth/render.hpp"
 
@@ -60,6 +64,7 @@ struct Scene {
   ImagingOptions imaging;
   bool stages = false;
   StageOptions stage;
+  MotionOptions motion;           // stage series: "stretch" (default) or oedometer motion
   RenderOptions render;
 };
 
@@ -103,6 +108,7 @@ struct WriteResult {
   double solid_fraction_voxels = 0;  // mean of the solid-fraction volume
   int64_t saturated = 0;
   int64_t particles = 0;
+  Table truth;  // the truth table written beside the file
 };
 WriteResult render_and_write(const std::vector<Particle>& particles, const Grid& grid, const Scene& scene,
                              const std::string& path, bool write_float, const std::string& provenance);

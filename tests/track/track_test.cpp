@@ -1,0 +1,280 @@
+// track/track: the tracker on hand-made label volumes whose every event is
+// known: a lattice of spheres under axial compression, with one sphere split
+// in two, one in four, one chipped, one vanished and one appearing; empty
+// stages, border grains, mismatched stages and stages out of order.
+#include "track/track.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <map>
+
+#include "core/errors.hpp"
+
+using namespace tg;
+using namespace tg::track;
+
+namespace {
+
+using Inside = std::function<bool(double z, double y, double x)>;  // relative to the centre
+
+const Geometry kGeom = Geometry::isotropic_m(12.3e-6);
+
+// Paints label `l` on the voxels whose centre lies in the sphere (c, r) and satisfies `keep`.
+void paint(Volume<uint32_t>& v, uint32_t l, std::array<double, 3> c, double r, const Inside& keep = {}) {
+  const Shape s = v.shape();
+  for (int64_t k = 0; k < s.nz; ++k)
+    for (int64_t j = 0; j < s.ny; ++j)
+      for (int64_t i = 0; i < s.nx; ++i) {
+        const double z = k + 0.5 - c[0], y = j + 0.5 - c[1], x = i + 0.5 - c[2];
+        if (z * z + y * y + x * x <= r * r && (!keep || keep(z, y, x))) v.data()[(k * s.ny + j) * s.nx + i] = l;
+      }
+}
+
+// Grain centres of a 3 x 4 x 4 lattice (spacing 14, radius 6) in a 48 x 60 x 60 volume, at axial
+// compression `strain` about z = 0 (the bottom platen).
+std::vector<std::array<double, 3>> centres(double strain) {
+  std::vector<std::array<double, 3>> c;
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 4; ++i) c.push_back({(9.0 + 14 * k) * (1 - strain), 9.0 + 14 * j + 0.3 * k, 9.0 + 14 * i});
+  return c;
+}
+
+Volume<uint32_t> empty_stage() { return Volume<uint32_t>::filled(Shape{48, 60, 60}, 0, kGeom); }
+
+// Label of grain q at a stage: q + 1 at stage 0, permuted (1000 - 7 q) later.
+uint32_t label_at(int stage, size_t q) { return stage == 0 ? static_cast<uint32_t>(q + 1) : static_cast<uint32_t>(1000 - 7 * q); }
+
+const LineageRow& row(const TrackResult& r, int stage, uint32_t label) {
+  for (const auto& x : r.lineage)
+    if (x.stage == stage && x.label == label) return x;
+  throw std::runtime_error("no row");
+}
+
+}  // namespace
+
+// Every grain moves with the compression and keeps its identity although
+// every label number changes; the map's axial scale is 1 - strain increment.
+TEST(Track, IntactGrainsFollowCompressionWithPermutedLabels) {
+  Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage();
+  const auto c0 = centres(0), c1 = centres(0.05);
+  for (size_t q = 0; q < c0.size(); ++q) {
+    paint(s0, label_at(0, q), c0[q], 6);
+    paint(s1, label_at(1, q), c1[q], 6);
+  }
+  Tracker tr;
+  tr.add_stage(std::move(s0), "s0");
+  tr.add_stage(std::move(s1), "s1");
+  const auto r = tr.result();
+  EXPECT_NEAR(r.maps[1].axial_scale(), 0.95, 0.005);
+  EXPECT_EQ(r.maps[1].method, "ransac");
+  for (size_t q = 0; q < c0.size(); ++q) {
+    const auto& x = row(r, 1, label_at(1, q));
+    EXPECT_EQ(x.parent_label, label_at(0, q));
+    EXPECT_EQ(x.grain, label_at(0, q));
+    EXPECT_EQ(x.event, Event::intact);
+    EXPECT_NEAR(x.displacement_vox[0], -0.05 * c0[q][0], 0.3);
+    EXPECT_GT(x.quality, 0.8);
+  }
+  EXPECT_TRUE(r.events.empty());
+  EXPECT_EQ(r.summary[1].grains_intact, 48);
+  EXPECT_EQ(r.summary[1].pct_intact_broken, 0.0);
+}
+
+// One thread or two: the same tables, byte for byte.
+TEST(Track, ThreadCountDoesNotChangeTheResult) {
+  std::string out[2];
+  for (int t = 1; t <= 2; ++t) {
+    Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage();
+    const auto c0 = centres(0), c1 = centres(0.05);
+    for (size_t q = 0; q < c0.size(); ++q) {
+      paint(s0, label_at(0, q), c0[q], 6);
+      paint(s1, label_at(1, q), c1[q], 6, [q](double, double, double x) { return q % 5 || std::abs(x) > 0.75; });
+    }
+    TrackOptions o;
+    o.threads = t;
+    Tracker tr(o);
+    tr.add_stage(std::move(s0), "s0");
+    tr.add_stage(std::move(s1), "s1");
+    const auto r = tr.result();
+    out[t - 1] = to_csv(lineage_table(r)) + to_csv(events_table(r)) + to_csv(summary_table(r));
+  }
+  EXPECT_EQ(out[0], out[1]);
+}
+
+// One grain of each kind of event, among intact ones; then a fragment breaks again.
+TEST(Track, ClassifiesEveryEventAndFragmentsBreakAgain) {
+  const auto c0 = centres(0), c1 = centres(0.04), c2 = centres(0.08);
+  Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage(), s2 = empty_stage();
+  // Stage 0: all grains. Grain 6 splits, 7 fragments (4 quadrants), 10 is chipped, 11 vanishes.
+  for (size_t q = 0; q < c0.size(); ++q) paint(s0, label_at(0, q), c0[q], 6);
+  const double g = 0.75;  // half the fragment gap (1.5 voxels)
+  uint32_t next = 2000;
+  std::map<std::string, std::vector<uint32_t>> kids;
+  for (size_t q = 0; q < c1.size(); ++q) {
+    if (q == 6) {
+      paint(s1, next, c1[q], 6, [&](double, double, double x) { return x > g; });
+      paint(s1, next + 1, c1[q], 6, [&](double, double, double x) { return x < -g; });
+      kids["split"] = {next, next + 1};
+      next += 2;
+    } else if (q == 7) {
+      for (int quad = 0; quad < 4; ++quad)
+        paint(s1, next + quad, c1[q], 6, [&, quad](double, double y, double x) {
+          return (quad & 1 ? y > g : y < -g) && (quad & 2 ? x > g : x < -g);
+        });
+      next += 4;
+    } else if (q == 10) {
+      paint(s1, next, c1[q], 6, [&](double z, double, double) { return z < 3.4 - g; });  // body
+      paint(s1, next + 1, c1[q], 6, [&](double z, double, double) { return z > 3.4 + g; });  // chip (~11 % of the volume)
+      next += 2;
+    } else if (q != 11) {
+      paint(s1, label_at(1, q), c1[q], 6);
+    }
+  }
+  paint(s1, 3000, {24, 16, 16}, 3);  // a newcomer in a void
+  // Stage 2: the first half of grain 6 splits again; everything else continues.
+  for (size_t q = 0; q < c2.size(); ++q) {
+    if (q == 6) {
+      paint(s2, 4000, c2[q], 6, [&](double, double y, double x) { return x > g && y > g; });
+      paint(s2, 4001, c2[q], 6, [&](double, double y, double x) { return x > g && y < -g; });
+      paint(s2, 2001, c2[q], 6, [&](double, double, double x) { return x < -g; });
+    } else if (q == 7) {
+      for (int quad = 0; quad < 4; ++quad)
+        paint(s2, 2002 + quad, c2[q], 6, [&, quad](double, double y, double x) {
+          return (quad & 1 ? y > g : y < -g) && (quad & 2 ? x > g : x < -g);
+        });
+    } else if (q == 10) {
+      paint(s2, 2006, c2[q], 6, [&](double z, double, double) { return z < 3.4 - g; });
+      paint(s2, 2007, c2[q], 6, [&](double z, double, double) { return z > 3.4 + g; });
+    } else if (q != 11) {
+      paint(s2, label_at(1, q), c2[q], 6);
+    }
+  }
+  paint(s2, 3000, {24 * 0.96, 16, 16}, 3);
+  Tracker tr;
+  tr.add_stage(std::move(s0), "s0");
+  tr.add_stage(std::move(s1), "s1");
+  tr.add_stage(std::move(s2), "s2");
+  const auto r = tr.result();
+
+  std::map<std::pair<int, uint32_t>, Event> ev;
+  for (const auto& e : r.events) ev[{e.stage, e.parent_label}] = e.type;
+  EXPECT_EQ(ev.at({1, 7}), Event::split);
+  EXPECT_EQ(ev.at({1, 8}), Event::fragmentation);
+  EXPECT_EQ(ev.at({1, 11}), Event::chipping);
+  EXPECT_EQ(ev.at({1, 12}), Event::lost);
+  EXPECT_EQ(ev.at({2, 2000}), Event::split);  // a fragment breaks again
+  EXPECT_EQ(r.events.size(), 6u);             // the five of stage 1 (new included) and the second split
+  EXPECT_EQ(row(r, 1, 2007).event, Event::chip);
+  EXPECT_EQ(row(r, 1, 2006).event, Event::chipping);
+  EXPECT_EQ(row(r, 1, 3000).event, Event::new_particle);
+  EXPECT_EQ(row(r, 1, 3000).grain, 0u);
+  EXPECT_EQ(row(r, 2, 3000).parent_label, 3000u);
+  EXPECT_EQ(row(r, 2, 4000).parent_label, 2000u);
+  EXPECT_EQ(row(r, 2, 4000).grain, 7u);
+  EXPECT_EQ(row(r, 2, 4001).event, Event::split);
+  EXPECT_EQ(row(r, 2, 2003).event, Event::intact);
+  EXPECT_EQ(row(r, 2, 2003).grain, 8u);
+  // 48 grains: 3 broke, 1 vanished at stage 1.
+  EXPECT_EQ(r.summary[1].grains_intact, 44);
+  EXPECT_EQ(r.summary[1].grains_broken, 3);
+  EXPECT_EQ(r.summary[1].grains_lost, 1);
+  EXPECT_NEAR(r.summary[1].pct_intact_broken, 100.0 * 3 / 47, 1e-9);
+  EXPECT_EQ(r.summary[1].split, 1);
+  EXPECT_EQ(r.summary[1].fragmentation, 1);
+  EXPECT_EQ(r.summary[1].chipping, 1);
+  EXPECT_EQ(r.summary[1].chips, 1);
+  EXPECT_EQ(r.summary[1].lost, 1);
+  EXPECT_EQ(r.summary[1].new_particles, 1);
+  EXPECT_EQ(r.summary[2].split, 1);
+  EXPECT_EQ(r.summary[2].grains_broken, 3);  // a fragment's break does not count a grain twice
+  // Heights: grains 7, 8, 11 (k = 0, the bottom row, z = 8.64) break in the bottom fifth.
+  EXPECT_EQ(r.summary[1].breaks_band[0], 3);
+}
+
+// A stage without labels: every particle lost, then every one new; nothing breaks.
+TEST(Track, EmptyStage) {
+  Volume<uint32_t> s0 = empty_stage(), s2 = empty_stage();
+  const auto c0 = centres(0), c2 = centres(0.02);
+  for (size_t q = 0; q < c0.size(); ++q) {
+    paint(s0, static_cast<uint32_t>(q + 1), c0[q], 6);
+    paint(s2, static_cast<uint32_t>(q + 1), c2[q], 6);
+  }
+  Tracker tr;
+  tr.add_stage(std::move(s0), "s0");
+  tr.add_stage(empty_stage(), "s1");
+  tr.add_stage(std::move(s2), "s2");
+  const auto r = tr.result();
+  EXPECT_EQ(r.summary[1].particles, 0);
+  EXPECT_EQ(r.summary[1].lost, 48);
+  EXPECT_EQ(r.summary[2].new_particles, 48);
+  EXPECT_EQ(r.summary[2].grains_intact, 0);
+  EXPECT_EQ(r.summary[2].grains_lost, 48);
+  EXPECT_EQ(r.summary[2].pct_intact_broken, 0.0);
+  EXPECT_EQ(r.maps[1].method, "identity");
+}
+
+// A grain cut by the top of the volume loses part of its visible volume as the packing moves:
+// still intact (no chipping), and its parent is right.
+TEST(Track, GrainsCutByTheBorderStayIntact) {
+  Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage();
+  const auto c0 = centres(0), c1 = centres(0.05);
+  for (size_t q = 0; q < c0.size(); ++q) {
+    paint(s0, label_at(0, q), c0[q], 6);
+    paint(s1, label_at(1, q), c1[q], 6);
+  }
+  paint(s0, 500, {49, 30, 30}, 6);  // centre 1 voxel above the volume
+  paint(s1, 501, {49 * 0.95 + 3, 30, 30}, 6);  // moved up a little more: less of it visible
+  Tracker tr;
+  tr.add_stage(std::move(s0), "s0");
+  tr.add_stage(std::move(s1), "s1");
+  const auto r = tr.result();
+  EXPECT_EQ(row(r, 1, 501).parent_label, 500u);
+  EXPECT_EQ(row(r, 1, 501).event, Event::intact);
+  EXPECT_TRUE(row(r, 1, 501).touches_border);
+}
+
+// Stages of another shape or voxel size: InputError naming the file.
+TEST(Track, RefusesMismatchedStages) {
+  {
+    Tracker tr;
+    tr.add_stage(empty_stage(), "a.h5");
+    try {
+      tr.add_stage(Volume<uint32_t>::filled(Shape{48, 60, 61}, 0, kGeom), "b.h5");
+      FAIL() << "no error";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("b.h5"), std::string::npos);
+    }
+  }
+  Tracker tr;
+  tr.add_stage(empty_stage(), "a.h5");
+  EXPECT_THROW(tr.add_stage(Volume<uint32_t>::filled(Shape{48, 60, 60}, 0, Geometry::isotropic_m(13e-6)), "c.h5"),
+               InputError);
+}
+
+// Stages given out of order (the specimen would get 5 % longer): refused, or accepted when allowed.
+TEST(Track, DetectsStagesOutOfOrder) {
+  auto stage = [](double strain) {
+    Volume<uint32_t> v = empty_stage();
+    const auto c = centres(strain);
+    for (size_t q = 0; q < c.size(); ++q) paint(v, static_cast<uint32_t>(q + 1), c[q], 6);
+    return v;
+  };
+  Tracker tr;
+  tr.add_stage(stage(0.05), "late.h5");
+  try {
+    tr.add_stage(stage(0.0), "early.h5");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("out of loading order"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("early.h5"), std::string::npos);
+  }
+  TrackOptions o;
+  o.allow_extension = true;
+  Tracker any(o);
+  any.add_stage(stage(0.05), "late.h5");
+  any.add_stage(stage(0.0), "early.h5");
+  EXPECT_NEAR(any.result().maps[1].axial_scale(), 1 / 0.95, 0.005);
+}

@@ -1,0 +1,573 @@
+#include "track/track.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <unordered_map>
+
+#include "core/errors.hpp"
+#include "core/io/hdf5.hpp"
+#include "core/io/volume_io.hpp"
+#include "core/progress.hpp"
+#include "measure/label_stats.hpp"
+
+namespace tg::track {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+const char* const kEventNames[] = {"intact", "split", "fragmentation", "chipping", "chip", "new", "lost"};
+
+bool is_break(Event e) { return e == Event::split || e == Event::fragmentation || e == Event::chipping; }
+
+// Label value -> dense index (-1 when absent): a table up to 2^26 labels, else a hash map.
+class LabelIndex {
+ public:
+  explicit LabelIndex(const std::vector<LineageRow>& rows) {
+    uint32_t top = 0;
+    for (const auto& r : rows) top = std::max(top, r.label);
+    if (top <= (1u << 26)) {
+      table_.assign(static_cast<size_t>(top) + 1, -1);
+      for (size_t n = 0; n < rows.size(); ++n) table_[rows[n].label] = static_cast<int32_t>(n);
+    } else {
+      for (size_t n = 0; n < rows.size(); ++n) map_[rows[n].label] = static_cast<int32_t>(n);
+    }
+  }
+  int32_t operator()(uint32_t label) const {
+    if (!table_.empty() || map_.empty()) return label < table_.size() ? table_[label] : -1;
+    auto it = map_.find(label);
+    return it == map_.end() ? -1 : it->second;
+  }
+
+ private:
+  std::vector<int32_t> table_;
+  std::unordered_map<uint32_t, int32_t> map_;
+};
+
+// Particles of one stage: label, voxel count, centroid (voxel coordinates), border flag.
+std::vector<LineageRow> particles_of(const Volume<uint32_t>& labels, int stage, int threads) {
+  VolumeView<const uint32_t> v(labels.data(), labels.shape(), labels.shape().slice_voxels(), labels.shape().nx,
+                               Geometry::isotropic_m(1.0));  // unit voxels: centroids come out in voxel coordinates
+  measure::LabelStatsOptions so;
+  so.detection_limit_m = 0;
+  so.collect_surface = false;
+  so.threads = threads;
+  const auto st = measure::label_stats(v, so);
+  std::vector<LineageRow> rows;
+  rows.reserve(st.labels.size());
+  for (const auto& s : st.labels) {
+    LineageRow r;
+    r.stage = stage;
+    r.label = s.label;
+    r.volume_vox = s.voxels;
+    r.centroid_vox = s.centroid_m;
+    r.touches_border = s.touches_border;
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+struct Overlap {
+  int32_t a;   // index into A's rows
+  uint32_t b;  // label in B
+  int64_t n;
+};
+
+double r_eq(double v) { return std::cbrt(3 * v / (4 * std::numbers::pi)); }
+
+// ov(a, b): voxels of A particle a that land in B label b once moved by M x + shift[a].
+std::vector<Overlap> overlaps(const Volume<uint32_t>& A, const LabelIndex& ia, const Volume<uint32_t>& B,
+                              const Eigen::Matrix3d& M, const std::vector<Eigen::Vector3d>& shift, int threads) {
+  const Shape sh = A.shape();
+  const int nt = threads > 0 ? threads : omp_get_max_threads();
+  std::vector<std::unordered_map<uint64_t, int64_t>> part(static_cast<size_t>(nt));
+#pragma omp parallel num_threads(nt)
+  {
+    const int t = omp_get_thread_num(), n = omp_get_num_threads();
+    auto& acc = part[static_cast<size_t>(t)];
+    const int64_t z0 = sh.nz * t / n, z1 = sh.nz * (t + 1) / n;
+    uint64_t run_key = ~uint64_t{0};
+    int64_t run = 0;
+    auto flush = [&] {
+      if (run) acc[run_key] += run;
+      run = 0;
+    };
+    uint32_t last = 0;
+    int32_t ai = -1;
+    Eigen::Vector3d s = Eigen::Vector3d::Zero();
+    for (int64_t k = z0; k < z1; ++k)
+      for (int64_t j = 0; j < sh.ny; ++j) {
+        const uint32_t* row = A.data() + (k * sh.ny + j) * sh.nx;
+        const Eigen::Vector3d base = M * Eigen::Vector3d(k + 0.5, j + 0.5, 0.5);
+        for (int64_t i = 0; i < sh.nx; ++i) {
+          const uint32_t a = row[i];
+          if (!a) continue;
+          if (a != last) {
+            last = a;
+            ai = ia(a);
+            s = shift[static_cast<size_t>(ai)];
+          }
+          const double y0 = base[0] + M(0, 2) * static_cast<double>(i) + s[0];
+          const double y1 = base[1] + M(1, 2) * static_cast<double>(i) + s[1];
+          const double y2 = base[2] + M(2, 2) * static_cast<double>(i) + s[2];
+          const int64_t bk = static_cast<int64_t>(std::floor(y0)), bj = static_cast<int64_t>(std::floor(y1)),
+                        bi = static_cast<int64_t>(std::floor(y2));
+          if (bk < 0 || bj < 0 || bi < 0 || bk >= sh.nz || bj >= sh.ny || bi >= sh.nx) continue;
+          const uint32_t b = B.data()[(bk * sh.ny + bj) * sh.nx + bi];
+          if (!b) continue;
+          const uint64_t key = (static_cast<uint64_t>(ai) << 32) | b;
+          if (key != run_key) {
+            flush();
+            run_key = key;
+          }
+          ++run;
+        }
+      }
+    flush();
+  }
+  std::unordered_map<uint64_t, int64_t> all;
+  for (const auto& p : part)
+    for (const auto& [key, n] : p) all[key] += n;  // integer sums: order-free
+  std::vector<Overlap> out;
+  out.reserve(all.size());
+  for (const auto& [key, n] : all) out.push_back({static_cast<int32_t>(key >> 32), static_cast<uint32_t>(key), n});
+  std::sort(out.begin(), out.end(), [](const Overlap& x, const Overlap& y) { return x.a != y.a ? x.a < y.a : x.b < y.b; });
+  return out;
+}
+
+// Parent (index into A, -1 none) and covered voxels of every B particle.
+void assign_parents(const std::vector<Overlap>& ov, const LabelIndex& ib, const std::vector<LineageRow>& b_rows,
+                    double min_fraction, std::vector<int32_t>& parent, std::vector<int64_t>& covered) {
+  parent.assign(b_rows.size(), -1);
+  covered.assign(b_rows.size(), 0);
+  for (const Overlap& o : ov) {  // ascending a: ties keep the lower index
+    const int32_t bi = ib(o.b);
+    if (bi < 0) continue;
+    if (o.n > covered[bi]) covered[bi] = o.n, parent[bi] = o.a;
+  }
+  for (size_t q = 0; q < b_rows.size(); ++q)
+    if (static_cast<double>(covered[q]) < min_fraction * static_cast<double>(b_rows[q].volume_vox)) parent[q] = -1;
+}
+
+}  // namespace
+
+const char* event_name(Event e) { return kEventNames[static_cast<int>(e)]; }
+
+Event event_from_name(const std::string& name) {
+  for (int e = 0; e < 7; ++e)
+    if (name == kEventNames[e]) return static_cast<Event>(e);
+  throw InputError("unknown event '" + name + "' (intact, split, fragmentation, chipping, chip, new, lost)");
+}
+
+Tracker::Tracker(TrackOptions o) : o_(std::move(o)) {}
+
+void Tracker::add_stage(Volume<uint32_t> labels, const std::string& name) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const int s = stages();
+  if (s > 0) {
+    if (labels.shape() != prev_.shape())
+      throw InputError(name + ": shape " + labels.shape().str() + " differs from the first stage's (" +
+                       prev_.shape().str() + ", " + names_.front() + ")");
+    const auto &g0 = prev_.geometry().voxel_size_m, &g1 = labels.geometry().voxel_size_m;
+    for (int a = 0; a < 3; ++a)
+      if (std::abs(g0[a] - g1[a]) > 1e-6 * std::max(std::abs(g0[a]), std::abs(g1[a])))
+        throw InputError(name + ": voxel size differs from the first stage's (" + names_.front() + ")");
+  }
+  std::vector<LineageRow> rows = particles_of(labels, s, o_.threads);
+  if (s == 0) {
+    for (auto& r : rows) {
+      r.grain = r.label;
+      r.event = Event::intact;
+      r.displacement_vox = {kNaN, kNaN, kNaN};
+      r.quality = 1;
+    }
+    maps_.push_back(StageMap{});
+  } else {
+    std::vector<Point> pa, pb;
+    for (const auto& r : prev_rows_) pa.push_back({r.centroid_vox, static_cast<double>(r.volume_vox)});
+    for (const auto& r : rows) pb.push_back({r.centroid_vox, static_cast<double>(r.volume_vox)});
+    const StageMap m = estimate_map(pa, pb, static_cast<double>(labels.shape().nz), o_.map);
+    if (!o_.allow_extension && m.axial_scale() > 1 + o_.extension_tolerance)
+      throw InputError(names_.back() + " -> " + name + ": the specimen gets " +
+                       std::to_string((m.axial_scale() - 1) * 100) +
+                       " % longer between these stages (axial scale of the map " + std::to_string(m.axial_scale()) +
+                       "): stages out of loading order?");
+    maps_.push_back(m);
+
+    const LabelIndex ia(prev_rows_), ib(rows);
+    std::vector<Eigen::Vector3d> shift(prev_rows_.size(), m.t);
+    std::vector<int32_t> parent, parent1;
+    std::vector<int64_t> covered, covered1;
+    auto ov = overlaps(prev_, ia, labels, m.M, shift, o_.threads);
+    assign_parents(ov, ib, rows, o_.min_overlap_fraction, parent, covered);
+    if (o_.refine) {
+      // Residual shift of each A particle: its children's volume-weighted centroid off its mapped centroid.
+      std::vector<Eigen::Vector3d> sum(prev_rows_.size(), Eigen::Vector3d::Zero());
+      std::vector<double> vol(prev_rows_.size(), 0);
+      for (size_t q = 0; q < rows.size(); ++q) {
+        if (parent[q] < 0) continue;
+        const auto& c = rows[q].centroid_vox;
+        sum[parent[q]] += static_cast<double>(rows[q].volume_vox) * Eigen::Vector3d(c[0], c[1], c[2]);
+        vol[parent[q]] += static_cast<double>(rows[q].volume_vox);
+      }
+      for (size_t a = 0; a < prev_rows_.size(); ++a)
+        if (vol[a] > 0) shift[a] = m.t + sum[a] / vol[a] - m.apply(prev_rows_[a].centroid_vox);
+      parent1.swap(parent);
+      covered1.swap(covered);
+      ov = overlaps(prev_, ia, labels, m.M, shift, o_.threads);
+      assign_parents(ov, ib, rows, o_.min_overlap_fraction, parent, covered);
+      // A child missed by its parent's shift (a thin chip on the side the body's centroid moved
+      // away from) keeps its first-pass match: the better covered of the two passes wins.
+      for (size_t q = 0; q < rows.size(); ++q)
+        if (covered1[q] > covered[q] && parent1[q] >= 0) parent[q] = parent1[q], covered[q] = covered1[q];
+    }
+    // Particles no moved voxel covers (small pieces that drifted off their parent's voxels):
+    // the A particle (of at least a quarter of the child's volume) whose moved body,
+    // approximated as its equivalent sphere about its predicted centroid, the child's centroid
+    // lies in or nearest to, within nearest_slack_vox. Match quality stays 0.
+    for (size_t q = 0; q < rows.size(); ++q) {
+      if (parent[q] >= 0) continue;
+      const auto& c = rows[q].centroid_vox;
+      const Eigen::Vector3d y(c[0], c[1], c[2]);
+      const double vb = static_cast<double>(rows[q].volume_vox);
+      double best = o_.nearest_slack_vox * o_.nearest_slack_vox;
+      for (size_t a = 0; a < prev_rows_.size(); ++a) {
+        const double va = static_cast<double>(prev_rows_[a].volume_vox);
+        if (va < 0.25 * vb) continue;
+        const auto& ca = prev_rows_[a].centroid_vox;
+        // Distance from the child's centroid to the parent's moved equivalent sphere.
+        const double d = std::max(0.0, (m.M * Eigen::Vector3d(ca[0], ca[1], ca[2]) + shift[a] - y).norm() - r_eq(va));
+        if (d * d < best) best = d * d, parent[q] = static_cast<int32_t>(a);
+      }
+    }
+
+    // Children of every A particle, largest first.
+    std::vector<std::vector<int32_t>> kids(prev_rows_.size());
+    for (size_t q = 0; q < rows.size(); ++q)
+      if (parent[q] >= 0) kids[parent[q]].push_back(static_cast<int32_t>(q));
+    for (auto& k : kids)
+      std::stable_sort(k.begin(), k.end(), [&](int32_t x, int32_t y) { return rows[x].volume_vox > rows[y].volume_vox; });
+    for (auto& r : rows) {
+      r.event = Event::new_particle;
+      r.displacement_vox = {kNaN, kNaN, kNaN};
+      r.quality = 0;
+    }
+    for (size_t a = 0; a < prev_rows_.size(); ++a) {
+      const auto& k = kids[a];
+      if (k.empty()) continue;
+      const LineageRow& pr = prev_rows_[a];
+      int64_t after = 0;
+      for (int32_t q : k) after += rows[q].volume_vox;
+      const double f1 = static_cast<double>(rows[k[0]].volume_vox) / static_cast<double>(after);
+      const double tol = std::max(o_.min_volume_tolerance,
+                                  3 * o_.surface_tolerance_vox / std::max(1.0, r_eq(static_cast<double>(pr.volume_vox))));
+      Event first = Event::intact, rest = Event::intact;
+      if (k.size() == 1) {
+        const bool cut = pr.touches_border || rows[k[0]].touches_border;
+        const double kept = static_cast<double>(after) / static_cast<double>(pr.volume_vox);
+        if (!cut && kept < 1 - tol) first = kept <= o_.hidden_split_fraction ? Event::split : Event::chipping;
+      } else if (f1 >= o_.chip_body_fraction) {
+        first = Event::chipping, rest = Event::chip;
+      } else {
+        first = rest = k.size() == 2 ? Event::split : Event::fragmentation;
+      }
+      for (size_t n = 0; n < k.size(); ++n) {
+        LineageRow& r = rows[k[n]];
+        r.parent_label = pr.label;
+        r.grain = pr.grain;
+        r.event = n == 0 ? first : rest;
+        for (int ax = 0; ax < 3; ++ax) r.displacement_vox[ax] = r.centroid_vox[ax] - pr.centroid_vox[ax];
+        r.quality = static_cast<double>(covered[k[n]]) / static_cast<double>(r.volume_vox);
+      }
+    }
+  }
+  lineage_.insert(lineage_.end(), rows.begin(), rows.end());
+  prev_rows_ = std::move(rows);
+  prev_ = std::move(labels);
+  names_.push_back(name);
+  seconds_.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+}
+
+TrackResult Tracker::result() const {
+  TrackResult r;
+  r.stage_names = names_;
+  r.maps = maps_;
+  r.lineage = lineage_;
+  r.seconds = seconds_;
+  r.events = derive_events(r.lineage, stages());
+  r.summary = summarise(r.lineage, r.events, stages());
+  for (int s = 0; s < stages() && s < static_cast<int>(r.summary.size()); ++s) {
+    r.summary[s].axial_scale = s == 0 ? 1.0 : maps_[s].axial_scale();
+    r.summary[s].map_matches = s == 0 ? 0 : maps_[s].matches;
+    r.summary[s].map_method = s == 0 ? "-" : maps_[s].method;
+  }
+  return r;
+}
+
+namespace {
+
+// Rows of each stage, in lineage order.
+std::vector<std::vector<const LineageRow*>> by_stage(const std::vector<LineageRow>& lineage, int stages) {
+  std::vector<std::vector<const LineageRow*>> out(static_cast<size_t>(stages));
+  for (const auto& r : lineage)
+    if (r.stage >= 0 && r.stage < stages) out[r.stage].push_back(&r);
+  return out;
+}
+
+// Height fifth (1..5) of z within [lo, hi].
+int band_of(double z, double lo, double hi) {
+  if (!(hi > lo)) return 1;
+  return std::clamp(static_cast<int>(std::floor(5 * (z - lo) / (hi - lo))) + 1, 1, 5);
+}
+
+std::pair<double, double> z_range(const std::vector<const LineageRow*>& rows) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const auto* r : rows) lo = std::min(lo, r->centroid_vox[0]), hi = std::max(hi, r->centroid_vox[0]);
+  return {lo, hi};
+}
+
+}  // namespace
+
+std::vector<EventRow> derive_events(const std::vector<LineageRow>& lineage, int stages) {
+  const auto st = by_stage(lineage, stages);
+  std::vector<EventRow> out;
+  for (int s = 1; s < stages; ++s) {
+    std::map<uint32_t, std::vector<const LineageRow*>> kids;
+    for (const auto* r : st[s])
+      if (r->parent_label) kids[r->parent_label].push_back(r);
+    const auto [lo, hi] = z_range(st[s - 1]);
+    for (const auto* p : st[s - 1]) {
+      EventRow e;
+      e.stage = s;
+      e.parent_label = p->label;
+      e.grain = p->grain;
+      e.volume_before_vox = p->volume_vox;
+      e.parent_z_vox = p->centroid_vox[0];
+      e.band = band_of(p->centroid_vox[0], lo, hi);
+      auto it = kids.find(p->label);
+      if (it == kids.end()) {
+        e.type = Event::lost;
+      } else {
+        e.type = Event::intact;
+        for (const auto* c : it->second) {
+          e.children.push_back(c->label);
+          e.volume_after_vox += c->volume_vox;
+          if (is_break(c->event)) e.type = c->event;
+        }
+        if (e.type == Event::intact) continue;  // a plain continuation is not an event
+      }
+      out.push_back(std::move(e));
+    }
+    for (const auto* r : st[s])
+      if (!r->parent_label) {
+        EventRow e;
+        e.stage = s;
+        e.type = Event::new_particle;
+        e.children = {r->label};
+        e.volume_after_vox = r->volume_vox;
+        e.parent_z_vox = r->centroid_vox[0];
+        e.band = band_of(r->centroid_vox[0], lo, hi);
+        out.push_back(std::move(e));
+      }
+  }
+  return out;
+}
+
+std::vector<SummaryRow> summarise(const std::vector<LineageRow>& lineage, const std::vector<EventRow>& events,
+                                  int stages) {
+  const auto st = by_stage(lineage, stages);
+  std::vector<SummaryRow> out(static_cast<size_t>(stages));
+  if (stages == 0) return out;
+  // Stage-0 grains and their height fifth.
+  std::map<uint32_t, int> grain_band;
+  {
+    const auto [lo, hi] = z_range(st[0]);
+    for (const auto* r : st[0]) grain_band[r->label] = band_of(r->centroid_vox[0], lo, hi);
+  }
+  std::map<uint32_t, bool> pristine;  // label at the current stage -> still an intact grain
+  std::map<uint32_t, bool> broken;    // grain -> broke at or before the current stage
+  for (int s = 0; s < stages; ++s) {
+    SummaryRow& row = out[s];
+    row.stage = s;
+    row.particles = static_cast<int64_t>(st[s].size());
+    std::map<uint32_t, bool> now;
+    for (const auto* r : st[s]) {
+      const bool p = s == 0 ? grain_band.count(r->label) > 0
+                            : r->event == Event::intact && r->parent_label && pristine.count(r->parent_label) &&
+                                  pristine.at(r->parent_label);
+      now[r->label] = p;
+      if (r->event == Event::chip) ++row.chips;
+      if (r->event == Event::new_particle && s > 0) ++row.new_particles;
+    }
+    pristine = std::move(now);
+    for (const auto& e : events) {
+      if (e.stage != s) continue;
+      if (e.type == Event::split) ++row.split;
+      if (e.type == Event::fragmentation) ++row.fragmentation;
+      if (e.type == Event::chipping) ++row.chipping;
+      if (e.type == Event::lost) ++row.lost;
+      if (is_break(e.type)) {
+        ++row.breaks_band[e.band - 1];
+        if (e.grain && grain_band.count(e.grain)) broken[e.grain] = true;
+      }
+    }
+    std::map<uint32_t, bool> intact_grains;
+    for (const auto* r : st[s])
+      if (pristine[r->label] && r->grain && !broken.count(r->grain)) intact_grains[r->grain] = true;
+    row.grains_intact = static_cast<int64_t>(intact_grains.size());
+    row.grains_broken = static_cast<int64_t>(broken.size());
+    row.grains_lost = static_cast<int64_t>(grain_band.size()) - row.grains_intact - row.grains_broken;
+    const int64_t known = row.grains_intact + row.grains_broken;
+    row.pct_intact_broken = known ? 100.0 * static_cast<double>(row.grains_broken) / static_cast<double>(known) : 0.0;
+    std::array<int64_t, 5> nb{}, ni{};
+    for (const auto& [g, b] : broken) ++nb[grain_band[g] - 1];
+    for (const auto& [g, b] : intact_grains) ++ni[grain_band[g] - 1];
+    for (int q = 0; q < 5; ++q)
+      row.pct_broken_band[q] = nb[q] + ni[q] ? 100.0 * static_cast<double>(nb[q]) / static_cast<double>(nb[q] + ni[q]) : 0.0;
+  }
+  return out;
+}
+
+TrackResult track_files(const std::vector<std::string>& paths, const TrackOptions& o) {
+  if (paths.empty()) throw UsageError("track: no stages given");
+  Tracker tr(o);
+  Progress bar("track", static_cast<double>(paths.size()), "stages");
+  if (!o.progress) bar.finish();
+  for (size_t s = 0; s < paths.size(); ++s) {
+    std::string spec = paths[s];
+    const auto [file, ds] = split_dataset_spec(spec);
+    if (format_of(spec, false) == FileFormat::hdf5 && ds.empty() && H5Reader(file).has("/labels")) spec = file + ":/labels";
+    ReadOptions ro;
+    ro.progress = false;
+    tr.add_stage(read_volume_as<uint32_t>(spec, ro), paths[s]);
+    if (o.progress) bar.update(static_cast<double>(s + 1));
+  }
+  if (o.progress) bar.finish();
+  return tr.result();
+}
+
+Table lineage_table(const TrackResult& r) {
+  Table t;
+  const size_t n = r.lineage.size();
+  std::vector<double> stage(n), label(n), parent(n), grain(n), vol(n), cz(n), cy(n), cx(n), dz(n), dy(n), dx(n), q(n), b(n);
+  std::vector<std::string> ev(n);
+  for (size_t i = 0; i < n; ++i) {
+    const auto& x = r.lineage[i];
+    stage[i] = x.stage, label[i] = x.label, parent[i] = x.parent_label, grain[i] = x.grain;
+    ev[i] = event_name(x.event);
+    vol[i] = static_cast<double>(x.volume_vox);
+    cz[i] = x.centroid_vox[0], cy[i] = x.centroid_vox[1], cx[i] = x.centroid_vox[2];
+    dz[i] = x.displacement_vox[0], dy[i] = x.displacement_vox[1], dx[i] = x.displacement_vox[2];
+    q[i] = x.quality, b[i] = x.touches_border;
+  }
+  t.add("stage", stage);
+  t.add("label", label);
+  t.add("parent_label", parent);
+  t.add("grain", grain);
+  t.add_text("event", ev);
+  t.add("volume_vox", vol);
+  t.add("cz_vox", cz);
+  t.add("cy_vox", cy);
+  t.add("cx_vox", cx);
+  t.add("dz_vox", dz);
+  t.add("dy_vox", dy);
+  t.add("dx_vox", dx);
+  t.add("quality", q);
+  t.add("border", b);
+  return t;
+}
+
+Table events_table(const TrackResult& r) {
+  Table t;
+  const size_t n = r.events.size();
+  std::vector<double> stage(n), parent(n), grain(n), nkids(n), before(n), after(n), z(n), band(n);
+  std::vector<std::string> type(n), kids(n);
+  for (size_t i = 0; i < n; ++i) {
+    const auto& e = r.events[i];
+    stage[i] = e.stage, parent[i] = e.parent_label, grain[i] = e.grain;
+    type[i] = event_name(e.type);
+    nkids[i] = static_cast<double>(e.children.size());
+    for (size_t c = 0; c < e.children.size(); ++c) {
+      if (c) kids[i] += ';';
+      kids[i] += std::to_string(e.children[c]);
+    }
+    if (kids[i].empty()) kids[i] = "-";
+    before[i] = static_cast<double>(e.volume_before_vox), after[i] = static_cast<double>(e.volume_after_vox);
+    z[i] = e.parent_z_vox, band[i] = e.band;
+  }
+  t.add("stage", stage);
+  t.add("parent_label", parent);
+  t.add("grain", grain);
+  t.add_text("type", type);
+  t.add("children", nkids);
+  t.add_text("child_labels", kids);
+  t.add("volume_before_vox", before);
+  t.add("volume_after_vox", after);
+  t.add("cz_vox", z);
+  t.add("band", band);
+  return t;
+}
+
+Table summary_table(const TrackResult& r) {
+  Table t;
+  const size_t n = r.summary.size();
+  auto col = [&](const std::string& name, auto get) {
+    std::vector<double> v(n);
+    for (size_t i = 0; i < n; ++i) v[i] = static_cast<double>(get(r.summary[i]));
+    t.add(name, std::move(v));
+  };
+  col("stage", [](const SummaryRow& s) { return s.stage; });
+  col("particles", [](const SummaryRow& s) { return s.particles; });
+  col("grains_intact", [](const SummaryRow& s) { return s.grains_intact; });
+  col("grains_broken", [](const SummaryRow& s) { return s.grains_broken; });
+  col("grains_lost", [](const SummaryRow& s) { return s.grains_lost; });
+  col("pct_intact_broken", [](const SummaryRow& s) { return s.pct_intact_broken; });
+  col("split", [](const SummaryRow& s) { return s.split; });
+  col("fragmentation", [](const SummaryRow& s) { return s.fragmentation; });
+  col("chipping", [](const SummaryRow& s) { return s.chipping; });
+  col("chips", [](const SummaryRow& s) { return s.chips; });
+  col("lost", [](const SummaryRow& s) { return s.lost; });
+  col("new", [](const SummaryRow& s) { return s.new_particles; });
+  for (int b = 0; b < 5; ++b)
+    col("breaks_band" + std::to_string(b + 1), [b](const SummaryRow& s) { return s.breaks_band[b]; });
+  for (int b = 0; b < 5; ++b)
+    col("pct_broken_band" + std::to_string(b + 1), [b](const SummaryRow& s) { return s.pct_broken_band[b]; });
+  col("axial_scale", [](const SummaryRow& s) { return s.axial_scale; });
+  col("map_matches", [](const SummaryRow& s) { return s.map_matches; });
+  std::vector<std::string> method(n);
+  for (size_t i = 0; i < n; ++i) method[i] = r.summary[i].map_method;
+  t.add_text("map_method", method);
+  return t;
+}
+
+void write_outputs(const TrackResult& r, const std::string& dir) {
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path d(dir);
+  write_csv(lineage_table(r), d / "lineage.csv");
+  write_csv(events_table(r), d / "events.csv");
+  write_csv(summary_table(r), d / "summary.csv");
+}
+
+std::vector<LineageRow> read_lineage(const Table& t) {
+  const auto &stage = t.num("stage"), &label = t.num("label"), &parent = t.num("parent_label"), &grain = t.num("grain");
+  const auto& ev = t.text("event");
+  std::vector<LineageRow> out(static_cast<size_t>(t.rows()));
+  for (int64_t i = 0; i < t.rows(); ++i) {
+    LineageRow& r = out[i];
+    r.stage = static_cast<int>(stage[i]);
+    r.label = static_cast<uint32_t>(label[i]);
+    r.parent_label = static_cast<uint32_t>(parent[i]);
+    r.grain = static_cast<uint32_t>(grain[i]);
+    r.event = event_from_name(ev[i]);
+    if (t.has("volume_vox")) r.volume_vox = static_cast<int64_t>(t.num("volume_vox")[i]);
+    if (t.has("cz_vox")) r.centroid_vox = {t.num("cz_vox")[i], t.num("cy_vox")[i], t.num("cx_vox")[i]};
+  }
+  return out;
+}
+
+}  // namespace tg::track

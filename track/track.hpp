@@ -1,0 +1,185 @@
+// Stage-to-stage tracking of grains and fragments through the label volumes
+// of an oedometer test (issue #20; the reference study's section 2.2 "used
+// several image processing algorithms to identify and track intact particles
+// and fragments ... and about the types of breakage events").
+//
+// Method, for each pair of consecutive stages A -> B:
+//  1. Per-label statistics of both stages (measure/label_stats.hpp): voxel
+//     count, centroid, bounding box, border contact.
+//  2. The global map y = M x + t between the stages (track/registration.hpp:
+//     RANSAC affine on candidate centroid matches, least-squares polish;
+//     identity plus axial compression when too few grains).
+//  3. Overlap of the moved labels: every voxel of A is moved by the map
+//     (plus the particle's own residual shift, step 4) and the label of B it
+//     lands in is counted: ov(a, b) = voxels of a landing in b. A B particle's
+//     parent is the A particle that covers most of it, provided it covers at
+//     least `min_overlap_fraction` of b's voxels (else b is `new`); its match
+//     quality is that covered fraction.
+//  4. Refinement: each A particle's residual shift is the volume-weighted
+//     centroid of its children minus its mapped centroid (grain jitter,
+//     rotation of the packing, fragments drifting apart); step 3 is run once
+//     more with it, and each B particle keeps the better covered of the two
+//     passes (a thin chip on the side its body's centroid moved away from
+//     stays with the first). One more pass over A's voxels buys the particles
+//     that moved more than a few voxels off the global map. A B particle
+//     still uncovered whose centroid lies within nearest_slack_vox of an A
+//     particle's moved equivalent sphere (A at least a quarter of its volume)
+//     takes that parent, with quality 0 (small pieces drifted off).
+//  5. Events, from each A particle's children (ordered by volume, largest
+//     first; f1 = largest child / all children):
+//       no child           lost (left the field, merged, or fell below the
+//                          detection limit)
+//       one child          intact, unless the particle lost more than the
+//                          volume tolerance tol = max(min_volume_tolerance,
+//                          3 d / r_eq) (d = surface_tolerance_vox, the
+//                          segmentation's surface uncertainty: one voxel of
+//                          radius changes a sphere's volume by 3 d / r) and
+//                          neither stage cuts it at the border: then split
+//                          when it kept at most hidden_split_fraction of its
+//                          volume (a half whose twin is unseen: merged into a
+//                          neighbour's label by the segmentation, or below
+//                          its size limit), else chipping with the chips unseen
+//       two or more        chipping when f1 >= chip_body_fraction (the body
+//                          row says `chipping`, each small piece `chip`),
+//                          else split (2 children) or fragmentation (>= 3)
+//     Children of B without a parent are `new`. Fragments are particles like
+//     any other at the next stage, so they are tracked and can break again.
+//  6. The stage-0 ancestor (`grain`) is carried down the lineage; a grain is
+//     "intact" at stage s while every event of its chain is `intact`.
+//
+// Stages out of order: the axial scale M_zz of the map is 1 - (strain
+// increment); M_zz > 1 + extension_tolerance means the specimen got longer,
+// which an oedometer never does: InputError naming both files, unless
+// allow_extension is set (the map's scale is then reported as is).
+//
+// Rotation is not estimated (grains are near-spherical: their principal axes
+// are ill-defined; the global map's rotation is in StageMap::M). Displacement
+// is the centroid's, child minus parent.
+//
+// Measured (bench/track/RESULTS.md, 789-grain zeolite series, shared 2-core
+// VM): 0.2-0.3 s per stage at 256^3, 2.1-2.7 s at 512^3, file reading apart.
+// Memory: the previous stage's label volume (4 B/voxel) and the current one,
+// plus O(particles) tables: 8 B/voxel at peak. Time: two passes over each
+// stage's solid voxels (affine per voxel, one lookup in B), O(V) with
+// OpenMP slabs; the per-thread counts are integers merged in thread order,
+// so the result is identical for any thread count.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/table.hpp"
+#include "core/volume.hpp"
+#include "track/registration.hpp"
+
+namespace tg::track {
+
+// Events, as written in lineage.csv / events.csv.
+enum class Event { intact, split, fragmentation, chipping, chip, new_particle, lost };
+const char* event_name(Event e);      // "intact", "split", "fragmentation", "chipping", "chip", "new", "lost"
+Event event_from_name(const std::string& name);  // InputError on an unknown name
+
+struct TrackOptions {
+  MapOptions map;
+  double min_overlap_fraction = 0.2;  // a child's voxels covered by its parent, at least
+  double nearest_slack_vox = 2.0;     // uncovered children: centroid within the parent's moved sphere + this
+  double surface_tolerance_vox = 1.0; // d above
+  double min_volume_tolerance = 0.1;
+  double chip_body_fraction = 0.7;    // f1 at or above this: chipping
+  double hidden_split_fraction = 0.7; // one child keeping at most this share of the volume: split
+  bool refine = true;                 // step 4
+  bool allow_extension = false;       // accept stages whose map lengthens the specimen
+  double extension_tolerance = 0.002;
+  int threads = 0;                    // OpenMP threads; 0 = the default
+  bool progress = false;
+};
+
+// One particle at one stage (lineage.csv).
+struct LineageRow {
+  int stage = 0;
+  uint32_t label = 0, parent_label = 0, grain = 0;
+  Event event = Event::intact;
+  int64_t volume_vox = 0;
+  std::array<double, 3> centroid_vox{0, 0, 0};       // (z, y, x), voxel coordinates
+  std::array<double, 3> displacement_vox{0, 0, 0};   // centroid minus parent's (NaN without parent)
+  double quality = 1;  // fraction of the particle's voxels covered by its moved parent (1 at stage 0, 0 if new)
+  bool touches_border = false;
+};
+
+// One event per parent particle and stage (events.csv), lost included.
+struct EventRow {
+  int stage = 0;  // the stage where the children are seen
+  uint32_t parent_label = 0, grain = 0;
+  Event type = Event::intact;
+  std::vector<uint32_t> children;
+  int64_t volume_before_vox = 0, volume_after_vox = 0;
+  double parent_z_vox = 0;
+  int band = 0;  // height fifth of the parent in its stage (1 = bottom .. 5 = top)
+};
+
+// Per stage (summary.csv).
+struct SummaryRow {
+  int stage = 0;
+  int64_t particles = 0, grains_intact = 0, grains_broken = 0, grains_lost = 0;
+  double pct_intact_broken = 0;  // 100 broken / (intact + broken); lost grains are in neither
+  int64_t split = 0, fragmentation = 0, chipping = 0, chips = 0, lost = 0, new_particles = 0;
+  std::array<int64_t, 5> breaks_band{0, 0, 0, 0, 0};     // breakage events of this stage by parent height fifth
+  std::array<double, 5> pct_broken_band{0, 0, 0, 0, 0};  // stage-0 grains of each fifth broken by now, %
+  double axial_scale = 1;  // map from the previous stage (1 at stage 0)
+  int map_matches = 0;
+  std::string map_method = "-";
+};
+
+struct TrackResult {
+  std::vector<std::string> stage_names;
+  std::vector<StageMap> maps;  // maps[s] takes stage s-1 to s (maps[0] identity)
+  std::vector<LineageRow> lineage;
+  std::vector<EventRow> events;
+  std::vector<SummaryRow> summary;
+  std::vector<double> seconds;  // per stage
+};
+
+// Events and summary from a lineage (the tracker's or a truth lineage in the
+// same columns): events group each stage's rows by parent; a parent of the
+// previous stage without children is lost.
+std::vector<EventRow> derive_events(const std::vector<LineageRow>& lineage, int stages);
+std::vector<SummaryRow> summarise(const std::vector<LineageRow>& lineage, const std::vector<EventRow>& events,
+                                  int stages);
+
+// Incremental tracker: feed the stages in loading order, then take the result.
+// Keeps only the previous stage's labels.
+class Tracker {
+ public:
+  explicit Tracker(TrackOptions options = {});
+  // Stages must share shape and voxel size (InputError naming `name`).
+  void add_stage(Volume<uint32_t> labels, const std::string& name);
+  TrackResult result() const;  // derives events and summary
+  int stages() const { return static_cast<int>(names_.size()); }
+
+ private:
+  struct Particles;
+  TrackOptions o_;
+  std::vector<std::string> names_;
+  Volume<uint32_t> prev_;
+  std::vector<LineageRow> prev_rows_;
+  std::vector<LineageRow> lineage_;
+  std::vector<StageMap> maps_;
+  std::vector<double> seconds_;
+};
+
+// Reads label volumes (an .h5 file's /labels by default) in the order given
+// and tracks them. InputError names the file whose shape or voxel size
+// differs from the first, or the pair given out of order.
+TrackResult track_files(const std::vector<std::string>& paths, const TrackOptions& options = {});
+
+// The three tables and their writer (DIR/lineage.csv, events.csv, summary.csv,
+// each atomic; DIR is created).
+Table lineage_table(const TrackResult& r);
+Table events_table(const TrackResult& r);
+Table summary_table(const TrackResult& r);
+void write_outputs(const TrackResult& r, const std::string& dir);
+
+// A lineage read back from CSV (tracker output or data_synth truth).
+std::vector<LineageRow> read_lineage(const Table& t);
+
+}  // namespace tg::track

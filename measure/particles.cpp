@@ -22,7 +22,12 @@ void fill_sizing(Particle& p, Sizing sizing) {
     const double den = std::numbers::pi * p.d_max_m * p.d_min_m;
     p.d_med_m = den > 0 ? 6.0 * p.stats.volume_m3 / den : 0.0;
   }
-  p.fr = p.d_med_m > 0 ? p.d_min_m / p.d_med_m : 0.0;
+  // FR > 1 cannot happen on a convex particle (Dmed >= Dmin there) but does
+  // on hollow or concave ones, whose volume is below the Dmax x Dmin x Dmin
+  // ellipsoid's: FR is clamped to 1 and the row flagged (header).
+  const double fr = p.d_med_m > 0 ? p.d_min_m / p.d_med_m : 0.0;
+  p.fr_clamped = fr > 1.0;
+  p.fr = std::min(fr, 1.0);
   p.ar = p.d_min_m > 0 ? p.d_max_m / p.d_min_m : 0.0;
 }
 
@@ -58,6 +63,16 @@ std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels
     if (opt.oriented_box) P.box = oriented_box(hull.vertices, opt.obb);
     fill_sizing(P, opt.sizing);
   }
+  if (opt.contacts) {
+    ContactOptions co = opt.contact;
+    co.threads = opt.threads;
+    const auto res = find_contacts(labels, co);
+    std::vector<uint32_t> ids;
+    ids.reserve(out.size());
+    for (const auto& P : out) ids.push_back(P.stats.label);
+    const auto z = coordination(res.contacts, ids);
+    for (size_t p = 0; p < out.size(); ++p) out[p].coordination = z[p];
+  }
   return out;
 }
 
@@ -87,6 +102,7 @@ Table particle_table(const std::vector<Particle>& ps) {
   col("d_med_mm", [&](const Particle& p) { return p.d_med_m * mm; });
   col("fr", [](const Particle& p) { return p.fr; });
   col("ar", [](const Particle& p) { return p.ar; });
+  col("fr_clamped", [](const Particle& p) { return p.fr_clamped ? 1 : 0; });
   col("obb_max_mm", [&](const Particle& p) { return p.box.dims[2] * mm; });
   col("obb_med_mm", [&](const Particle& p) { return p.box.dims[1] * mm; });
   col("obb_min_mm", [&](const Particle& p) { return p.box.dims[0] * mm; });
@@ -103,6 +119,19 @@ Table particle_table(const std::vector<Particle>& ps) {
   }
   for (int a = 0; a < 3; ++a)
     col("inertia" + std::to_string(a + 1) + "_mm5", [&, a](const Particle& p) { return p.stats.principal_moments_m5[a] * mm5; });
+  for (int a = 0; a < 3; ++a)
+    col("ell_d" + std::to_string(a + 1) + "_mm", [&, a](const Particle& p) { return 2 * p.stats.ellipsoid_semi_axes_m[a] * mm; });
+  // The major axis, sign chosen so that its first non-zero component (z, y, x) is positive.
+  auto major = [](const Particle& p) {
+    Eigen::Vector3d u = p.stats.ellipsoid_axes.col(0);
+    for (int c = 0; c < 3; ++c)
+      if (u[c] != 0) return u[c] < 0 ? Eigen::Vector3d(-u) : u;
+    return u;
+  };
+  col("ell_axis1_z", [&](const Particle& p) { return major(p)[0]; });
+  col("ell_axis1_y", [&](const Particle& p) { return major(p)[1]; });
+  col("ell_axis1_x", [&](const Particle& p) { return major(p)[2]; });
+  if (!ps.empty() && ps.front().coordination >= 0) col("coordination", [](const Particle& p) { return p.coordination; });
   return t;
 }
 

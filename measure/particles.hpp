@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "core/table.hpp"
+#include "measure/contacts.hpp"
 #include "measure/hull.hpp"
 #include "measure/label_stats.hpp"
 
@@ -35,6 +36,8 @@ struct ParticleOptions {
   double face_offset = 0.3;   // hull point convention, see feret.hpp
   bool oriented_box = true;   // also run CGAL's oriented box (obb_* columns)
   OrientedBoxOptions obb;
+  bool contacts = false;      // also find contacts (measure/contacts.hpp): the coordination column
+  ContactOptions contact;
   int threads = 0;            // 0 = OpenMP default
 };
 
@@ -43,19 +46,31 @@ struct Particle {
   FeretResult feret;
   OrientedBox box;  // dims 0 when oriented_box is off
   int hull_vertices = 0;
+  int coordination = -1;  // contacts with other labels; -1 when contacts were not asked for
   double d_max_m = 0, d_med_m = 0, d_min_m = 0, fr = 0, ar = 0;  // per the chosen sizing
+  bool fr_clamped = false;  // Dmin / Dmed was > 1 (non-convex particle): fr set to 1
 };
 
 std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels, const ParticleOptions& opt = {});
 
-// Dmed, FR, AR from volume and the two calipers (NaN-free: a zero caliper gives 0).
+// Dmed, FR, AR from volume and the two calipers (NaN-free: a zero caliper
+// gives 0, which cannot happen with the face-offset hull points: every voxel
+// gives a 3-D hull, a single voxel an octahedron of calipers 0.3 voxel).
+// Rule for FR > 1 (issue 22): Dmed = 6V/(pi Dmax Dmin) falls below Dmin on
+// hollow or non-convex particles (their volume is less than the ellipsoid's
+// with axes Dmax, Dmin, Dmin); on a real carbonate-sand scan 68 % of the
+// particles did. FR is then clamped to 1 and fr_clamped set: the study's FR
+// classes stay valid (such a particle is as "unflat" as FR can say) and the
+// flag tells how many. d_med itself is not changed (the grading uses it).
 void fill_sizing(Particle& p, Sizing sizing);
 
 // Columns: label, voxels, volume_mm3, cx_mm, cy_mm, cz_mm, d_eq_mm, d_max_mm,
-// d_min_mm, d_med_mm, fr, ar, obb_max_mm, obb_med_mm, obb_min_mm,
+// d_min_mm, d_med_mm, fr, ar, fr_clamped, obb_max_mm, obb_med_mm, obb_min_mm,
 // touches_border, below_limit, then feret_dmax_mm, feret_dmin_mm,
 // feret_dmin_any_mm, hull_vertices, bbox (voxel indices) and the principal
-// moments of inertia (mm^5).
+// moments of inertia (mm^5), the equivalent ellipsoid's full axes
+// ell_d1_mm >= ell_d2_mm >= ell_d3_mm and major axis ell_axis1_z/y/x
+// (label_stats.hpp), and `coordination` when contacts were found.
 Table particle_table(const std::vector<Particle>& particles);
 
 // "feret-60", "feret-exact" or "obb": the definition behind d_max/d_min/d_med.

@@ -7,12 +7,15 @@
 //       mode vs the exact mode for N = 15, 30, 60, 120, 500, and time per particle
 //   measure_feret_bench throughput [n] [grains]   particles/s on an n^3 label
 //       volume (default 512, ~1000 grains), 1 and 2 threads
+//   measure_feret_bench small [n] [count]   the same on >= 20 000 particles of
+//       7-100 voxels (default 256^3, 24 000); TG_DUMP=file.raw saves the labels
 //
 // Shapes are drawn by voxel-centre inclusion with random sub-voxel centres
 // and rotations (fixed seeds), as in tests/measure/shapes.hpp.
 #include <omp.h>
 
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -162,6 +165,38 @@ void trade() {
   }
 }
 
+// Times measure_particles on `v` (N = 60, then exact; box only when `box`),
+// 1 and 2 threads, wall and CPU seconds; TG_DUMP=path writes the labels as
+// raw u32 (z, y, x) for bench/measure/skimage_regionprops.py.
+void time_measure(const Volume<uint32_t>& v, bool box) {
+  if (const char* dump = std::getenv("TG_DUMP")) {
+    std::FILE* f = std::fopen(dump, "wb");
+    std::fwrite(v.data(), sizeof(uint32_t), static_cast<size_t>(v.size()), f);
+    std::fclose(f);
+    std::printf("# wrote %s (%lld x %lld x %lld u32)\n", dump, static_cast<long long>(v.shape().nz),
+                static_cast<long long>(v.shape().ny), static_cast<long long>(v.shape().nx));
+  }
+  for (int mode = 0; mode < (box ? 3 : 2); ++mode)
+    for (int threads : {1, 2}) {
+      ParticleOptions o;
+      o.threads = threads;
+      o.oriented_box = mode == 2;
+      o.feret_exact = mode == 1;
+      LabelStatsOptions so;
+      so.threads = threads;
+      double t0 = now(), c0 = std::clock() / static_cast<double>(CLOCKS_PER_SEC);
+      const auto ls = label_stats(v.view(), so);
+      const double t_stats = now() - t0;
+      t0 = now();
+      c0 = std::clock() / static_cast<double>(CLOCKS_PER_SEC);
+      const auto ps = measure_particles(v.view(), o);
+      const double t = now() - t0, cpu = std::clock() / static_cast<double>(CLOCKS_PER_SEC) - c0;
+      std::printf("threads %d, %s: %zu particles in %.2f s wall, %.2f s CPU (label_stats alone %.2f s) = %.0f particles/s\n",
+                  threads, mode == 0 ? "N=60" : mode == 1 ? "exact" : "N=60 + CGAL oriented box", ps.size(), t, cpu,
+                  t_stats, static_cast<double>(ps.size()) / t);
+    }
+}
+
 void throughput(int64_t n, int grains) {
   // Random spheres, ellipsoids and half-spheres, radius 12-30 voxels; later
   // grains overwrite earlier ones (some are cut, as real fragments are).
@@ -187,22 +222,38 @@ void throughput(int64_t n, int grains) {
           if (in(V3(k + 0.5, j + 0.5, i + 0.5))) v(k, j, i) = static_cast<uint32_t>(g + 1);
   }
   std::printf("# %lld^3 label volume, %d grains drawn\n", static_cast<long long>(n), grains);
-  for (int obb : {0, 1})
-    for (int threads : {1, 2}) {
-      ParticleOptions o;
-      o.threads = threads;
-      o.oriented_box = obb != 0;
-      LabelStatsOptions so;
-      so.threads = threads;
-      double t0 = now();
-      const auto ls = label_stats(v.view(), so);
-      const double t_stats = now() - t0;
-      t0 = now();
-      const auto ps = measure_particles(v.view(), o);
-      const double t = now() - t0;
-      std::printf("threads %d, N=60%s: %zu particles in %.2f s (label_stats alone %.2f s) = %.0f particles/s\n",
-                  threads, obb ? " + CGAL oriented box" : "", ps.size(), t, t_stats, static_cast<double>(ps.size()) / t);
-    }
+  time_measure(v, true);
+}
+
+// >= 20 000 small particles: ellipsoids of semi-axes 1.2-3 voxels (about 7
+// to 100 voxels each), one per cell of an 8-voxel grid, random sub-cell
+// centres and rotations, a fraction of the cells left empty.
+void small(int64_t n, int count) {
+  auto v = Volume<uint32_t>::filled(Shape{n, n, n}, 0, Geometry::isotropic_m(1e-5));
+  const int64_t cells = n / 8;
+  uint32_t id = 0;
+  for (int64_t c = 0; c < cells * cells * cells && static_cast<int>(id) < count; ++c) {
+    const unsigned seed = 5000u + static_cast<unsigned>(c);
+    const V3 u = test::random_offset(seed), w = test::random_offset(seed + 99991);
+    if (w[2] < 0.25) continue;
+    const V3 semi(1.2 + 1.8 * w[0], 1.2 + 1.8 * w[1], 1.2 + 1.2 * w[0] * w[1]);
+    const V3 cen(8.0 * static_cast<double>(c / (cells * cells)) + 4 + (u[0] - 0.5) * 1.5,
+                 8.0 * static_cast<double>((c / cells) % cells) + 4 + (u[1] - 0.5) * 1.5,
+                 8.0 * static_cast<double>(c % cells) + 4 + (u[2] - 0.5) * 1.5);
+    const test::Inside in = test::ellipsoid(cen, semi, test::random_rotation(seed));
+    bool any = false;
+    ++id;
+    for (int64_t k = static_cast<int64_t>(cen[0]) - 4; k <= static_cast<int64_t>(cen[0]) + 4; ++k)
+      for (int64_t j = static_cast<int64_t>(cen[1]) - 4; j <= static_cast<int64_t>(cen[1]) + 4; ++j)
+        for (int64_t i = static_cast<int64_t>(cen[2]) - 4; i <= static_cast<int64_t>(cen[2]) + 4; ++i)
+          if (k >= 0 && j >= 0 && i >= 0 && k < n && j < n && i < n && in(V3(k + 0.5, j + 0.5, i + 0.5))) {
+            v(k, j, i) = id;
+            any = true;
+          }
+    if (!any) --id;
+  }
+  std::printf("# %lld^3 label volume, %u small particles drawn\n", static_cast<long long>(n), id);
+  time_measure(v, false);
 }
 
 }  // namespace
@@ -215,10 +266,12 @@ int main(int argc, char** argv) {
     convention(l);
   } else if (what == "trade") {
     trade();
+  } else if (what == "small") {
+    small(argc > 2 ? std::atoll(argv[2]) : 256, argc > 3 ? std::atoi(argv[3]) : 24000);
   } else if (what == "throughput") {
     throughput(argc > 2 ? std::atoll(argv[2]) : 512, argc > 3 ? std::atoi(argv[3]) : 1000);
   } else {
-    std::fprintf(stderr, "usage: measure_feret_bench convention [lambda...] | trade | throughput [n] [grains]\n");
+    std::fprintf(stderr, "usage: measure_feret_bench convention [lambda...] | trade | throughput [n] [grains] | small [n] [count]\n");
     return 2;
   }
   return 0;

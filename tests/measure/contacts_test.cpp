@@ -31,104 +31,19 @@
 #include "core/errors.hpp"
 #include "data_synth/geometry.hpp"
 #include "data_synth/render.hpp"
+#include "tests/measure/contact_scenes.hpp"
 #include "tests/measure/shapes.hpp"
 
 namespace tg::measure {
 namespace {
 
 using V3 = Eigen::Vector3d;
+using test::Scene;
+using test::cut_lines;
 constexpr double kVoxel = 1e-5;
 
-struct Scene {
-  std::vector<V3> c;
-  std::vector<double> r;
-  std::vector<std::pair<int, int>> contacts;  // indices, first < second
-};
-
-// See the file's header. Directions of single contacts are stretched along z
-// (factor 2 before normalising), so the fabric is anisotropic.
-Scene grow_scene(int64_t n, unsigned seed, int target, double overlap = 0.6, double margin = 3.0) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> U(0, 1);
-  std::normal_distribution<double> G;
-  Scene s;
-  s.c.push_back(V3::Constant(n / 2.0) + V3(U(rng), U(rng), U(rng)));
-  s.r.push_back(21.0);
-  const double lo = 8, hi = static_cast<double>(n) - 8;
-  for (int attempt = 0; attempt < 20000 && static_cast<int>(s.c.size()) < target; ++attempt) {
-    const double r = 20 + 3 * U(rng);
-    const int P = static_cast<int>(U(rng) * static_cast<double>(s.c.size()));
-    std::vector<int> touch{P};
-    V3 c;
-    if (attempt % 2 == 0) {
-      V3 u(2 * G(rng), G(rng), G(rng));
-      c = s.c[P] + (s.r[P] + r - overlap) * u.normalized();
-    } else {
-      // Tangent (less the overlap) to P and to a neighbour Q of P: a point on
-      // the circle where the two spheres of reach intersect.
-      std::vector<int> qs;
-      for (int q = 0; q < static_cast<int>(s.c.size()); ++q)
-        if (q != P && (s.c[q] - s.c[P]).norm() < s.r[P] + s.r[q] + 2 * r - 2 * overlap - 1) qs.push_back(q);
-      if (qs.empty()) continue;
-      const int Q = qs[static_cast<size_t>(U(rng) * static_cast<double>(qs.size()))];
-      const double dp = s.r[P] + r - overlap, dq = s.r[Q] + r - overlap;
-      const V3 e = s.c[Q] - s.c[P];
-      const double L = e.norm();
-      const double x = (L * L + dp * dp - dq * dq) / (2 * L);
-      const double rr = dp * dp - x * x;
-      if (rr <= 0) continue;
-      const V3 ez = e / L;
-      V3 e1 = ez.unitOrthogonal(), e2 = ez.cross(e1);
-      const double t = 2 * std::numbers::pi * U(rng);
-      c = s.c[P] + x * ez + std::sqrt(rr) * (std::cos(t) * e1 + std::sin(t) * e2);
-      touch.push_back(Q);
-    }
-    if ((c.array() < lo).any() || (c.array() > hi).any()) continue;
-    bool ok = true;
-    for (int q = 0; q < static_cast<int>(s.c.size()) && ok; ++q) {
-      if (std::find(touch.begin(), touch.end(), q) != touch.end()) continue;
-      ok = (c - s.c[q]).norm() - r - s.r[q] >= margin;
-    }
-    if (!ok) continue;
-    const int id = static_cast<int>(s.c.size());
-    s.c.push_back(c);
-    s.r.push_back(r);
-    for (int q : touch) s.contacts.push_back({q, id});
-  }
-  return s;
-}
-
-Volume<uint32_t> render_scene(const Scene& s, int64_t n) {
-  std::vector<synth::Particle> ps;
-  for (size_t p = 0; p < s.c.size(); ++p)
-    ps.push_back(synth::make_grain(static_cast<uint32_t>(p + 1), {s.c[p][0], s.c[p][1], s.c[p][2]}, s.r[p]));
-  auto r = synth::render(ps, Shape{n, n, n}, Geometry::isotropic_m(kVoxel));
-  return std::move(r.labels);
-}
-
-// A one-voxel 26-separating line between touching labels: a voxel gives way
-// when a smaller non-zero label is among its 26 neighbours (in the input).
-Volume<uint32_t> cut_lines(const Volume<uint32_t>& in) {
-  Volume<uint32_t> out = in.clone();
-  const Shape s = in.shape();
-  for (int64_t k = 0; k < s.nz; ++k)
-    for (int64_t j = 0; j < s.ny; ++j)
-      for (int64_t i = 0; i < s.nx; ++i) {
-        const uint32_t l = in(k, j, i);
-        if (!l) continue;
-        bool cut = false;
-        for (int64_t dk = -1; dk <= 1 && !cut; ++dk)
-          for (int64_t dj = -1; dj <= 1 && !cut; ++dj)
-            for (int64_t di = -1; di <= 1 && !cut; ++di) {
-              const int64_t a = k + dk, b = j + dj, c = i + di;
-              if (a < 0 || b < 0 || c < 0 || a >= s.nz || b >= s.ny || c >= s.nx) continue;
-              const uint32_t m = in(a, b, c);
-              cut = m != 0 && m < l;
-            }
-        if (cut) out(k, j, i) = 0;
-      }
-  return out;
-}
+Scene grow_scene(int64_t n, unsigned seed, int target) { return test::grow_scene(n, seed, target); }
+Volume<uint32_t> render_scene(const Scene& s, int64_t n) { return test::render_scene(s, n, kVoxel); }
 
 double angle_deg(const V3& a, const V3& b) {
   return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180 / std::numbers::pi;
@@ -144,7 +59,6 @@ struct Score {
 Score score(const Scene& s, const Volume<uint32_t>& labels, int threads = 2) {
   ContactOptions o;
   o.threads = threads;
-  if (std::getenv("TG_RHO")) o.normal_radius_voxels = std::atof(std::getenv("TG_RHO"));
   const auto res = find_contacts(labels.view(), o);
   std::map<std::pair<uint32_t, uint32_t>, const Contact*> found;
   for (const auto& c : res.contacts) found[{c.a, c.b}] = &c;

@@ -64,6 +64,8 @@ int run_measure(const MeasureJob& o) {
   po.face_offset = o.face_offset;
   po.oriented_box = o.box || po.sizing == measure::Sizing::obb;
   po.contacts = !o.no_contacts;
+  po.surface = o.surface;
+  po.convex = o.convex;
   po.threads = o.threads;
   po.obb.random_seed = o.seed;
   for (const auto& out : o.out) {
@@ -127,8 +129,11 @@ tg::app::Registrar reg_measure{{"measure", 40, [](CLI::App& app, CLI::App*& sub)
       "label, voxels, volume_mm3, cx_mm, cy_mm, cz_mm, d_eq_mm (equal-volume sphere), d_max_mm,\n"
       "d_min_mm, d_med_mm, fr = d_min/d_med, ar = d_max/d_min, obb_max/med/min_mm (CGAL oriented box),\n"
       "touches_border, below_limit, then the raw Feret calipers, bounding box and principal moments,\n"
-      "coordination (contacts with other labels, as `tomograin contacts` finds them) and a `sizing`\n"
-      "column naming the definition behind d_max/d_med/d_min. obb_* are 0 unless --box.\n"
+      "the equivalent ellipsoid (ell_d1/2/3_mm, ell_axis1_z/y/x), convex_volume_mm3 and solidity with --convex,\n"
+      "coordination (contacts with other labels, as `tomograin contacts` finds them), surface_mm2 and\n"
+      "sphericity with --surface, and a `sizing` column naming the definition behind d_max/d_med/d_min.\n"
+      "obb_* are 0 unless --box. fr is clamped to 1 where d_min > d_med (non-convex particles), and\n"
+      "fr_clamped says where (docs/measure.md).\n"
       "Sizing 'feret' (default): calipers of the convex hull at --feret N quasi-uniform orientations\n"
       "(60, as in the reference study) or 'exact' (hull diameter and exact minimum widths: slower,\n"
       "the reference for N's bias); d_min is the smallest caliper perpendicular to d_max (its\n"
@@ -164,6 +169,10 @@ tg::app::Registrar reg_measure{{"measure", 40, [](CLI::App& app, CLI::App*& sub)
                 "on real scans it took ~85 % of the time");
   sub->add_flag("--no-box", o->no_box, "Accepted for old scripts: the box is off unless --box");
   sub->add_flag("--no-contacts", o->no_contacts, "Skip the coordination column (contact search)");
+  sub->add_flag("--convex", o->convex, "Also convex_volume_mm3 and solidity (builds the CGAL hull)");
+  sub->add_flag("--surface", o->surface,
+                "Also surface_mm2 (normal-weighted voxel faces, within 0.2 % on spheres of radius >= 20 voxels) "
+                "and Wadell sphericity; costs several times the Feret step");
   sub->add_option("--seed", o->seed, "Random seed of CGAL's oriented-box optimiser")->default_str("42");
   sub->add_option("--threads", o->threads, "OpenMP threads (0 = all); results do not depend on it")
       ->check(CLI::NonNegativeNumber)

@@ -31,7 +31,9 @@ struct MeasureJob {
   double face_offset = 0.3;
   bool box = false;          // CGAL's oriented box (obb_* columns): only when asked, it dominated the run time
   bool no_box = false;       // the old flag, accepted and without effect (the box is off unless `box`)
-  bool no_contacts = false;  // skip the coordination column (measure/contacts.hpp)
+  bool no_contacts = false;
+  bool surface = false;      // surface_mm2 + sphericity (measure/surface.hpp)
+  bool convex = false;       // convex_volume_mm3 + solidity (CGAL hull)  // skip the coordination column (measure/contacts.hpp)
   int threads = 0;
   unsigned seed = 42;
   double voxel_um = 0;

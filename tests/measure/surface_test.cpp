@@ -40,6 +40,7 @@ TEST(Surface, SphereAreaWithinOnePercentAtRadius20) {
       if (std::getenv("TG_DEBUG")) std::printf("R %g seed %u area err %+.4f %%\n", R, seed, 100 * (m.area_vox2 / truth - 1));
       EXPECT_NEAR(m.area_vox2 / truth, 1.0, 0.01) << R << " " << seed;
       const double psi = wadell_sphericity(m.volume_vox3, m.area_vox2);
+      if (std::getenv("TG_DEBUG")) std::printf("R %g seed %u sphericity %.4f\n", R, seed, psi);
       EXPECT_GE(psi, 0.98);
       EXPECT_LE(psi, 1.02);
     }

@@ -26,6 +26,7 @@
 #include "measure/feret.hpp"
 #include "measure/label_stats.hpp"
 #include "measure/particles.hpp"
+#include "measure/psd.hpp"
 #include "tests/measure/shapes.hpp"
 
 using namespace tg;
@@ -163,6 +164,25 @@ void trade() {
     for (int k = 0; k < 4; ++k) std::printf(" %7.4f (%7.4f)", s[k] / static_cast<double>(hulls.size()), m[k]);
     std::printf(" | %+.3f %+.3f %+.3f %+.3f | %.4f\n", fr_shape[0], fr_shape[1], fr_shape[2], fr_shape[3], 1e3 * t);
   }
+  // The study's FR and AR classes (measure/psd.hpp thresholds): share of the
+  // 40 particles in each, per N (tie rule) and for the exact mode. The shapes
+  // sit near class edges (half-spheres: FR 0.5, AR 2; ellipsoids: FR 0.58,
+  // AR 2.86), as real fragments do, so the shares move with N.
+  std::printf("\n# share of particles (%%) in the study's classes; FR <0.4 / 0.4-0.8 / 0.8-0.9 / >=0.9; AR <2 / 2-3 / >=3\n");
+  auto classes = [&](const std::vector<FeretResult>& fs, const char* name) {
+    std::vector<double> fr(hulls.size()), ar(hulls.size());
+    for (size_t p = 0; p < hulls.size(); ++p) frar(hulls[p], fs[p], fr[p], ar[p]);
+    const auto fc = class_percent(fr, fr_thresholds()), ac = class_percent(ar, ar_thresholds());
+    std::printf("%10s | FR %5.1f %5.1f %5.1f %5.1f | AR %5.1f %5.1f %5.1f\n", name, fc[0], fc[1], fc[2], fc[3], ac[0], ac[1],
+                ac[2]);
+  };
+  for (int N : {15, 30, 60, 120, 500}) {
+    const auto dirs = half_sphere_directions(N);
+    std::vector<FeretResult> fs;
+    for (const auto& h : hulls) fs.push_back(feret_sampled(h.hull, dirs, FeretSampledOptions{0, 0.5, 20.0}));
+    classes(fs, ("N=" + std::to_string(N)).c_str());
+  }
+  classes(ex, "exact");
 }
 
 // Times measure_particles on `v` (N = 60, then exact; box only when `box`),

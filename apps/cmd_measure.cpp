@@ -66,6 +66,18 @@ int run_measure(const MeasureJob& o) {
   po.contacts = !o.no_contacts;
   po.surface = o.surface;
   po.convex = o.convex;
+  if (!o.columns.empty()) {
+    const std::vector<std::string> known{"coordination", "surface", "sphericity", "convex", "solidity", "obb"};
+    auto has = [&](const char* c) { return std::find(o.columns.begin(), o.columns.end(), c) != o.columns.end(); };
+    for (const auto& c : o.columns)
+      if (std::find(known.begin(), known.end(), c) == known.end())
+        throw UsageError("--columns: unknown column group '" + c +
+                         "' (valid: coordination, surface, sphericity, convex, solidity, obb)");
+    po.contacts = has("coordination");
+    po.surface = has("surface") || has("sphericity");
+    po.convex = has("convex") || has("solidity");
+    po.oriented_box = has("obb") || po.sizing == measure::Sizing::obb;
+  }
   po.threads = o.threads;
   po.obb.random_seed = o.seed;
   for (const auto& out : o.out) {
@@ -169,6 +181,11 @@ tg::app::Registrar reg_measure{{"measure", 40, [](CLI::App& app, CLI::App*& sub)
                 "on real scans it took ~85 % of the time");
   sub->add_flag("--no-box", o->no_box, "Accepted for old scripts: the box is off unless --box");
   sub->add_flag("--no-contacts", o->no_contacts, "Skip the coordination column (contact search)");
+  sub->add_option("--columns", o->columns,
+                  "Optional column groups to compute, comma-separated, instead of the flags: coordination, "
+                  "surface, sphericity, convex, solidity, obb (e.g. --columns coordination,sphericity; "
+                  "the size/shape columns are always there)")
+      ->delimiter(',');
   sub->add_flag("--convex", o->convex, "Also convex_volume_mm3 and solidity (builds the CGAL hull)");
   sub->add_flag("--surface", o->surface,
                 "Also surface_mm2 (normal-weighted voxel faces, within 0.2 % on spheres of radius >= 20 voxels) "

@@ -33,7 +33,11 @@ struct MeasureJob {
   bool no_box = false;       // the old flag, accepted and without effect (the box is off unless `box`)
   bool no_contacts = false;
   bool surface = false;      // surface_mm2 + sphericity (measure/surface.hpp)
-  bool convex = false;       // convex_volume_mm3 + solidity (CGAL hull)  // skip the coordination column (measure/contacts.hpp)
+  bool convex = false;       // convex_volume_mm3 + solidity (CGAL hull)
+  // Optional column groups by name (coordination, surface, sphericity,
+  // convex, solidity, obb): when given, exactly these are computed and the
+  // flags above are ignored.
+  std::vector<std::string> columns;  // skip the coordination column (measure/contacts.hpp)
   int threads = 0;
   unsigned seed = 42;
   double voxel_um = 0;

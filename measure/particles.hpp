@@ -1,4 +1,4 @@
-// The particle table: label_stats + convex hull + Feret sizing + oriented box
+// The particle table: label_stats + Feret sizing (+ hull, box, surface, contacts)
 // for every label of a volume, as records and as a tomograin Table with the
 // column names the CLI and compare/ use.
 //
@@ -6,8 +6,13 @@
 // dynamic schedule; each particle's numbers depend only on its own voxels, so
 // the table is identical for any thread count):
 //   boundary voxels -> caliper_points (face-offset convention, feret.hpp)
-//   -> convex_hull -> Feret (sampled at N directions, or exact)
-//   -> oriented box (CGAL heuristic, on the hull's vertices).
+//   -> Feret sampled at N directions straight on those points (no hull:
+//      a point set's widths are its hull's), or, for the exact mode, the
+//      oriented box (CGAL heuristic) and the convex volume, convex_hull
+//      first (CGAL; ~10x the sampled path's cost per particle, and the box
+//      ~100x: bench/measure/RESULTS.md)
+//   -> optional: surface area + sphericity (surface.hpp), coordination
+//      (contacts.hpp: three scans of the whole volume).
 // Dmed = 6 V / (pi Dmax Dmin) (the ellipsoid with axes Dmax, Dmin, Dmed has
 // the particle's volume); FR = Dmin / Dmed; AR = Dmax / Dmin. With
 // sizing = obb the three columns are the oriented box's sorted edges instead

@@ -15,6 +15,7 @@ struct Opts {
   std::string in, out;
   double voxel_um = 0, grain_diameter_um = 1360.0, grain_radius_vox = 0;
   std::string feret = "60";
+  bool box = false;
 };
 
 int run_analyse(const Opts& o) {
@@ -36,7 +37,7 @@ int run_analyse(const Opts& o) {
   mea.in = seg.out;
   mea.out = {(d / "particles.csv").string()};
   mea.feret = o.feret;
-  mea.no_box = false;
+  mea.box = o.box;
   tg::app::run_measure(mea);
 
   tg::app::PsdJob psd;
@@ -71,5 +72,6 @@ static tg::app::Registrar reg{{"analyse", 50, [](CLI::App& app, CLI::App*& sub) 
       ->capture_default_str();
   sub->add_option("--grain-radius-vox", o->grain_radius_vox, "Expected grain radius in voxels (overrides the diameter)");
   sub->add_option("--feret", o->feret, "Feret orientations N, or 'exact'")->capture_default_str();
+  sub->add_flag("--box", o->box, "Also compute CGAL's oriented box (obb_* columns; slow on large scans)");
   return [o] { return run_analyse(*o); };
 }}};

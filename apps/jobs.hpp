@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "core/volume.hpp"
 #include "segmentation/segment.hpp"
 
 namespace tg::app {
@@ -28,12 +29,24 @@ struct MeasureJob {
   std::string sizing = "feret";
   double limit_mm = 0.2;
   double face_offset = 0.3;
-  bool no_box = false;
+  bool box = false;          // CGAL's oriented box (obb_* columns): only when asked, it dominated the run time
+  bool no_box = false;       // the old flag, accepted and without effect (the box is off unless `box`)
+  bool no_contacts = false;
+  bool surface = false;      // surface_mm2 + sphericity (measure/surface.hpp)
+  bool convex = false;       // convex_volume_mm3 + solidity (CGAL hull)
+  // Optional column groups by name (coordination, surface, sphericity,
+  // convex, solidity, obb): when given, exactly these are computed and the
+  // flags above are ignored.
+  std::vector<std::string> columns;  // skip the coordination column (measure/contacts.hpp)
   int threads = 0;
   unsigned seed = 42;
   double voxel_um = 0;
 };
 int run_measure(const MeasureJob& job);
+
+// The u32 label volume of `in` (an .h5 without a dataset name: its /labels),
+// with --voxel-um applied; InputError when it has no voxel size.
+Volume<uint32_t> read_labels(const std::string& in, double voxel_um);
 
 // tomograin psd: particle tables of one or more stages -> gradings and summaries.
 struct PsdJob {

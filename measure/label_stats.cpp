@@ -190,6 +190,13 @@ LabelStatsResult label_stats(const VolumeView<const uint32_t>& v, const LabelSta
     const Eigen::Vector3d hv(h[0], h[1], h[2]);
     Eigen::Matrix3d C = hv.asDiagonal() * cov * hv.asDiagonal();
     for (int c = 0; c < 3; ++c) C(c, c) += h[c] * h[c] / 12.0;
+    {
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> ev(C);  // ascending
+      for (int c = 0; c < 3; ++c) {
+        st.ellipsoid_semi_axes_m[c] = std::sqrt(5.0 * std::max(0.0, ev.eigenvalues()[2 - c]));
+        st.ellipsoid_axes.col(c) = ev.eigenvectors().col(2 - c);
+      }
+    }
     C *= st.volume_m3;
     st.inertia_m5 = C.trace() * Eigen::Matrix3d::Identity() - C;
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(st.inertia_m5);

@@ -19,7 +19,11 @@
 // n dv diag(h^2)/12 (each voxel is a cube of edges h, not a point), inertia
 // tensor (unit density) I = tr(C) 1 - C, principal moments = eigenvalues of
 // I ascending with their unit axes (Eigen's SelfAdjointEigenSolver). The
-// equivalent-sphere diameter is d_eq = (6 V / pi)^(1/3). Anisotropic voxels
+// equivalent-sphere diameter is d_eq = (6 V / pi)^(1/3); the equivalent
+// ellipsoid's semi-axes are sqrt(5 eigenvalues of C / V) (a solid ellipsoid
+// of semi-axis a has variance a^2/5 along it; skimage's
+// axis_major_length uses the same moments). One voxel has semi-axes
+// sqrt(5/12) h = 0.645 h (a cube's moments), never 0. Anisotropic voxels
 // are handled: every position is origin + h * (index + 0.5) per axis.
 //
 // Coordinates are in metres, (z, y, x) order, as everywhere in tomograin.
@@ -53,6 +57,12 @@ struct LabelStats {
   Eigen::Matrix3d inertia_m5 = Eigen::Matrix3d::Zero();  // about the centroid, unit density, (z, y, x)
   Eigen::Vector3d principal_moments_m5 = Eigen::Vector3d::Zero();  // ascending
   Eigen::Matrix3d principal_axes = Eigen::Matrix3d::Identity();   // columns, matching the moments
+  // Equivalent ellipsoid: the solid ellipsoid with the same second moments,
+  // semi-axes a_i = sqrt(5 lambda_i) for the eigenvalues lambda_i of the
+  // covariance C / V (a solid ellipsoid's covariance along an axis is a^2/5),
+  // descending, with their unit axes as columns (z, y, x).
+  Eigen::Vector3d ellipsoid_semi_axes_m = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d ellipsoid_axes = Eigen::Matrix3d::Identity();
   double d_eq_m = 0;
   bool touches_border = false;
   bool below_limit = false;

@@ -2,6 +2,7 @@
 
 #include <omp.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -10,6 +11,24 @@
 #include "measure/feret.hpp"
 
 namespace tg::measure {
+
+double hull_volume(const ConvexHull& hull) {
+  if (hull.dimension < 3 || hull.faces.empty()) return 0.0;
+  Vec3 c = Vec3::Zero();
+  for (const auto& v : hull.vertices) c += v;
+  c /= static_cast<double>(hull.vertices.size());
+  // Summed in sorted order: CGAL's hull may list (and split coplanar facets
+  // into) triangles in an order that depends on its per-thread random state,
+  // and the table must not depend on the thread count.
+  std::vector<double> t;
+  t.reserve(hull.faces.size());
+  for (const auto& f : hull.faces)
+    t.push_back(std::abs((hull.vertices[f[0]] - c).dot((hull.vertices[f[1]] - c).cross(hull.vertices[f[2]] - c))));
+  std::sort(t.begin(), t.end());
+  double vol = 0;
+  for (double x : t) vol += x;
+  return vol / 6.0;
+}
 
 void fill_sizing(Particle& p, Sizing sizing) {
   if (sizing == Sizing::obb) {
@@ -22,7 +41,12 @@ void fill_sizing(Particle& p, Sizing sizing) {
     const double den = std::numbers::pi * p.d_max_m * p.d_min_m;
     p.d_med_m = den > 0 ? 6.0 * p.stats.volume_m3 / den : 0.0;
   }
-  p.fr = p.d_med_m > 0 ? p.d_min_m / p.d_med_m : 0.0;
+  // FR > 1 cannot happen on a convex particle (Dmed >= Dmin there) but does
+  // on hollow or concave ones, whose volume is below the Dmax x Dmin x Dmin
+  // ellipsoid's: FR is clamped to 1 and the row flagged (header).
+  const double fr = p.d_med_m > 0 ? p.d_min_m / p.d_med_m : 0.0;
+  p.fr_clamped = fr > 1.0;
+  p.fr = std::min(fr, 1.0);
   p.ar = p.d_min_m > 0 ? p.d_max_m / p.d_min_m : 0.0;
 }
 
@@ -42,6 +66,7 @@ std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels
   FeretSampledOptions sampled;
   sampled.tie_tolerance = exact.tie_tolerance;
 
+  const bool need_hull = opt.feret_exact || opt.oriented_box || opt.convex || opt.force_hull;
   std::vector<Particle> out(ls.labels.size());
   const int64_t n = static_cast<int64_t>(out.size());
   const int nt = opt.threads > 0 ? opt.threads : 0;
@@ -51,12 +76,41 @@ std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels
   for (int64_t p = 0; p < n; ++p) {
     Particle& P = out[static_cast<size_t>(p)];
     P.stats = ls.labels[static_cast<size_t>(p)];
-    const auto pts = caliper_points(ls.surface_of(static_cast<size_t>(p)), h, P.stats.box_lo, opt.face_offset);
-    const ConvexHull hull = convex_hull(pts);
-    P.hull_vertices = static_cast<int>(hull.vertices.size());
-    P.feret = opt.feret_exact ? feret_exact(hull, exact) : feret_sampled(hull, dirs, sampled);
-    if (opt.oriented_box) P.box = oriented_box(hull.vertices, opt.obb);
+    auto pts = caliper_points(ls.surface_of(static_cast<size_t>(p)), h, P.stats.box_lo, opt.face_offset);
+    if (need_hull) {
+      const ConvexHull hull = convex_hull(pts);
+      P.hull_vertices = static_cast<int>(hull.vertices.size());
+      P.feret = opt.feret_exact ? feret_exact(hull, exact) : feret_sampled(hull, dirs, sampled);
+      if (opt.convex) {
+        P.convex_volume_m3 = hull_volume(hull);
+        P.solidity = P.convex_volume_m3 > 0 ? std::min(1.0, P.stats.volume_m3 / P.convex_volume_m3) : 1.0;
+      }
+      if (opt.oriented_box) P.box = oriented_box(hull.vertices, opt.obb);
+    } else {
+      // Sampled calipers need no hull: the width of a point set along u is
+      // its hull's (the extremes are hull vertices), so the points go to
+      // feret_sampled as they are (it reads only the vertex list). Same
+      // numbers as through the hull up to the rounding of a dot product
+      // (tests: ParticlesFastPath).
+      ConvexHull points;
+      points.vertices = std::move(pts);
+      P.feret = feret_sampled(points, dirs, sampled);
+    }
+    if (opt.surface) {
+      P.surface_m2 = surface_area(labels, P.stats.label, ls.surface_of(static_cast<size_t>(p)), opt.surface_opt);
+      P.sphericity = wadell_sphericity(P.stats.volume_m3, P.surface_m2);
+    }
     fill_sizing(P, opt.sizing);
+  }
+  if (opt.contacts) {
+    ContactOptions co = opt.contact;
+    co.threads = opt.threads;
+    const auto res = find_contacts(labels, co);
+    std::vector<uint32_t> ids;
+    ids.reserve(out.size());
+    for (const auto& P : out) ids.push_back(P.stats.label);
+    const auto z = coordination(res.contacts, ids);
+    for (size_t p = 0; p < out.size(); ++p) out[p].coordination = z[p];
   }
   return out;
 }
@@ -87,6 +141,7 @@ Table particle_table(const std::vector<Particle>& ps) {
   col("d_med_mm", [&](const Particle& p) { return p.d_med_m * mm; });
   col("fr", [](const Particle& p) { return p.fr; });
   col("ar", [](const Particle& p) { return p.ar; });
+  col("fr_clamped", [](const Particle& p) { return p.fr_clamped ? 1 : 0; });
   col("obb_max_mm", [&](const Particle& p) { return p.box.dims[2] * mm; });
   col("obb_med_mm", [&](const Particle& p) { return p.box.dims[1] * mm; });
   col("obb_min_mm", [&](const Particle& p) { return p.box.dims[0] * mm; });
@@ -103,6 +158,27 @@ Table particle_table(const std::vector<Particle>& ps) {
   }
   for (int a = 0; a < 3; ++a)
     col("inertia" + std::to_string(a + 1) + "_mm5", [&, a](const Particle& p) { return p.stats.principal_moments_m5[a] * mm5; });
+  for (int a = 0; a < 3; ++a)
+    col("ell_d" + std::to_string(a + 1) + "_mm", [&, a](const Particle& p) { return 2 * p.stats.ellipsoid_semi_axes_m[a] * mm; });
+  // The major axis, sign chosen so that its first non-zero component (z, y, x) is positive.
+  auto major = [](const Particle& p) {
+    Eigen::Vector3d u = p.stats.ellipsoid_axes.col(0);
+    for (int c = 0; c < 3; ++c)
+      if (u[c] != 0) return u[c] < 0 ? Eigen::Vector3d(-u) : u;
+    return u;
+  };
+  col("ell_axis1_z", [&](const Particle& p) { return major(p)[0]; });
+  col("ell_axis1_y", [&](const Particle& p) { return major(p)[1]; });
+  col("ell_axis1_x", [&](const Particle& p) { return major(p)[2]; });
+  if (!ps.empty() && ps.front().convex_volume_m3 >= 0) {
+    col("convex_volume_mm3", [&](const Particle& p) { return p.convex_volume_m3 * mm3; });
+    col("solidity", [](const Particle& p) { return p.solidity; });
+  }
+  if (!ps.empty() && ps.front().surface_m2 >= 0) {
+    col("surface_mm2", [&](const Particle& p) { return p.surface_m2 * 1e6; });
+    col("sphericity", [](const Particle& p) { return p.sphericity; });
+  }
+  if (!ps.empty() && ps.front().coordination >= 0) col("coordination", [](const Particle& p) { return p.coordination; });
   return t;
 }
 

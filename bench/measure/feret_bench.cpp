@@ -7,12 +7,15 @@
 //       mode vs the exact mode for N = 15, 30, 60, 120, 500, and time per particle
 //   measure_feret_bench throughput [n] [grains]   particles/s on an n^3 label
 //       volume (default 512, ~1000 grains), 1 and 2 threads
+//   measure_feret_bench small [n] [count]   the same on >= 20 000 particles of
+//       7-100 voxels (default 256^3, 24 000); TG_DUMP=file.raw saves the labels
 //
 // Shapes are drawn by voxel-centre inclusion with random sub-voxel centres
 // and rotations (fixed seeds), as in tests/measure/shapes.hpp.
 #include <omp.h>
 
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -23,6 +26,7 @@
 #include "measure/feret.hpp"
 #include "measure/label_stats.hpp"
 #include "measure/particles.hpp"
+#include "measure/psd.hpp"
 #include "tests/measure/shapes.hpp"
 
 using namespace tg;
@@ -160,6 +164,68 @@ void trade() {
     for (int k = 0; k < 4; ++k) std::printf(" %7.4f (%7.4f)", s[k] / static_cast<double>(hulls.size()), m[k]);
     std::printf(" | %+.3f %+.3f %+.3f %+.3f | %.4f\n", fr_shape[0], fr_shape[1], fr_shape[2], fr_shape[3], 1e3 * t);
   }
+  // The study's FR and AR classes (measure/psd.hpp thresholds): share of the
+  // 40 particles in each, per N (tie rule) and for the exact mode. The shapes
+  // sit near class edges (half-spheres: FR 0.5, AR 2; ellipsoids: FR 0.58,
+  // AR 2.86), as real fragments do, so the shares move with N.
+  std::printf("\n# share of particles (%%) in the study's classes; FR <0.4 / 0.4-0.8 / 0.8-0.9 / >=0.9; AR <2 / 2-3 / >=3\n");
+  auto classes = [&](const std::vector<FeretResult>& fs, const char* name) {
+    std::vector<double> fr(hulls.size()), ar(hulls.size());
+    for (size_t p = 0; p < hulls.size(); ++p) frar(hulls[p], fs[p], fr[p], ar[p]);
+    const auto fc = class_percent(fr, fr_thresholds()), ac = class_percent(ar, ar_thresholds());
+    std::printf("%10s | FR %5.1f %5.1f %5.1f %5.1f | AR %5.1f %5.1f %5.1f\n", name, fc[0], fc[1], fc[2], fc[3], ac[0], ac[1],
+                ac[2]);
+  };
+  for (int N : {15, 30, 60, 120, 500}) {
+    const auto dirs = half_sphere_directions(N);
+    std::vector<FeretResult> fs;
+    for (const auto& h : hulls) fs.push_back(feret_sampled(h.hull, dirs, FeretSampledOptions{0, 0.5, 20.0}));
+    classes(fs, ("N=" + std::to_string(N)).c_str());
+  }
+  classes(ex, "exact");
+}
+
+// Times measure_particles on `v` (N = 60, then exact; box only when `box`),
+// 1 and 2 threads, wall and CPU seconds (TG_NO_BOX=1 skips the box, the
+// slowest by far); TG_DUMP=path writes the labels as
+// raw u32 (z, y, x) for bench/measure/skimage_regionprops.py.
+void time_measure(const Volume<uint32_t>& v, bool box) {
+  if (const char* b = std::getenv("TG_NO_BOX")) box = box && std::atoi(b) == 0;
+  if (const char* dump = std::getenv("TG_DUMP")) {
+    std::FILE* f = std::fopen(dump, "wb");
+    std::fwrite(v.data(), sizeof(uint32_t), static_cast<size_t>(v.size()), f);
+    std::fclose(f);
+    std::printf("# wrote %s (%lld x %lld x %lld u32)\n", dump, static_cast<long long>(v.shape().nz),
+                static_cast<long long>(v.shape().ny), static_cast<long long>(v.shape().nx));
+  }
+  const char* names[4] = {"N=60, no hull (this session's path)", "N=60 through the CGAL hull (before)", "exact",
+                          "N=60 + CGAL oriented box"};
+  for (int mode = 0; mode < (box ? 4 : 3); ++mode)
+    for (int threads : {1, 2}) {
+      ParticleOptions o;
+      o.threads = threads;
+      o.force_hull = mode == 1;
+      o.feret_exact = mode == 2;
+      o.oriented_box = mode == 3;
+      LabelStatsOptions so;
+      so.threads = threads;
+      auto cpu_now = [] { return std::clock() / static_cast<double>(CLOCKS_PER_SEC); };
+      double t0 = now(), c0 = cpu_now();
+      const auto ls = label_stats(v.view(), so);
+      const double t_stats = now() - t0, c_stats = cpu_now() - c0;
+      t0 = now();
+      c0 = cpu_now();
+      const auto ps = measure_particles(v.view(), o);
+      const double t = now() - t0, cpu = cpu_now() - c0;
+      // On a shared machine wall time is noisy; CPU time is what the work
+      // costs. Geometry CPU = measure's CPU - label_stats' CPU (the scan);
+      // its rate on `threads` cores = threads x particles / geometry CPU.
+      const double geo_cpu = std::max(1e-9, cpu - c_stats);
+      std::printf("threads %d, %s: %zu particles; measure %.2f s wall / %.2f s CPU; label_stats %.2f s wall / %.2f s CPU; "
+                  "overall %.0f particles/s (wall); per-particle geometry %.1f us CPU each = %.0f particles/s on %d core(s)\n",
+                  threads, names[mode], ps.size(), t, cpu, t_stats, c_stats, static_cast<double>(ps.size()) / t,
+                  1e6 * geo_cpu / static_cast<double>(ps.size()), threads * static_cast<double>(ps.size()) / geo_cpu, threads);
+    }
 }
 
 void throughput(int64_t n, int grains) {
@@ -187,22 +253,38 @@ void throughput(int64_t n, int grains) {
           if (in(V3(k + 0.5, j + 0.5, i + 0.5))) v(k, j, i) = static_cast<uint32_t>(g + 1);
   }
   std::printf("# %lld^3 label volume, %d grains drawn\n", static_cast<long long>(n), grains);
-  for (int obb : {0, 1})
-    for (int threads : {1, 2}) {
-      ParticleOptions o;
-      o.threads = threads;
-      o.oriented_box = obb != 0;
-      LabelStatsOptions so;
-      so.threads = threads;
-      double t0 = now();
-      const auto ls = label_stats(v.view(), so);
-      const double t_stats = now() - t0;
-      t0 = now();
-      const auto ps = measure_particles(v.view(), o);
-      const double t = now() - t0;
-      std::printf("threads %d, N=60%s: %zu particles in %.2f s (label_stats alone %.2f s) = %.0f particles/s\n",
-                  threads, obb ? " + CGAL oriented box" : "", ps.size(), t, t_stats, static_cast<double>(ps.size()) / t);
-    }
+  time_measure(v, true);
+}
+
+// >= 20 000 small particles: ellipsoids of semi-axes 1.2-3 voxels (about 7
+// to 100 voxels each), one per cell of an 8-voxel grid, random sub-cell
+// centres and rotations, a fraction of the cells left empty.
+void small(int64_t n, int count) {
+  auto v = Volume<uint32_t>::filled(Shape{n, n, n}, 0, Geometry::isotropic_m(1e-5));
+  const int64_t cells = n / 8;
+  uint32_t id = 0;
+  for (int64_t c = 0; c < cells * cells * cells && static_cast<int>(id) < count; ++c) {
+    const unsigned seed = 5000u + static_cast<unsigned>(c);
+    const V3 u = test::random_offset(seed), w = test::random_offset(seed + 99991);
+    if (w[2] < 0.25) continue;
+    const V3 semi(1.2 + 1.8 * w[0], 1.2 + 1.8 * w[1], 1.2 + 1.2 * w[0] * w[1]);
+    const V3 cen(8.0 * static_cast<double>(c / (cells * cells)) + 4 + (u[0] - 0.5) * 1.5,
+                 8.0 * static_cast<double>((c / cells) % cells) + 4 + (u[1] - 0.5) * 1.5,
+                 8.0 * static_cast<double>(c % cells) + 4 + (u[2] - 0.5) * 1.5);
+    const test::Inside in = test::ellipsoid(cen, semi, test::random_rotation(seed));
+    bool any = false;
+    ++id;
+    for (int64_t k = static_cast<int64_t>(cen[0]) - 4; k <= static_cast<int64_t>(cen[0]) + 4; ++k)
+      for (int64_t j = static_cast<int64_t>(cen[1]) - 4; j <= static_cast<int64_t>(cen[1]) + 4; ++j)
+        for (int64_t i = static_cast<int64_t>(cen[2]) - 4; i <= static_cast<int64_t>(cen[2]) + 4; ++i)
+          if (k >= 0 && j >= 0 && i >= 0 && k < n && j < n && i < n && in(V3(k + 0.5, j + 0.5, i + 0.5))) {
+            v(k, j, i) = id;
+            any = true;
+          }
+    if (!any) --id;
+  }
+  std::printf("# %lld^3 label volume, %u small particles drawn\n", static_cast<long long>(n), id);
+  time_measure(v, false);
 }
 
 }  // namespace
@@ -215,10 +297,12 @@ int main(int argc, char** argv) {
     convention(l);
   } else if (what == "trade") {
     trade();
+  } else if (what == "small") {
+    small(argc > 2 ? std::atoll(argv[2]) : 256, argc > 3 ? std::atoi(argv[3]) : 24000);
   } else if (what == "throughput") {
     throughput(argc > 2 ? std::atoll(argv[2]) : 512, argc > 3 ? std::atoi(argv[3]) : 1000);
   } else {
-    std::fprintf(stderr, "usage: measure_feret_bench convention [lambda...] | trade | throughput [n] [grains]\n");
+    std::fprintf(stderr, "usage: measure_feret_bench convention [lambda...] | trade | throughput [n] [grains] | small [n] [count]\n");
     return 2;
   }
   return 0;

@@ -1,0 +1,297 @@
+#include "measure/contacts.hpp"
+
+#include <omp.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <unordered_map>
+
+#include "core/errors.hpp"
+
+namespace tg::measure {
+namespace {
+
+constexpr int kMaxRun = 3;  // longest void run kept (the options may ask for less)
+
+// Crossings of one pair, per axis (z, y, x) and void run length (0..3):
+// count and the sum of twice their midpoints' voxel indices (integers, so
+// sums are exact and merge in any order).
+struct Agg {
+  std::array<std::array<int64_t, kMaxRun + 1>, 3> n{};
+  std::array<std::array<std::array<int64_t, 3>, kMaxRun + 1>, 3> s{};
+  void merge(const Agg& o) {
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r <= kMaxRun; ++r) {
+        n[c][r] += o.n[c][r];
+        for (int d = 0; d < 3; ++d) s[c][r][d] += o.s[c][r][d];
+      }
+  }
+};
+
+using PairMap = std::unordered_map<uint64_t, Agg>;
+
+uint64_t pair_key(uint32_t a, uint32_t b) {
+  return a < b ? (static_cast<uint64_t>(a) << 32) | b : (static_cast<uint64_t>(b) << 32) | a;
+}
+
+// State of one lattice line while it is scanned: the last labelled voxel's
+// label and position along the line, and the void voxels seen since.
+struct LineState {
+  uint32_t last = 0;
+  int64_t pos = 0;
+};
+
+// One voxel of a line along `axis` at (k, j, i) with label l.
+inline void step(PairMap& map, LineState& st, uint32_t l, int axis, int64_t k, int64_t j, int64_t i, int max_gap) {
+  const int64_t here = axis == 0 ? k : axis == 1 ? j : i;
+  if (l == 0) return;
+  if (st.last != 0 && st.last != l) {
+    const int64_t run = here - st.pos - 1;
+    if (run <= max_gap) {
+      Agg& g = map[pair_key(st.last, l)];
+      const int r = static_cast<int>(run);
+      ++g.n[axis][r];
+      std::array<int64_t, 3> twice{2 * k, 2 * j, 2 * i};
+      twice[axis] = here + st.pos;
+      for (int d = 0; d < 3; ++d) g.s[axis][r][d] += twice[d];
+    }
+  }
+  st.last = l;
+  st.pos = here;
+}
+
+// Step 1 of the header: crossings of all three axes, merged over threads.
+std::vector<std::pair<uint64_t, Agg>> crossings(const VolumeView<const uint32_t>& v, int nt, int max_gap) {
+  const Shape s = v.shape();
+  std::vector<PairMap> maps(static_cast<size_t>(nt));
+#pragma omp parallel num_threads(nt)
+  {
+    const int t = omp_get_thread_num();
+    PairMap& map = maps[static_cast<size_t>(t)];
+    // x lines and y lines: slices shared out.
+    std::vector<LineState> ys(static_cast<size_t>(s.nx));
+#pragma omp for schedule(static)
+    for (int64_t k = 0; k < s.nz; ++k) {
+      std::fill(ys.begin(), ys.end(), LineState{});
+      for (int64_t j = 0; j < s.ny; ++j) {
+        const uint32_t* row = v.row(k, j).data();
+        LineState xs;
+        for (int64_t i = 0; i < s.nx; ++i) {
+          const uint32_t l = row[i];
+          if (l == 0) continue;
+          step(map, xs, l, 2, k, j, i, max_gap);
+          step(map, ys[static_cast<size_t>(i)], l, 1, k, j, i, max_gap);
+        }
+      }
+    }
+    // z lines: rows j shared out, each thread walks all slices of its rows.
+    std::vector<LineState> zs;
+#pragma omp for schedule(static)
+    for (int64_t j = 0; j < s.ny; ++j) {
+      zs.assign(static_cast<size_t>(s.nx), LineState{});
+      for (int64_t k = 0; k < s.nz; ++k) {
+        const uint32_t* row = v.row(k, j).data();
+        for (int64_t i = 0; i < s.nx; ++i)
+          if (row[i]) step(map, zs[static_cast<size_t>(i)], row[i], 0, k, j, i, max_gap);
+      }
+    }
+  }
+  std::unordered_map<uint64_t, Agg> all;
+  for (const auto& m : maps)
+    for (const auto& [key, g] : m) all[key].merge(g);
+  std::vector<std::pair<uint64_t, Agg>> out(all.begin(), all.end());
+  std::sort(out.begin(), out.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  return out;
+}
+
+// Mean midpoint (voxel index space) of the crossings along `axis` with run <= cap.
+bool mean_midpoint(const Agg& g, int axis, int cap, Eigen::Vector3d& m, int64_t& count) {
+  count = 0;
+  std::array<int64_t, 3> sum{0, 0, 0};
+  for (int r = 0; r <= cap; ++r) {
+    count += g.n[axis][r];
+    for (int d = 0; d < 3; ++d) sum[d] += g.s[axis][r][d];
+  }
+  if (count == 0) return false;
+  for (int d = 0; d < 3; ++d) m[d] = static_cast<double>(sum[d]) / (2.0 * static_cast<double>(count));
+  return true;
+}
+
+// For a void voxel: bit 1 when label a is among its 26 neighbours, bit 0
+// when b is; 3 means a line voxel between a and b.
+int line_sides(const VolumeView<const uint32_t>& v, int64_t k, int64_t j, int64_t i, uint32_t a, uint32_t b) {
+  const Shape s = v.shape();
+  int side = 0;
+  for (int64_t z = std::max<int64_t>(0, k - 1); z <= std::min(s.nz - 1, k + 1); ++z)
+    for (int64_t y = std::max<int64_t>(0, j - 1); y <= std::min(s.ny - 1, j + 1); ++y) {
+      const uint32_t* row = v.row(z, y).data();
+      for (int64_t x = std::max<int64_t>(0, i - 1); x <= std::min(s.nx - 1, i + 1); ++x)
+        side |= row[x] == a ? 2 : row[x] == b ? 1 : 0;
+    }
+  return side == 3 ? 3 : 0;
+}
+
+// Step 3 of the header: the unit direction from a's to b's centroid inside
+// the ball of radius `radius` voxels (scaled to the geometric-mean voxel
+// edge) around m (voxel index space); line voxels between a and b count half
+// for each. False when either side is empty.
+bool ball_normal(const VolumeView<const uint32_t>& v, const Eigen::Vector3d& m, const Contact& c, double radius,
+                 Eigen::Vector3d& normal) {
+  const Shape s = v.shape();
+  const auto& h = v.geometry().voxel_size_m;
+  const double rho = radius * std::cbrt(h[0] * h[1] * h[2]);
+  int64_t na = 0, nb = 0;
+  std::array<int64_t, 3> sa{0, 0, 0}, sb{0, 0, 0};
+  int64_t lo[3], hi[3];
+  for (int d = 0; d < 3; ++d) {
+    const double r = rho / h[d];
+    const int64_t n = d == 0 ? s.nz : d == 1 ? s.ny : s.nx;
+    lo[d] = std::max<int64_t>(0, static_cast<int64_t>(std::ceil(m[d] - r)));
+    hi[d] = std::min<int64_t>(n - 1, static_cast<int64_t>(std::floor(m[d] + r)));
+  }
+  const double rho2 = rho * rho;
+  for (int64_t k = lo[0]; k <= hi[0]; ++k) {
+    const double dz = (static_cast<double>(k) - m[0]) * h[0];
+    for (int64_t j = lo[1]; j <= hi[1]; ++j) {
+      const double dy = (static_cast<double>(j) - m[1]) * h[1];
+      const double rem = rho2 - dz * dz - dy * dy;
+      if (rem < 0) continue;
+      const double r = std::sqrt(rem) / h[2];
+      const int64_t i0 = std::max(lo[2], static_cast<int64_t>(std::ceil(m[2] - r)));
+      const int64_t i1 = std::min(hi[2], static_cast<int64_t>(std::floor(m[2] + r)));
+      const uint32_t* row = v.row(k, j).data();
+      for (int64_t i = i0; i <= i1; ++i) {
+        const uint32_t l = row[i];
+        int side = l == c.a ? 2 : l == c.b ? 1 : 0;  // bit 1: a, bit 0: b
+        if (l == 0 && !c.face_to_face) side = line_sides(v, k, j, i, c.a, c.b);
+        const int64_t w = side == 3 ? 1 : 2;  // weights in halves
+        if (side & 2) { na += w; sa[0] += w * k; sa[1] += w * j; sa[2] += w * i; }
+        if (side & 1) { nb += w; sb[0] += w * k; sb[1] += w * j; sb[2] += w * i; }
+      }
+    }
+  }
+  if (na == 0 || nb == 0) return false;
+  Eigen::Vector3d dir;
+  for (int d = 0; d < 3; ++d)
+    dir[d] = (static_cast<double>(sb[d]) / static_cast<double>(nb) - static_cast<double>(sa[d]) / static_cast<double>(na)) * h[d];
+  if (dir.squaredNorm() == 0) return false;
+  normal = dir.normalized();
+  return true;
+}
+
+}  // namespace
+
+ContactResult find_contacts(const VolumeView<const uint32_t>& v, const ContactOptions& opt) {
+  const Geometry& g = v.geometry();
+  if (!g.has_voxel_size()) throw UsageError("contacts: the label volume has no voxel size (give --voxel-um)");
+  if (opt.threads < 0) throw UsageError("contacts: threads must be >= 0");
+  if (opt.max_gap_voxels < 0 || opt.max_gap_voxels > kMaxRun)
+    throw UsageError("contacts: max_gap_voxels must be in 0..3, got " + std::to_string(opt.max_gap_voxels));
+  if (!(opt.normal_radius_voxels >= 2 && opt.normal_radius_voxels <= 64))
+    throw UsageError("contacts: normal_radius_voxels must be in [2, 64], got " + std::to_string(opt.normal_radius_voxels));
+  const int nt = opt.threads > 0 ? opt.threads : omp_get_max_threads();
+  const auto pairs = crossings(v, nt, opt.max_gap_voxels);
+
+  const auto& h = g.voxel_size_m;
+  const Eigen::Vector3d hv(h[0], h[1], h[2]);
+  const double face[3] = {h[1] * h[2], h[0] * h[2], h[0] * h[1]};
+
+  std::vector<Contact> found(pairs.size());
+  std::vector<char> keep(pairs.size(), 0);
+  const int64_t np = static_cast<int64_t>(pairs.size());
+#pragma omp parallel for schedule(static) num_threads(nt)
+  for (int64_t p = 0; p < np; ++p) {
+    const auto& [key, agg] = pairs[static_cast<size_t>(p)];
+    Contact c;
+    c.a = static_cast<uint32_t>(key >> 32);
+    c.b = static_cast<uint32_t>(key & 0xffffffffu);
+    c.face_to_face = agg.n[0][0] + agg.n[1][0] + agg.n[2][0] > 0;
+    // Step 2: provisional point from every crossing kept for this pair.
+    const int cap0 = c.face_to_face ? 0 : opt.max_gap_voxels;
+    Eigen::Vector3d m = Eigen::Vector3d::Zero();
+    int64_t cnt = 0;
+    for (int ax = 0; ax < 3; ++ax) {
+      Eigen::Vector3d ma;
+      int64_t ca = 0;
+      if (mean_midpoint(agg, ax, cap0, ma, ca)) {
+        m += ma * static_cast<double>(ca);
+        cnt += ca;
+      }
+    }
+    m /= static_cast<double>(cnt);
+    // Step 3: normal from the ball around the provisional point. (Taking the
+    // ball again around the final point of step 6 was tried: worse, median
+    // error 2.3 deg instead of 1.4 with one-sided lines, since that point
+    // leans into the side that holds the line.)
+    if (!ball_normal(v, m, c, opt.normal_radius_voxels, c.normal)) continue;
+    // Steps 4-6: counting axis (most crossings per area first), cap, area, point.
+    std::array<int, 3> order{0, 1, 2};
+    const Eigen::Vector3d w = c.normal.cwiseAbs().cwiseProduct(hv);
+    std::stable_sort(order.begin(), order.end(), [&](int x, int y) { return w[x] > w[y]; });
+    for (int ax : order) {
+      if (w[ax] <= 0) break;
+      const int cap = c.face_to_face ? 0 : std::clamp(static_cast<int>(std::ceil(w.sum() / w[ax] - 0.05)), 1, opt.max_gap_voxels);
+      Eigen::Vector3d mid;
+      int64_t count = 0;
+      if (!mean_midpoint(agg, ax, cap, mid, count)) continue;
+      c.axis = ax;
+      c.crossings = count;
+      c.area_m2 = static_cast<double>(count) * face[ax] / std::abs(c.normal[ax]);
+      for (int d = 0; d < 3; ++d) c.point_m[d] = g.origin_m[d] + (mid[d] + 0.5) * h[d];
+      keep[static_cast<size_t>(p)] = 1;
+      break;
+    }
+    found[static_cast<size_t>(p)] = c;
+  }
+  ContactResult r;
+  for (size_t p = 0; p < found.size(); ++p)
+    if (keep[p]) r.contacts.push_back(found[p]);
+  return r;
+}
+
+std::vector<int> coordination(std::span<const Contact> contacts, std::span<const uint32_t> labels) {
+  std::vector<uint32_t> sorted(labels.begin(), labels.end());
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<int> count(sorted.size(), 0);
+  auto bump = [&](uint32_t l) {
+    auto it = std::lower_bound(sorted.begin(), sorted.end(), l);
+    if (it != sorted.end() && *it == l) ++count[static_cast<size_t>(it - sorted.begin())];
+  };
+  for (const auto& c : contacts) {
+    bump(c.a);
+    bump(c.b);
+  }
+  std::vector<int> out(labels.size());
+  for (size_t n = 0; n < labels.size(); ++n)
+    out[n] = count[static_cast<size_t>(std::lower_bound(sorted.begin(), sorted.end(), labels[n]) - sorted.begin())];
+  return out;
+}
+
+Fabric fabric(std::span<const Eigen::Vector3d> normals) {
+  Fabric f;
+  f.contacts = static_cast<int64_t>(normals.size());
+  if (normals.empty()) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    f.N.setConstant(nan);
+    f.deviator.setConstant(nan);
+    f.F.setConstant(nan);
+    f.anisotropy = nan;
+    f.eigenvalues.setConstant(nan);
+    f.major_axis.setConstant(nan);
+    return f;
+  }
+  for (const auto& n : normals) f.N += n * n.transpose();
+  f.N /= static_cast<double>(normals.size());
+  f.deviator = f.N - Eigen::Matrix3d::Identity() * (f.N.trace() / 3.0);
+  f.F = 7.5 * f.deviator;
+  f.anisotropy = std::sqrt(1.5 * (f.F.array() * f.F.array()).sum());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(f.N);
+  f.eigenvalues = es.eigenvalues().reverse();
+  f.major_axis = es.eigenvectors().col(2);
+  return f;
+}
+
+}  // namespace tg::measure

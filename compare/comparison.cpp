@@ -54,6 +54,10 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
 
   Report rep;
   rep.dir = out;
+  // The experiment's grains tracked stage to stage (track/): each stage's
+  // labels go to the tracker once measured; it keeps only the previous one.
+  std::optional<track::Tracker> tracker;
+  if (opt.track && in.xct.size() >= 2) tracker.emplace(opt.tracking);
   std::vector<XctStage> xs;
   std::vector<Series> ideal(in.xct.size()), imaged(in.xct.size());
   for (size_t n = 0; n < in.xct.size(); ++n) {
@@ -61,6 +65,18 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
     const std::string stem = "stage" + std::to_string(n);
     XctStage x = load_xct_stage(in.xct[n], opt, scale0.median_radius_m, out / "slices", stem);
     if (!in.xct_strains.empty()) x.strain = in.xct_strains[n];
+    if (tracker && x.labels.empty()) {
+      tracker.reset();
+      rep.tracking_note = in.xct[n] + " is a particle table: no labels to track";
+    }
+    if (tracker) {
+      try {
+        tracker->add_stage(std::move(x.labels), in.xct[n]);
+      } catch (const InputError& e) {  // the report goes on without a lineage, and says why
+        tracker.reset();
+        rep.tracking_note = std::string("tracking stopped: ") + e.what();
+      }
+    }
     const size_t m = match_snapshot(dem.strains, x.strain, n);
     const double vox_m = opt.voxel_um > 0 ? opt.voxel_um * 1e-6 : x.geometry.voxel_size_m[0];
     if (!(vox_m > 0)) throw UsageError("compare: " + in.xct[n] + " has no voxel size: give --voxel-um");
@@ -95,6 +111,11 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
     xs.push_back(std::move(x));
   }
 
+  if (tracker) {
+    rep.tracking = tracker->result();
+    track::write_outputs(*rep.tracking, (out / "tracking").string());
+  }
+
   // One grading for every series, on sieves common to all of them; Br against each series' first stage.
   const size_t nseries = opt.imaged_path ? 3 : 2;
   auto series_of = [&](size_t n, size_t k) -> Series& { return k == 0 ? xs[n].s : k == 1 ? ideal[n] : imaged[n]; };
@@ -112,7 +133,11 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
     rep.stages[n].experiment = xs[n].s.metrics;
     rep.stages[n].ideal = ideal[n].metrics;
     rep.stages[n].imaged = imaged[n].metrics;
-    if (!std::isfinite(xs[n].s.broken_fraction)) {  // no truth: the particle count's growth against stage 0
+    if (std::isfinite(xs[n].s.broken_fraction)) continue;  // synthetic truth
+    if (rep.tracking) {  // the lineage: stage-0 grains with a breakage event in their chain
+      xs[n].s.broken_fraction = rep.tracking->summary[n].pct_intact_broken / 100;
+      xs[n].s.broken_method = "tracking (track/): stage-0 grains with a breakage event in their lineage";
+    } else {  // the particle count's growth against stage 0
       xs[n].s.broken_fraction = count_growth_fraction(static_cast<int64_t>(xs[n].s.sample.size_mm.size()),
                                                       static_cast<int64_t>(xs[0].s.sample.size_mm.size()));
       xs[n].s.broken_method = "particle count growth against stage 0 (one extra particle per break)";
@@ -136,6 +161,7 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
   meta["dem_snapshots"] = dem.snapshots;
   meta["sizing"] = measure::sizing_name(opt.measure);
   meta["imaged_path"] = opt.imaged_path;
+  meta["tracking"] = rep.tracking ? json("tracking/ (lineage.csv, events.csv, summary.csv)") : json(rep.tracking_note);
   meta["segmentation_grain_radius_m"] = opt.grain_radius_vox > 0 ? json(nullptr) : json(scale0.median_radius_m);
   rep.seconds = seconds_since(t_all);
   meta["compute_seconds"] = rep.seconds;

@@ -22,7 +22,9 @@
 //
 // Report folder (every number behind every plot is a CSV/JSON file there):
 //   report.json         metadata, stages, options, imaging estimates, timings
-//   summary.csv         stage, series, strain, particles, D10/D50/D60/Cu, Br, broken fraction
+//   summary.csv         stage, series, strain, particles, D10/D50/D60/Cu, Br, broken fraction,
+//                       mean coordination of interior particles (contacts from the labels)
+//   tracking/           the experiment's lineage, events, summary (track/), with >= 2 volumes
 //   psd.csv             stage, series, sieve_mm, passing_pct
 //   shape_classes.csv   stage, series, metric (fr|ar), class, percent
 //   distances.csv       stage, pair, psd_ks, psd_w1_mm, fr_ks, fr_w1, ar_ks, ar_w1
@@ -43,6 +45,7 @@
 //   // r.index_html is the page; r.stages[i].ideal_vs_imaged the segmentation bias
 #pragma once
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,6 +55,7 @@
 #include "measure/grading.hpp"
 #include "measure/particles.hpp"
 #include "segmentation/segment.hpp"
+#include "track/track.hpp"
 
 namespace tg::compare {
 
@@ -86,6 +90,8 @@ struct CompareOptions {
   SegmentOptions segment;     // shared by the experiment and dem_imaged (grain_radius_vox set as above)
   measure::ParticleOptions measure = default_measure();  // shared by all three series
   VoxeliseOptions voxelise;   // voxel_m and imaging are filled per stage
+  bool track = true;          // track grains through the XCT stages (track/) when they are volumes
+  track::TrackOptions tracking;
   bool plots = true;          // run the plotting script (index.html + PNGs)
   std::string python = "/usr/bin/python3";  // Debian's, with python3-matplotlib
   std::string script;         // default: $TOMOGRAIN_REPORT_SCRIPT, else the source tree's
@@ -93,6 +99,8 @@ struct CompareOptions {
   static measure::ParticleOptions default_measure() {
     measure::ParticleOptions p;
     p.oriented_box = false;   // Feret sizing is what is compared; the CGAL box is not needed
+    p.contacts = true;        // coordination of the experiment beside the DEM's (ideal: its true contacts
+                              // as voxelised; imaged: with the segmentation's bias)
     return p;
   }
 };
@@ -111,6 +119,8 @@ struct StageReport {
 struct Report {
   std::filesystem::path dir, index_html;  // index_html empty when plots are off
   std::vector<StageReport> stages;
+  std::optional<track::TrackResult> tracking;  // the experiment's lineage (REPORT/tracking/), when tracked
+  std::string tracking_note;                   // why there is none, when tracking was asked for
   std::vector<double> sieves_mm;
   double seconds = 0;
 };

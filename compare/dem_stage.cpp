@@ -63,6 +63,7 @@ DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth
   d.particles = static_cast<int64_t>(v.particle_of_label.size()) - 1;
   d.ideal.particles = measure_labels(v.labels, opt.measure);
   d.ideal.sample = measure::grading_sample(d.ideal.particles);
+  d.ideal.coordination = mean_interior_coordination(d.ideal.particles);
   write_mid_slices(v.labels, slices, stem + "_dem_ideal_labels");
   if (opt.imaged_path) {
     write_mid_slices(v.grey, slices, stem + "_dem_grey");
@@ -71,6 +72,7 @@ DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth
     write_mid_slices(r.labels, slices, stem + "_dem_imaged_labels");
     d.imaged.particles = measure_labels(r.labels, opt.measure);
     d.imaged.sample = measure::grading_sample(d.imaged.particles);
+    d.imaged.coordination = mean_interior_coordination(d.imaged.particles);
   }
   d.ideal.info["voxelise"] = {{"snapshot", snapshot},
                               {"voxel_um", voxel_m * 1e6},

@@ -80,130 +80,51 @@ void write_report_tables(const fs::path& out, const ReportData& d) {
   const auto& sv = rep.sieves_mm;
   const auto fr_names = measure::class_labels(measure::fr_thresholds());
   const auto ar_names = measure::class_labels(measure::ar_thresholds());
-  std::vector<std::string> c_stage, c_series, c_method;
-  std::vector<double> c_strain, c_n, c_d10, c_d50, c_d60, c_cu, c_br, c_bf;
-  std::vector<std::string> p_stage, p_series;
-  std::vector<double> p_sieve, p_pass;
-  std::vector<std::string> h_stage, h_series, h_metric, h_class;
-  std::vector<double> h_pct;
-  std::vector<std::string> b_series;
-  std::vector<double> b_strain, b_frac;
+  RowTable sum({"stage", "series", "axial_strain", "particles", "d10_mm", "d50_mm", "d60_mm", "cu", "hardin_br",
+                "broken_fraction", "broken_method", "coordination_interior"});
+  RowTable psd({"stage", "series", "sieve_mm", "passing_pct"});
+  RowTable cls({"stage", "series", "metric", "class", "percent"});
+  RowTable broken({"series", "axial_strain", "broken_fraction"});
   for (size_t n = 0; n < rep.stages.size(); ++n)
     for (int k = 0; k < 3; ++k) {
       if (!d.series[n][static_cast<size_t>(k)]) continue;
       const Series& s = *d.series[n][static_cast<size_t>(k)];
       const std::string& st = rep.stages[n].name;
+      const char* series = kSeriesNames[k];
       const double e = k == 0 ? rep.stages[n].xct_strain : rep.stages[n].dem_strain;
-      c_stage.push_back(st);
-      c_series.push_back(kSeriesNames[k]);
-      c_method.push_back(s.broken_method);
-      c_strain.push_back(e);
-      c_n.push_back(static_cast<double>(s.metrics.particles));
-      c_d10.push_back(s.metrics.d.d10);
-      c_d50.push_back(s.metrics.d.d50);
-      c_d60.push_back(s.metrics.d.d60);
-      c_cu.push_back(s.metrics.d.cu);
-      c_br.push_back(s.metrics.hardin_br);
-      c_bf.push_back(s.broken_fraction);
-      for (size_t q = 0; q < sv.size(); ++q) {
-        p_stage.push_back(st);
-        p_series.push_back(kSeriesNames[k]);
-        p_sieve.push_back(sv[q]);
-        p_pass.push_back(s.metrics.passing[q]);
-      }
-      const auto add_classes = [&](const char* metric, const std::vector<std::string>& names,
-                                   const std::vector<double>& pct) {
-        for (size_t q = 0; q < pct.size(); ++q) {
-          h_stage.push_back(st);
-          h_series.push_back(kSeriesNames[k]);
-          h_metric.push_back(metric);
-          h_class.push_back(names[q]);
-          h_pct.push_back(pct[q]);
-        }
-      };
-      add_classes("fr", fr_names, s.metrics.fr_classes);
-      add_classes("ar", ar_names, s.metrics.ar_classes);
-      if (k != 2) {  // broken fraction: one point per stage for experiment and DEM
-        b_series.push_back(k == 0 ? "experiment" : "dem");
-        b_strain.push_back(e);
-        b_frac.push_back(s.broken_fraction);
-      }
+      const measure::StageGrading& m = s.metrics;
+      sum.row({st, series, e, m.particles, m.d.d10, m.d.d50, m.d.d60, m.d.cu, m.hardin_br, s.broken_fraction,
+               s.broken_method, s.coordination});
+      for (size_t q = 0; q < sv.size(); ++q) psd.row({st, series, sv[q], m.passing[q]});
+      for (size_t q = 0; q < m.fr_classes.size(); ++q) cls.row({st, series, "fr", fr_names[q], m.fr_classes[q]});
+      for (size_t q = 0; q < m.ar_classes.size(); ++q) cls.row({st, series, "ar", ar_names[q], m.ar_classes[q]});
+      if (k != 2) broken.row({k == 0 ? "experiment" : "dem", e, s.broken_fraction});  // one point per stage
     }
-  Table sum;
-  sum.add_text("stage", c_stage);
-  sum.add_text("series", c_series);
-  sum.add("axial_strain", c_strain);
-  sum.add("particles", c_n);
-  sum.add("d10_mm", c_d10);
-  sum.add("d50_mm", c_d50);
-  sum.add("d60_mm", c_d60);
-  sum.add("cu", c_cu);
-  sum.add("hardin_br", c_br);
-  sum.add("broken_fraction", c_bf);
-  sum.add_text("broken_method", c_method);
-  write_csv(sum, out / "summary.csv");
-  Table psd;
-  psd.add_text("stage", p_stage);
-  psd.add_text("series", p_series);
-  psd.add("sieve_mm", p_sieve);
-  psd.add("passing_pct", p_pass);
-  write_csv(psd, out / "psd.csv");
-  Table cls;
-  cls.add_text("stage", h_stage);
-  cls.add_text("series", h_series);
-  cls.add_text("metric", h_metric);
-  cls.add_text("class", h_class);
-  cls.add("percent", h_pct);
-  write_csv(cls, out / "shape_classes.csv");
+  write_csv(sum.table(), out / "summary.csv");
+  write_csv(psd.table(), out / "psd.csv");
+  write_csv(cls.table(), out / "shape_classes.csv");
 
-  std::vector<std::string> d_stage, d_pair;
-  std::vector<double> dv[6];
+  RowTable dist({"stage", "pair", "psd_ks", "psd_w1_mm", "fr_ks", "fr_w1", "ar_ks", "ar_w1"});
   for (const StageReport& st : rep.stages) {
     const std::pair<const char*, const Distances*> pairs[3] = {{"experiment_vs_dem_imaged", &st.exp_vs_imaged},
                                                                {"experiment_vs_dem_ideal", &st.exp_vs_ideal},
                                                                {"dem_ideal_vs_dem_imaged", &st.ideal_vs_imaged}};
-    for (const auto& [name, ds] : pairs) {
-      d_stage.push_back(st.name);
-      d_pair.push_back(name);
-      const double vals[6] = {ds->psd_ks, ds->psd_w1_mm, ds->fr_ks, ds->fr_w1, ds->ar_ks, ds->ar_w1};
-      for (int q = 0; q < 6; ++q) dv[q].push_back(vals[q]);
-    }
+    for (const auto& [name, ds] : pairs)
+      dist.row({st.name, name, ds->psd_ks, ds->psd_w1_mm, ds->fr_ks, ds->fr_w1, ds->ar_ks, ds->ar_w1});
   }
-  Table dist;
-  dist.add_text("stage", d_stage);
-  dist.add_text("pair", d_pair);
-  const char* dn[6] = {"psd_ks", "psd_w1_mm", "fr_ks", "fr_w1", "ar_ks", "ar_w1"};
-  for (int q = 0; q < 6; ++q) dist.add(dn[q], dv[q]);
-  write_csv(dist, out / "distances.csv");
+  write_csv(dist.table(), out / "distances.csv");
 
-  std::vector<std::string> s_series;
-  std::vector<double> s_strain, s_stress;
+  RowTable ss({"series", "axial_strain", "stress_mpa"});
   const Curve& hist = d.history;
   for (size_t q = 0; q < hist.strain.size(); ++q) {
-    s_series.push_back("dem");
-    s_strain.push_back(hist.strain[q]);
-    s_stress.push_back(hist.stress_mpa[q]);
-    if (!hist.broken.empty()) {
-      b_series.push_back("dem_history");
-      b_strain.push_back(hist.strain[q]);
-      b_frac.push_back(hist.broken[q] / static_cast<double>(d.initial_dem_particles));
-    }
+    ss.row({"dem", hist.strain[q], hist.stress_mpa[q]});
+    if (!hist.broken.empty())
+      broken.row({"dem_history", hist.strain[q], hist.broken[q] / static_cast<double>(d.initial_dem_particles)});
   }
-  for (size_t q = 0; q < d.experiment_curve.strain.size(); ++q) {
-    s_series.push_back("experiment");
-    s_strain.push_back(d.experiment_curve.strain[q]);
-    s_stress.push_back(d.experiment_curve.stress_mpa[q]);
-  }
-  Table ss;
-  ss.add_text("series", s_series);
-  ss.add("axial_strain", s_strain);
-  ss.add("stress_mpa", s_stress);
-  write_csv(ss, out / "stress_strain.csv");
-  Table br;
-  br.add_text("series", b_series);
-  br.add("axial_strain", b_strain);
-  br.add("broken_fraction", b_frac);
-  write_csv(br, out / "broken.csv");
+  for (size_t q = 0; q < d.experiment_curve.strain.size(); ++q)
+    ss.row({"experiment", d.experiment_curve.strain[q], d.experiment_curve.stress_mpa[q]});
+  write_csv(ss.table(), out / "stress_strain.csv");
+  write_csv(broken.table(), out / "broken.csv");
 }
 
 void write_report_json(const fs::path& out, const ReportData& d, json meta) {

@@ -19,12 +19,26 @@ struct Series {
   measure::StageGrading metrics;    // filled once every stage is measured (common sieves)
   double broken_fraction = std::numeric_limits<double>::quiet_NaN();
   std::string broken_method;        // how broken_fraction was obtained, shown in the report
+  double coordination = std::numeric_limits<double>::quiet_NaN();  // mean over interior particles
   nlohmann::json info = nlohmann::json::object();  // provenance for report.json
 };
 
 // The particle table of a label volume (measure/particles.hpp).
 inline Table measure_labels(const Volume<uint32_t>& labels, const measure::ParticleOptions& po) {
   return measure::particle_table(measure::measure_particles(labels.view(), po));
+}
+
+// Mean coordination (measure/contacts.hpp, from the labels) of the particles
+// that do not touch the volume's border (their neighbours outside are
+// unseen); NaN without a coordination column or interior particle.
+inline double mean_interior_coordination(const Table& t) {
+  if (!t.has("coordination") || !t.has("touches_border")) return std::numeric_limits<double>::quiet_NaN();
+  const auto &z = t.num("coordination"), &b = t.num("touches_border");
+  double sum = 0;
+  int64_t n = 0;
+  for (int64_t q = 0; q < t.rows(); ++q)
+    if (b[q] == 0 && z[q] >= 0) sum += z[q], ++n;
+  return n ? sum / static_cast<double>(n) : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace tg::compare

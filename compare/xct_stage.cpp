@@ -84,9 +84,11 @@ XctStage load_xct_stage(const std::string& path, const CompareOptions& opt, doub
     }
     write_mid_slices(labels, slices, stem + "_experiment_labels");
     x.s.particles = measure_labels(labels, opt.measure);
+    x.labels = std::move(labels);
   }
   x.s.particles.source = path;
   x.s.sample = measure::grading_sample(x.s.particles);
+  x.s.coordination = mean_interior_coordination(x.s.particles);
   return x;
 }
 

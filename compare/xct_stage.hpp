@@ -20,6 +20,7 @@ struct XctStage {
   bool synthetic = false;
   Geometry geometry;  // voxel size unknown (0) for particle-table inputs
   std::optional<GreyEstimate> grey;
+  Volume<uint32_t> labels;  // the stage's labels (segmented or read), for tracking; empty for tables
 };
 
 // The segmentation options both worlds share at one voxel size: the scale is

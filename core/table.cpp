@@ -46,6 +46,30 @@ const std::vector<std::string>& Table::text(const std::string& name) const {
   return cols_[c].text;
 }
 
+void RowTable::row(std::initializer_list<Cell> cells) {
+  if (cells.size() != names_.size())
+    throw UsageError("table row has " + std::to_string(cells.size()) + " values for " + std::to_string(names_.size()) +
+                     " columns");
+  size_t c = 0;
+  for (const Cell& v : cells) {
+    Column& col = cols_[c++];
+    if (rows_ == 0) col.is_text = v.is_text;
+    if (v.is_text != col.is_text) throw UsageError("column '" + names_[c - 1] + "' mixes text and numbers");
+    if (v.is_text) col.text.push_back(v.text);
+    else col.num.push_back(v.num);
+  }
+  ++rows_;
+}
+
+Table RowTable::table() const {
+  Table t;
+  for (size_t c = 0; c < cols_.size(); ++c) {
+    if (cols_[c].is_text) t.add_text(names_[c], cols_[c].text);
+    else t.add(names_[c], cols_[c].num);
+  }
+  return t;
+}
+
 namespace {
 
 void append_number(std::string& out, double v) {

@@ -5,6 +5,7 @@
 #pragma once
 #include <cstdint>
 #include <filesystem>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,35 @@ class Table {
 
  private:
   std::vector<Column> cols_;
+};
+
+// A table built row by row: the columns named once, then one call a row with
+// the values in column order. A column is text when its first row's value is
+// text, numeric otherwise; later rows must agree (UsageError).
+//   RowTable t({"file", "step", "strain"});
+//   t.row({"a.h5", 10, 0.01});
+//   write_csv(t.table(), "index.csv");
+class RowTable {
+ public:
+  struct Cell {
+    Cell(double v) : num(v) {}
+    Cell(int v) : num(v) {}
+    Cell(int64_t v) : num(static_cast<double>(v)) {}
+    Cell(size_t v) : num(static_cast<double>(v)) {}
+    Cell(std::string v) : text(std::move(v)), is_text(true) {}
+    Cell(const char* v) : text(v), is_text(true) {}
+    double num = 0;
+    std::string text;
+    bool is_text = false;
+  };
+  explicit RowTable(std::vector<std::string> names) : names_(std::move(names)), cols_(names_.size()) {}
+  void row(std::initializer_list<Cell> cells);
+  Table table() const;
+
+ private:
+  std::vector<std::string> names_;
+  std::vector<Column> cols_;
+  int64_t rows_ = 0;
 };
 
 // Numbers are written in their shortest exact form (round-trip safe).

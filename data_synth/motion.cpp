@@ -197,8 +197,7 @@ std::vector<SeriesParticle> oedometer_stage(const std::vector<Particle>& grains,
 
 Table lineage_truth(const std::vector<std::vector<SeriesParticle>>& stages, const std::vector<Table>& truth_tables) {
   if (stages.size() != truth_tables.size()) throw UsageError("lineage_truth: one truth table per stage");
-  std::vector<double> stage, label, parent, grain, vol, cz, cy, cx;
-  std::vector<std::string> event;
+  RowTable out({"stage", "label", "parent_label", "grain", "event", "volume_vox", "cz_vox", "cy_vox", "cx_vox"});
   std::unordered_map<uint32_t, uint32_t> prev_grain;  // present at the previous stage: id -> grain
   for (size_t s = 0; s < stages.size(); ++s) {
     const Table& t = truth_tables[s];
@@ -221,27 +220,12 @@ Table lineage_truth(const std::vector<std::vector<SeriesParticle>>& stages, cons
         gr = prev_grain.at(par);
       }
       now[sp.particle.id] = gr;
-      stage.push_back(static_cast<double>(s));
-      label.push_back(sp.particle.id);
-      parent.push_back(par);
-      grain.push_back(gr);
-      event.push_back(ev);
-      vol.push_back(lv[q]);
-      cz.push_back(z[q]), cy.push_back(y[q]), cx.push_back(x[q]);
+      out.row({s, static_cast<int64_t>(sp.particle.id), static_cast<int64_t>(par), static_cast<int64_t>(gr), ev, lv[q],
+               z[q], y[q], x[q]});
     }
     prev_grain = std::move(now);
   }
-  Table out;
-  out.add("stage", stage);
-  out.add("label", label);
-  out.add("parent_label", parent);
-  out.add("grain", grain);
-  out.add_text("event", event);
-  out.add("volume_vox", vol);
-  out.add("cz_vox", cz);
-  out.add("cy_vox", cy);
-  out.add("cx_vox", cx);
-  return out;
+  return out.table();
 }
 
 }  // namespace tg::synth

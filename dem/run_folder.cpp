@@ -48,60 +48,27 @@ void HistoryTable::read_until(const fs::path& path, int64_t step) {
 }
 
 void write_bonds_csv(const breakage::BreakageModel& brk, const fs::path& path) {
-  std::vector<double> a, b, fn, fs_, mt, mb;
+  RowTable t({"sphere_a", "sphere_b", "normal_force_N", "shear_force_N", "twist_moment_Nm", "bending_moment_Nm"});
   for (int64_t k = 0; k < brk.bond_count(); ++k) {
     const breakage::BondState& st = brk.bond_state(k);
-    a.push_back(static_cast<double>(brk.bond_a(k)));
-    b.push_back(static_cast<double>(brk.bond_b(k)));
-    fn.push_back(st.fn);
-    fs_.push_back(norm(st.fs));
-    mt.push_back(st.mt);
-    mb.push_back(norm(st.mb));
+    t.row({brk.bond_a(k), brk.bond_b(k), st.fn, norm(st.fs), st.mt, norm(st.mb)});
   }
-  Table t;
-  t.add("sphere_a", a);
-  t.add("sphere_b", b);
-  t.add("normal_force_N", fn);
-  t.add("shear_force_N", fs_);
-  t.add("twist_moment_Nm", mt);
-  t.add("bending_moment_Nm", mb);
-  write_csv(t, path);
+  write_csv(t.table(), path);
 }
 
 void write_splits_csv(const std::vector<breakage::SplitEvent>& events, const fs::path& path) {
-  Table t;
-  std::vector<double> cols[11];
-  for (const breakage::SplitEvent& ev : events) {
-    const double v[11] = {static_cast<double>(ev.step), ev.time_s, static_cast<double>(ev.generation), ev.diameter_m,
-                          ev.position.x, ev.position.y, ev.position.z, ev.f_max_N, ev.stress_Pa, ev.strength_Pa,
-                          ev.volume_retained_m3};
-    for (int k = 0; k < 11; ++k) cols[k].push_back(v[k]);
-  }
-  const char* names[11] = {"step", "time_s", "generation", "diameter_m", "x_m", "y_m", "z_m", "f_max_N", "stress_Pa",
-                           "strength_Pa", "volume_retained_m3"};
-  for (int k = 0; k < 11; ++k) t.add(names[k], cols[k]);
-  write_csv(t, path);
+  RowTable t({"step", "time_s", "generation", "diameter_m", "x_m", "y_m", "z_m", "f_max_N", "stress_Pa", "strength_Pa",
+              "volume_retained_m3"});
+  for (const breakage::SplitEvent& ev : events)
+    t.row({ev.step, ev.time_s, ev.generation, ev.diameter_m, ev.position.x, ev.position.y, ev.position.z, ev.f_max_N,
+           ev.stress_Pa, ev.strength_Pa, ev.volume_retained_m3});
+  write_csv(t.table(), path);
 }
 
 void write_snapshot_index(const fs::path& rundir, const std::vector<SnapshotEntry>& entries) {
-  std::vector<std::string> file, bonds;
-  std::vector<double> step, time, strain, requested;
-  for (const SnapshotEntry& e : entries) {
-    file.push_back(e.file);
-    step.push_back(static_cast<double>(e.step));
-    time.push_back(e.time_s);
-    strain.push_back(e.axial_strain);
-    requested.push_back(e.requested_strain);
-    bonds.push_back(e.bonds);
-  }
-  Table t;
-  t.add_text("file", file);
-  t.add("step", step);
-  t.add("time_s", time);
-  t.add("axial_strain", strain);
-  t.add("requested_strain", requested);
-  t.add_text("bonds", bonds);
-  write_csv(t, rundir / "snapshots.csv");
+  RowTable t({"file", "step", "time_s", "axial_strain", "requested_strain", "bonds"});
+  for (const SnapshotEntry& e : entries) t.row({e.file, e.step, e.time_s, e.axial_strain, e.requested_strain, e.bonds});
+  write_csv(t.table(), rundir / "snapshots.csv");
 }
 
 std::vector<SnapshotEntry> read_snapshot_index(const fs::path& rundir, int64_t max_step) {

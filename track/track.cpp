@@ -452,65 +452,27 @@ TrackResult track_files(const std::vector<std::string>& paths, const TrackOption
 }
 
 Table lineage_table(const TrackResult& r) {
-  Table t;
-  const size_t n = r.lineage.size();
-  std::vector<double> stage(n), label(n), parent(n), grain(n), vol(n), cz(n), cy(n), cx(n), dz(n), dy(n), dx(n), q(n), b(n);
-  std::vector<std::string> ev(n);
-  for (size_t i = 0; i < n; ++i) {
-    const auto& x = r.lineage[i];
-    stage[i] = x.stage, label[i] = x.label, parent[i] = x.parent_label, grain[i] = x.grain;
-    ev[i] = event_name(x.event);
-    vol[i] = static_cast<double>(x.volume_vox);
-    cz[i] = x.centroid_vox[0], cy[i] = x.centroid_vox[1], cx[i] = x.centroid_vox[2];
-    dz[i] = x.displacement_vox[0], dy[i] = x.displacement_vox[1], dx[i] = x.displacement_vox[2];
-    q[i] = x.quality, b[i] = x.touches_border;
-  }
-  t.add("stage", stage);
-  t.add("label", label);
-  t.add("parent_label", parent);
-  t.add("grain", grain);
-  t.add_text("event", ev);
-  t.add("volume_vox", vol);
-  t.add("cz_vox", cz);
-  t.add("cy_vox", cy);
-  t.add("cx_vox", cx);
-  t.add("dz_vox", dz);
-  t.add("dy_vox", dy);
-  t.add("dx_vox", dx);
-  t.add("quality", q);
-  t.add("border", b);
-  return t;
+  RowTable t({"stage", "label", "parent_label", "grain", "event", "volume_vox", "cz_vox", "cy_vox", "cx_vox", "dz_vox",
+              "dy_vox", "dx_vox", "quality", "border"});
+  for (const LineageRow& x : r.lineage)
+    t.row({x.stage, static_cast<int64_t>(x.label), static_cast<int64_t>(x.parent_label), static_cast<int64_t>(x.grain),
+           event_name(x.event), x.volume_vox, x.centroid_vox[0], x.centroid_vox[1], x.centroid_vox[2],
+           x.displacement_vox[0], x.displacement_vox[1], x.displacement_vox[2], x.quality,
+           static_cast<int>(x.touches_border)});
+  return t.table();
 }
 
 Table events_table(const TrackResult& r) {
-  Table t;
-  const size_t n = r.events.size();
-  std::vector<double> stage(n), parent(n), grain(n), nkids(n), before(n), after(n), z(n), band(n);
-  std::vector<std::string> type(n), kids(n);
-  for (size_t i = 0; i < n; ++i) {
-    const auto& e = r.events[i];
-    stage[i] = e.stage, parent[i] = e.parent_label, grain[i] = e.grain;
-    type[i] = event_name(e.type);
-    nkids[i] = static_cast<double>(e.children.size());
-    for (size_t c = 0; c < e.children.size(); ++c) {
-      if (c) kids[i] += ';';
-      kids[i] += std::to_string(e.children[c]);
-    }
-    if (kids[i].empty()) kids[i] = "-";
-    before[i] = static_cast<double>(e.volume_before_vox), after[i] = static_cast<double>(e.volume_after_vox);
-    z[i] = e.parent_z_vox, band[i] = e.band;
+  RowTable t({"stage", "parent_label", "grain", "type", "children", "child_labels", "volume_before_vox",
+              "volume_after_vox", "cz_vox", "band"});
+  for (const EventRow& e : r.events) {
+    std::string kids;
+    for (size_t c = 0; c < e.children.size(); ++c) kids += (c ? ";" : "") + std::to_string(e.children[c]);
+    t.row({e.stage, static_cast<int64_t>(e.parent_label), static_cast<int64_t>(e.grain), event_name(e.type),
+           e.children.size(), kids.empty() ? "-" : kids, e.volume_before_vox, e.volume_after_vox, e.parent_z_vox,
+           e.band});
   }
-  t.add("stage", stage);
-  t.add("parent_label", parent);
-  t.add("grain", grain);
-  t.add_text("type", type);
-  t.add("children", nkids);
-  t.add_text("child_labels", kids);
-  t.add("volume_before_vox", before);
-  t.add("volume_after_vox", after);
-  t.add("cz_vox", z);
-  t.add("band", band);
-  return t;
+  return t.table();
 }
 
 Table summary_table(const TrackResult& r) {

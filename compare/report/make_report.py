@@ -264,10 +264,23 @@ def main():
           f"{st['seconds']:.1f}"] for st in stages]))
     parts.append("<h2>Gradings, breakage</h2>")
     parts.append(table(["stage", "series", "strain", "particles", "D10 (mm)", "D50 (mm)", "Cu", "Hardin Br",
-                        "broken", "broken from"],
+                        "broken", "broken from", "coordination (interior)"],
                        [[r["stage"], r["series"], fmt(r["axial_strain"]), r["particles"], fmt(r["d10_mm"]),
                          fmt(r["d50_mm"]), fmt(r["cu"]), fmt(r["hardin_br"]), fmt(r["broken_fraction"]),
-                         r["broken_method"]] for r in summary]))
+                         r["broken_method"], fmt(r.get("coordination_interior", ""))] for r in summary]))
+    track_csv = os.path.join(out, "tracking", "summary.csv")
+    if os.path.exists(track_csv):  # the experiment's lineage (track/): events by type, breakage by height fifth
+        trk = read_csv(track_csv)
+        parts.append("<h2>Tracking of the experiment's grains (events by type, breakage by height)</h2>")
+        parts.append(table(["stage", "particles", "intact grains broken (%)", "split", "fragmentation", "chipping",
+                            "chips", "lost", "new"] + [f"broken, fifth {b} (%)" for b in range(1, 6)],
+                           [[r["stage"], r["particles"], fmt(r["pct_intact_broken"]), r["split"], r["fragmentation"],
+                             r["chipping"], r["chips"], r["lost"], r["new"]]
+                            + [fmt(r[f"pct_broken_band{b}"]) for b in range(1, 6)] for r in trk]))
+        parts.append("<p>Fifths of the specimen's height, 1 = bottom platen, 5 = top (moving) platen; lineage, "
+                     "events and this table in <a href='tracking/'>tracking/</a>.</p>")
+    elif isinstance(meta.get("tracking"), str) and meta["tracking"]:
+        parts.append(f"<p>No tracking: {html.escape(meta['tracking'])}</p>")
     parts.append("<h2>Distances (Kolmogorov–Smirnov, Wasserstein-1)</h2>")
     parts.append(table(["stage", "pair", "PSD KS", "PSD W1 (mm)", "FR KS", "FR W1", "AR KS", "AR W1"],
                        [[r["stage"], r["pair"], fmt(r["psd_ks"]), fmt(r["psd_w1_mm"]), fmt(r["fr_ks"]),

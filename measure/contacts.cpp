@@ -1,5 +1,7 @@
 #include "measure/contacts.hpp"
 
+#include "measure/ball.hpp"
+
 #include <omp.h>
 
 #include <Eigen/Eigenvalues>
@@ -140,39 +142,18 @@ int line_sides(const VolumeView<const uint32_t>& v, int64_t k, int64_t j, int64_
 // for each. False when either side is empty.
 bool ball_normal(const VolumeView<const uint32_t>& v, const Eigen::Vector3d& m, const Contact& c, double radius,
                  Eigen::Vector3d& normal) {
-  const Shape s = v.shape();
   const auto& h = v.geometry().voxel_size_m;
   const double rho = radius * std::cbrt(h[0] * h[1] * h[2]);
   int64_t na = 0, nb = 0;
   std::array<int64_t, 3> sa{0, 0, 0}, sb{0, 0, 0};
-  int64_t lo[3], hi[3];
-  for (int d = 0; d < 3; ++d) {
-    const double r = rho / h[d];
-    const int64_t n = d == 0 ? s.nz : d == 1 ? s.ny : s.nx;
-    lo[d] = std::max<int64_t>(0, static_cast<int64_t>(std::ceil(m[d] - r)));
-    hi[d] = std::min<int64_t>(n - 1, static_cast<int64_t>(std::floor(m[d] + r)));
-  }
-  const double rho2 = rho * rho;
-  for (int64_t k = lo[0]; k <= hi[0]; ++k) {
-    const double dz = (static_cast<double>(k) - m[0]) * h[0];
-    for (int64_t j = lo[1]; j <= hi[1]; ++j) {
-      const double dy = (static_cast<double>(j) - m[1]) * h[1];
-      const double rem = rho2 - dz * dz - dy * dy;
-      if (rem < 0) continue;
-      const double r = std::sqrt(rem) / h[2];
-      const int64_t i0 = std::max(lo[2], static_cast<int64_t>(std::ceil(m[2] - r)));
-      const int64_t i1 = std::min(hi[2], static_cast<int64_t>(std::floor(m[2] + r)));
-      const uint32_t* row = v.row(k, j).data();
-      for (int64_t i = i0; i <= i1; ++i) {
-        const uint32_t l = row[i];
-        int side = l == c.a ? 2 : l == c.b ? 1 : 0;  // bit 1: a, bit 0: b
-        if (l == 0 && !c.face_to_face) side = line_sides(v, k, j, i, c.a, c.b);
-        const int64_t w = side == 3 ? 1 : 2;  // weights in halves
-        if (side & 2) { na += w; sa[0] += w * k; sa[1] += w * j; sa[2] += w * i; }
-        if (side & 1) { nb += w; sb[0] += w * k; sb[1] += w * j; sb[2] += w * i; }
-      }
-    }
-  }
+  const double centre[3] = {m[0], m[1], m[2]};
+  for_each_voxel_in_ball(v, centre, rho, [&](int64_t k, int64_t j, int64_t i, double, double, double, uint32_t l) {
+    int side = l == c.a ? 2 : l == c.b ? 1 : 0;  // bit 1: a, bit 0: b
+    if (l == 0 && !c.face_to_face) side = line_sides(v, k, j, i, c.a, c.b);
+    const int64_t w = side == 3 ? 1 : 2;  // weights in halves
+    if (side & 2) { na += w; sa[0] += w * k; sa[1] += w * j; sa[2] += w * i; }
+    if (side & 1) { nb += w; sb[0] += w * k; sb[1] += w * j; sb[2] += w * i; }
+  });
   if (na == 0 || nb == 0) return false;
   Eigen::Vector3d dir;
   for (int d = 0; d < 3; ++d)

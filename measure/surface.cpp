@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "core/errors.hpp"
+#include "measure/ball.hpp"
 
 namespace tg::measure {
 
@@ -13,12 +14,10 @@ double surface_area(const VolumeView<const uint32_t>& v, uint32_t label, std::sp
                     const SurfaceOptions& opt) {
   if (!(opt.normal_radius_voxels >= 1 && opt.normal_radius_voxels <= 16))
     throw UsageError("surface: normal_radius_voxels must be in [1, 16], got " + std::to_string(opt.normal_radius_voxels));
-  const Shape s = v.shape();
   const auto& h = v.geometry().voxel_size_m;
   const double face[3] = {h[1] * h[2], h[0] * h[2], h[0] * h[1]};
   const double rho = opt.normal_radius_voxels * std::cbrt(h[0] * h[1] * h[2]);
   const double rho2 = rho * rho;
-  const int64_t n[3] = {s.nz, s.ny, s.nx};
   double area = 0;
   for (const auto& sv : surface) {
     const int64_t p[3] = {sv.k, sv.j, sv.i};
@@ -28,35 +27,16 @@ double surface_area(const VolumeView<const uint32_t>& v, uint32_t label, std::sp
       const double sign = f % 2 ? 0.5 : -0.5;
       double m[3] = {static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2])};
       m[ax] += sign;  // the face centre, voxel index space (centres at integers)
-      int64_t lo[3], hi[3];
-      for (int d = 0; d < 3; ++d) {
-        const double r = rho / h[d];
-        lo[d] = std::max<int64_t>(0, static_cast<int64_t>(std::ceil(m[d] - r)));
-        hi[d] = std::min<int64_t>(n[d] - 1, static_cast<int64_t>(std::floor(m[d] + r)));
-      }
       // Weighted centroid of the particle's voxels, smooth weights
       // (1 - r^2/rho^2)^2: a hard ball's discrete shells made the estimate
       // jump with the radius (sphere area -2.4 % at 3.75 voxels, +1 % at 4).
       double sw = 0, cz = 0, cy = 0, cx = 0;
-      for (int64_t k = lo[0]; k <= hi[0]; ++k) {
-        const double dz = (static_cast<double>(k) - m[0]) * h[0];
-        for (int64_t j = lo[1]; j <= hi[1]; ++j) {
-          const double dy = (static_cast<double>(j) - m[1]) * h[1];
-          const double rem = rho2 - dz * dz - dy * dy;
-          if (rem < 0) continue;
-          const double r = std::sqrt(rem) / h[2];
-          const int64_t i0 = std::max(lo[2], static_cast<int64_t>(std::ceil(m[2] - r)));
-          const int64_t i1 = std::min(hi[2], static_cast<int64_t>(std::floor(m[2] + r)));
-          const uint32_t* row = v.row(k, j).data();
-          for (int64_t i = i0; i <= i1; ++i) {
-            if (row[i] != label) continue;
-            const double dx = (static_cast<double>(i) - m[2]) * h[2];
-            const double q = 1.0 - (dz * dz + dy * dy + dx * dx) / rho2;
-            const double wt = q * q;
-            sw += wt; cz += wt * dz; cy += wt * dy; cx += wt * dx;
-          }
-        }
-      }
+      for_each_voxel_in_ball(v, m, rho, [&](int64_t, int64_t, int64_t, double dz, double dy, double dx, uint32_t l) {
+        if (l != label) return;
+        const double q = 1.0 - (dz * dz + dy * dy + dx * dx) / rho2;
+        const double wt = q * q;
+        sw += wt; cz += wt * dz; cy += wt * dy; cx += wt * dx;
+      });
       double w = 1.0;  // an empty ball cannot happen (the face's own voxel is inside it); keep the face
       if (sw > 0) {
         const double nz = -cz, ny = -cy, nx = -cx;  // from the centroid to the centre

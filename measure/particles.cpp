@@ -55,6 +55,9 @@ std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels
     throw UsageError("Feret orientations must be >= 3 (or exact), got " + std::to_string(opt.feret_directions));
   if (opt.sizing == Sizing::obb && !opt.oriented_box)
     throw UsageError("sizing = obb needs the oriented box");
+  // Checked here, not in the parallel loop below: an exception cannot leave an OpenMP region.
+  if (!(opt.face_offset > 0 && opt.face_offset <= 1))
+    throw UsageError("--face-offset must be in (0, 1], got " + std::to_string(opt.face_offset));
   LabelStatsOptions so = opt.stats;
   so.collect_surface = true;
   so.threads = opt.threads;

@@ -64,6 +64,10 @@ expect_bad "missing input" "none.tif: no such file" -- "$TG" convert none.tif -o
 expect_bad "unknown format" "unknown volume format" -- "$TG" convert good.tif -o out.xyz
 printf '{"shape_zyx":[1,1,2],"dtype":"float32"}' > f.json; printf '\x00\x00\x80\x3f\x00\x00\x00\x40' > f.raw
 expect_bad "bad --range" "--range must be" -- "$TG" convert f.json -o out.h5 --to uint16 --range 5,1
+# Out-of-range options of measure are refused before its parallel loops (an
+# exception there used to abort the process, exit 134).
+"$TG" synth --preset spheres --size 32 -o lab.h5 >/dev/null
+expect_bad "measure --face-offset 0" "--face-offset must be in (0, 1]" -- "$TG" measure lab.h5 -o out.csv --face-offset 0
 expect_bad "unknown option" "tomograin:" -- "$TG" convert good.tif -o out.h5 --frobnicate
 
 # NaN policy: `info` reports instead of refusing.

@@ -93,7 +93,7 @@ struct CmpOpts {
   std::vector<double> xct_strains, dem_strains;
   std::string dem, out, curve, title = "tomograin: experiment vs DEM", notes;
   double voxel_um = 0, grain_radius_vox = 0;
-  bool no_like = false, no_imaged = false, synthetic = false, no_plots = false;
+  bool no_like = false, no_imaged = false, synthetic = false, no_plots = false, no_track = false;
   std::string feret = "60";
 };
 
@@ -116,6 +116,7 @@ int run_compare(const CmpOpts& o) {
   opt.imaged_path = !o.no_imaged;
   opt.synthetic_xct = o.synthetic;
   opt.plots = !o.no_plots;
+  opt.track = !o.no_track;
   if (o.feret == "exact") {
     opt.measure.feret_exact = true;
   } else {
@@ -223,5 +224,8 @@ static tg::app::Registrar reg_cmp{{"compare", 80, [](CLI::App& app, CLI::App*& s
   sub->add_flag("--no-imaged", o->no_imaged, "Skip the imaged DEM path");
   sub->add_flag("--synthetic", o->synthetic, "Mark the XCT inputs synthetic in the report");
   sub->add_flag("--no-plots", o->no_plots, "Write the CSV/JSON only (no Python)");
+  sub->add_flag("--no-track", o->no_track,
+                "Do not track the experiment's grains through the stages (REPORT/tracking/; by default the "
+                "experiment's broken fraction comes from that lineage when the scans carry no truth)");
   return [o] { return run_compare(*o); };
 }}};

@@ -171,6 +171,8 @@ def main():
         run(["segment", "s.h5", "-o", "seg.h5", "--grain-diameter-um", "400"])
         run(["measure", "seg.h5", "-o", "m.csv"])
         base = rows("m.csv")
+        run(["measure", "seg.h5", "-o", "m_boxbase.csv", "--box"])
+        base_box = rows("m_boxbase.csv")
         col = lambda t, c: [float(r[c]) for r in t]
         checks = [
             (["--feret", "exact"], lambda t: t[0]["sizing"] == "feret-exact" and col(t, "d_min_mm") != col(base, "d_min_mm")),
@@ -178,9 +180,14 @@ def main():
             (["--sizing", "obb"], lambda t: t[0]["sizing"] == "obb" and col(t, "d_max_mm") == col(t, "obb_max_mm")),
             (["--detection-limit-mm", "10"], lambda t: all(r["below_limit"] in ("1", "1.0", "true") for r in t)),
             (["--face-offset", "0.9"], lambda t: col(t, "d_max_mm") != col(base, "d_max_mm")),
-            (["--no-box"], lambda t: all(float(r["obb_max_mm"]) == 0 for r in t)),
-            (["--seed", "7"], lambda t: col(t, "obb_max_mm") != col(base, "obb_max_mm") or
-             col(t, "obb_min_mm") != col(base, "obb_min_mm")),
+            (["--box"], lambda t: all(float(r["obb_max_mm"]) > 0 for r in t)),
+            (["--no-box"], lambda t: all(float(r["obb_max_mm"]) == 0 for r in t)),  # the default since issue 22
+            (["--seed", "7", "--box"], lambda t: col(t, "obb_max_mm") != col(base_box, "obb_max_mm") or
+             col(t, "obb_min_mm") != col(base_box, "obb_min_mm")),
+            (["--no-contacts"], lambda t: "coordination" not in t[0] and "coordination" in base[0]),
+            (["--convex"], lambda t: "convex_volume_mm3" in t[0] and "solidity" in t[0] and "solidity" not in base[0]),
+            (["--surface"], lambda t: "surface_mm2" in t[0] and "surface_mm2" not in base[0]),
+            (["--columns", "sphericity"], lambda t: "sphericity" in t[0] and "convex_volume_mm3" not in t[0]),
             (["--voxel-um", "10"], lambda t: abs(float(t[0]["volume_mm3"]) /
                                                  float(base[0]["volume_mm3"]) - (10 / voxel_um()) ** 3) < 1e-9),
             (["--threads", "2"], lambda t: t == base),  # no effect by design: results do not depend on it

@@ -78,8 +78,8 @@ for c in nocol nanr negr overlap escape; do
   printf '[walls]\ncylinder_radius_m = 4.0e-3\n[specimen]\npacking_csv = "%s.csv"\n' $c > $c.toml
 done
 expect_bad "packing without r_m column" "nocol.csv: missing column 'r_m'" -- "$TG" dem oedometer nocol.toml -o out_run
-expect_bad "packing with NaN radius" "nanr.csv:2: sphere needs finite" -- "$TG" dem oedometer nanr.toml -o out_run
-expect_bad "packing with negative radius" "negr.csv:2: sphere needs finite" -- "$TG" dem oedometer negr.toml -o out_run
+expect_bad "packing with NaN radius" "nanr.csv: row 2: r_m must be > 0" -- "$TG" dem oedometer nanr.toml -o out_run
+expect_bad "packing with negative radius" "negr.csv: row 2: r_m must be > 0" -- "$TG" dem oedometer negr.toml -o out_run
 expect_bad "packing with overlapping spheres" "overlap.csv" -- "$TG" dem oedometer overlap.toml -o out_run
 expect_bad "packing sphere escaping the cylinder" "escape.csv: sphere 0 crosses the cylinder" -- "$TG" dem oedometer escape.toml -o out_run
 expect_bad "voxelise CSV without r_m" "nocol.csv: missing column 'r_m'" -- "$TG" voxelise nocol.csv -o out.h5 --voxel-um 100

@@ -299,7 +299,7 @@ TEST(Voxelise, ReadsCsvAndHdf5Tables) {
   misnamed.add("r_bad", {1e-4});
   misnamed.source = "misnamed.csv";
   try {
-    compare::spheres_from_table(misnamed);
+    tg::spheres_from_table(misnamed);
     ADD_FAILURE() << "a table without r_m was accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("r_m"), std::string::npos) << e.what();
@@ -311,7 +311,7 @@ TEST(Voxelise, ReadsCsvAndHdf5Tables) {
   fractional.add("r_m", {1e-4, 1e-4});
   fractional.add("particle", {4, 9.5});  // not an id
   fractional.source = "fractional.csv";
-  EXPECT_THROW(compare::spheres_from_table(fractional), InputError);
+  EXPECT_THROW(tg::spheres_from_table(fractional), InputError);
   Table neg;
   neg.add("x_m", {0});
   neg.add("y_m", {0});

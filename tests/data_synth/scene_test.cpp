@@ -65,9 +65,11 @@ TEST(Scene, ReadsDemAndVoxelSphereLists) {
     std::ofstream f(d / "dem.csv");
     f << "x_m,y_m,z_m,r_m,cluster\n0,0,0.001,0.0002,5\n0.0001,0,0.001,0.0002,5\n0.0005,0,0.001,0.0001,6\n";
   }
-  Grid g;
+  Grid g;  // as make_grid lays it: millimetres and the same grid in metres
   g.voxel_mm = 0.01;
   g.origin_mm = {0, -1, -1};
+  g.geometry = tg::Geometry::isotropic_m(1e-5);
+  g.geometry.origin_m = {0, -1e-3, -1e-3};
   const auto ps = read_particles((d / "dem.csv").string(), g);
   ASSERT_EQ(ps.size(), 2u);
   EXPECT_EQ(ps[0].kind, Kind::cluster);

@@ -68,6 +68,59 @@ for n in names:
 assert "Synthetic inputs" in dom, "synthetic inputs not marked"
 print("stages named:", names)
 PYC
+# The numbers the report prints, against independent computations (numpy,
+# the inputs themselves): issue 25.
+$PY - "$W" <<'PYN'
+import csv, json, os, sys
+import numpy as np
+W = sys.argv[1]
+R = os.path.join(W, "report")
+rows = lambda p: list(csv.DictReader(open(p)))
+summ = {(r["stage"], r["series"]): r for r in rows(os.path.join(R, "summary.csv"))}
+names = [s["name"] for s in json.load(open(os.path.join(R, "report.json")))["stages"]]
+# 1. The stress-strain file is the DEM history (Pa -> MPa), row for row.
+hist = rows(os.path.join(W, "dem_run", "history.csv"))
+dem = [r for r in rows(os.path.join(R, "stress_strain.csv")) if r["series"] == "dem"]
+assert len(dem) == len(hist), (len(dem), len(hist))
+for a, b in zip(dem, hist):
+    assert float(a["axial_strain"]) == float(b["strain"])
+    assert abs(float(a["stress_mpa"]) - float(b["top_stress_Pa"]) * 1e-6) <= 1e-12 * max(1, abs(float(a["stress_mpa"])))
+# 2. The experiment's broken fraction at the last stage: grains with fragments in the synthetic truth.
+truth = rows(os.path.join(W, "xct_stage1_truth.csv"))
+parents = {}
+for t in truth:
+    parents[t["parent"]] = parents.get(t["parent"], False) or t["kind"] != "grain"
+want = sum(parents.values()) / len(parents)
+got = float(summ[(names[1], "experiment")]["broken_fraction"])
+assert abs(got - want) < 1e-12, (got, want)
+# 3. D10 / D50 / D60 of every series: mass quantiles of its own particle table (numpy, log-linear).
+for n, name in enumerate(names):
+    for series in ("experiment", "dem_ideal", "dem_imaged"):
+        p = rows(os.path.join(R, "particles", f"stage{n}_{series}.csv"))
+        d = np.array([float(r["d_med_mm"]) for r in p if float(r["volume_mm3"]) > 0])
+        v = np.array([float(r["volume_mm3"]) for r in p if float(r["volume_mm3"]) > 0])
+        o = np.argsort(d)
+        c = np.cumsum(v[o]) / v.sum() * 100
+        for k, q in (("d10_mm", 10), ("d50_mm", 50), ("d60_mm", 60)):
+            ref = float(np.exp(np.interp(q, c, np.log(d[o]))))
+            assert abs(float(summ[(name, series)][k]) - ref) <= 1e-9 * ref, (name, series, k, summ[(name, series)][k], ref)
+# 4. The PSD distance experiment vs DEM ideal at every stage: KS of the mass-weighted Dmed CDFs.
+def ks(a, wa, b, wb):
+    x = np.union1d(a, b)
+    fa = np.array([wa[a <= t].sum() for t in x]) / wa.sum()
+    fb = np.array([wb[b <= t].sum() for t in x]) / wb.sum()
+    return float(np.abs(fa - fb).max())
+dist = {(r["stage"], r["pair"]): r for r in rows(os.path.join(R, "distances.csv"))}
+for n, name in enumerate(names):
+    s = {}
+    for series in ("experiment", "dem_ideal"):
+        p = [r for r in rows(os.path.join(R, "particles", f"stage{n}_{series}.csv")) if float(r["volume_mm3"]) > 0]
+        s[series] = (np.array([float(r["d_med_mm"]) for r in p]), np.array([float(r["volume_mm3"]) for r in p]))
+    ref = ks(*s["experiment"], *s["dem_ideal"])
+    got = float(dist[(name, "experiment_vs_dem_ideal")]["psd_ks"])
+    assert abs(got - ref) <= 1e-12, (name, got, ref)
+print("report numbers: stress-strain = history, broken fraction = truth, D-values and PSD KS = numpy")
+PYN
 $CHROME --user-data-dir="$PROFILE" --virtual-time-budget=10000 --window-size=1280,2000 \
   --screenshot="$W/report_screenshot.png" "file://$W/report/index.html" 2>> "$W/chromium.log"
 test -s "$W/report_screenshot.png"

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
+#include <unordered_map>
 
 #include "compare/report_files.hpp"
 #include "compare/voxelise.hpp"
@@ -51,6 +53,34 @@ ParticleScale particle_scale(const SphereTable& s) {
   return {r[r.size() / 2], static_cast<int64_t>(vol.size())};
 }
 
+double sphere_coordination(const SphereTable& s, double gap_tolerance) {
+  double rmax = 0;
+  for (double r : s.r_m) rmax = std::max(rmax, r);
+  const double cell = 2 * rmax * (1 + gap_tolerance);
+  auto key = [&](int64_t a, int64_t b, int64_t c) { return (a * 1000003 + b) * 1000033 + c; };
+  auto idx = [&](double v) { return static_cast<int64_t>(std::floor(v / cell)); };
+  std::unordered_map<int64_t, std::vector<size_t>> grid;
+  for (size_t q = 0; q < s.size(); ++q) grid[key(idx(s.z_m[q]), idx(s.y_m[q]), idx(s.x_m[q]))].push_back(q);
+  std::set<std::pair<int64_t, int64_t>> pairs;  // particle ids, ordered: each contact once
+  for (size_t q = 0; q < s.size(); ++q) {
+    const int64_t cz = idx(s.z_m[q]), cy = idx(s.y_m[q]), cx = idx(s.x_m[q]);
+    for (int64_t dz = -1; dz <= 1; ++dz)
+      for (int64_t dy = -1; dy <= 1; ++dy)
+        for (int64_t dx = -1; dx <= 1; ++dx) {
+          const auto it = grid.find(key(cz + dz, cy + dy, cx + dx));
+          if (it == grid.end()) continue;
+          for (size_t p : it->second) {
+            if (p <= q || s.particle[p] == s.particle[q]) continue;
+            const double d = std::hypot(s.z_m[p] - s.z_m[q], s.y_m[p] - s.y_m[q], s.x_m[p] - s.x_m[q]);
+            if (d <= s.r_m[p] + s.r_m[q] + gap_tolerance * std::min(s.r_m[p], s.r_m[q]))
+              pairs.insert(std::minmax(s.particle[p], s.particle[q]));
+          }
+        }
+  }
+  const int64_t n = particle_count(s);
+  return n ? 2.0 * static_cast<double>(pairs.size()) / static_cast<double>(n) : 0.0;
+}
+
 DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth::ImagingOptions& imaging,
                         const std::string& imaging_from, const CompareOptions& opt, const SegmentOptions& so,
                         const fs::path& slices, const std::string& stem) {
@@ -58,8 +88,10 @@ DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth
   vo.voxel_m = voxel_m;
   vo.grey = opt.imaged_path;
   vo.imaging = imaging;
-  Voxelised v = voxelise(read_spheres(snapshot), vo);
+  const SphereTable spheres = read_spheres(snapshot);
+  Voxelised v = voxelise(spheres, vo);
   DemStage d;
+  d.exact_coordination = sphere_coordination(spheres);
   d.particles = static_cast<int64_t>(v.particle_of_label.size()) - 1;
   d.ideal.particles = measure_labels(v.labels, opt.measure);
   d.ideal.sample = measure::grading_sample(d.ideal.particles);
@@ -85,6 +117,7 @@ DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth
                               {"noise_sigma", vo.imaging.noise_sigma},
                               {"psf_sigma_vox", vo.imaging.psf_sigma},
                               {"imaging_from", imaging_from}};
+  d.ideal.info["exact_coordination"] = d.exact_coordination;  // from the spheres: the image method's reference
   return d;
 }
 

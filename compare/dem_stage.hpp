@@ -30,9 +30,17 @@ struct ParticleScale {
 };
 ParticleScale particle_scale(const SphereTable& s);
 
+// Mean coordination of a snapshot's particles counted from the spheres
+// themselves (the DEM's exact contacts): two particles touch when a sphere of
+// one and a sphere of the other are closer than the sum of their radii plus
+// `gap_tolerance` × the smaller radius; contacts with walls do not count
+// (walls are not particles). A cell grid of the largest diameter: O(n).
+double sphere_coordination(const SphereTable& s, double gap_tolerance = 1e-3);
+
 struct DemStage {
   Series ideal, imaged;  // imaged empty when the imaged path is off
   int64_t particles = 0; // particles voxelised
+  double exact_coordination = 0;  // sphere_coordination of the snapshot
 };
 // Voxelises `snapshot` at voxel_m with `imaging` (grey levels and noise),
 // measures the truth labels and, when opt.imaged_path, segments and measures

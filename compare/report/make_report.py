@@ -257,11 +257,11 @@ def main():
     parts.append("<h2>Stages</h2>")
     parts.append(table(
         ["stage", "experiment input", "synthetic", "XCT strain", "DEM snapshot", "DEM strain",
-         "particles exp / ideal / imaged", "time (s)"],
+         "particles exp / ideal / imaged", "DEM coordination from its spheres", "time (s)"],
         [[st["name"], st["experiment"]["source"], "yes" if st["experiment"].get("synthetic") else "no",
           fmt(st["experiment"]["strain"]), os.path.basename(st["dem"]["snapshot"]), fmt(st["dem"]["strain"]),
           f"{st['experiment']['particles']} / {st['dem']['particles_ideal']} / {st['dem']['particles_imaged']}",
-          f"{st['seconds']:.1f}"] for st in stages]))
+          fmt(st["dem"]["ideal"].get("exact_coordination")), f"{st['seconds']:.1f}"] for st in stages]))
     parts.append("<h2>Gradings, breakage</h2>")
     parts.append(table(["stage", "series", "strain", "particles", "D10 (mm)", "D50 (mm)", "Cu", "Hardin Br",
                         "broken", "broken from", "coordination (interior)"],

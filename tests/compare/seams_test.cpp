@@ -69,5 +69,18 @@ TEST(Seams, ADemSnapshotIsTheSameParticlesForSynthVoxeliseAndCompare) {
   fs::remove_all(dir);
 }
 
+// The DEM's exact coordination, by hand: a chain of three touching particles
+// (the middle one a two-sphere fragment) and a fourth 1 % of a radius away.
+TEST(Seams, SphereCoordinationCountsParticleContactsOnce) {
+  SphereTable s;
+  s.push_back(0, 0, 0, 1e-3, 1);
+  s.push_back(0, 0, 2e-3, 1e-3, 2);      // touches particle 1
+  s.push_back(0, 0, 3.5e-3, 0.5e-3, 2);  // same fragment: no contact with itself
+  s.push_back(0, 0, 5e-3, 1e-3, 3);      // overlaps particle 2's second sphere
+  s.push_back(0, 0, 7.01e-3, 1e-3, 4);   // 10 um gap: not a contact
+  EXPECT_DOUBLE_EQ(compare::sphere_coordination(s), 2.0 * 2 / 4);
+  EXPECT_DOUBLE_EQ(compare::sphere_coordination(s, 0.02), 2.0 * 3 / 4);  // within 2 % of a radius
+}
+
 }  // namespace
 }  // namespace tg

@@ -59,13 +59,7 @@ int run_voxelise(const VoxOpts& o) {
 
   const SphereTable s = read_spheres(o.in);
   compare::Voxelised v = compare::voxelise(s, vo);
-  const nlohmann::json prov = {{"voxelise", o.in},
-                               {"voxel_um", o.voxel_um},
-                               {"void_grey", vo.imaging.void_grey},
-                               {"solid_grey", vo.imaging.solid_grey},
-                               {"noise_sigma", vo.imaging.noise_sigma},
-                               {"psf_sigma_vox", vo.imaging.psf_sigma},
-                               {"imaging", like_note}};
+  const nlohmann::json prov = compare::voxelise_json(o.in, vo, v, like_note);
   {
     H5Writer w(o.out);
     if (vo.grey) w.write_volume("/volume", v.grey);

@@ -106,17 +106,7 @@ DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth
     d.imaged.sample = measure::grading_sample(d.imaged.particles);
     d.imaged.coordination = mean_interior_coordination(d.imaged.particles);
   }
-  d.ideal.info["voxelise"] = {{"snapshot", snapshot},
-                              {"voxel_um", voxel_m * 1e6},
-                              {"shape", {v.labels.shape().nz, v.labels.shape().ny, v.labels.shape().nx}},
-                              {"solid_fraction", v.solid_fraction},
-                              {"render_s", v.render_s},
-                              {"imaging_s", v.imaging_s},
-                              {"void_grey", vo.imaging.void_grey},
-                              {"solid_grey", vo.imaging.solid_grey},
-                              {"noise_sigma", vo.imaging.noise_sigma},
-                              {"psf_sigma_vox", vo.imaging.psf_sigma},
-                              {"imaging_from", imaging_from}};
+  d.ideal.info["voxelise"] = voxelise_json(snapshot, vo, v, imaging_from);
   d.ideal.info["exact_coordination"] = d.exact_coordination;  // from the spheres: the image method's reference
   return d;
 }

@@ -133,4 +133,20 @@ Voxelised voxelise(const SphereTable& s, const VoxeliseOptions& opt) {
   return out;
 }
 
+nlohmann::json voxelise_json(const std::string& input, const VoxeliseOptions& opt, const Voxelised& v,
+                             const std::string& imaging_from) {
+  const Shape s = v.labels.shape();
+  return {{"input", input},
+          {"voxel_um", opt.voxel_m * 1e6},
+          {"shape", {s.nz, s.ny, s.nx}},
+          {"solid_fraction", v.solid_fraction},
+          {"render_s", v.render_s},
+          {"imaging_s", v.imaging_s},
+          {"void_grey", opt.imaging.void_grey},
+          {"solid_grey", opt.imaging.solid_grey},
+          {"noise_sigma", opt.imaging.noise_sigma},
+          {"psf_sigma_vox", opt.imaging.psf_sigma},
+          {"imaging_from", opt.grey ? imaging_from : std::string("no grey scan (labels only)")}};
+}
+
 }  // namespace tg::compare

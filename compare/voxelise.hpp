@@ -29,6 +29,7 @@
 // plus 2 B/voxel for the grey output.
 #pragma once
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -75,5 +76,11 @@ struct Voxelised {
 std::pair<Shape, Geometry> voxel_grid(const SphereTable& s, const VoxeliseOptions& opt);
 
 Voxelised voxelise(const SphereTable& s, const VoxeliseOptions& opt);
+
+// What a voxelised scan is, as JSON (the .h5's `voxelise` attribute and the
+// report's provenance): input, voxel_um, shape, solid_fraction, render_s,
+// imaging_s, void_grey, solid_grey, noise_sigma, psf_sigma_vox, imaging_from.
+nlohmann::json voxelise_json(const std::string& input, const VoxeliseOptions& opt, const Voxelised& v,
+                             const std::string& imaging_from);
 
 }  // namespace tg::compare

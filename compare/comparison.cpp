@@ -77,6 +77,7 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
         rep.tracking_note = std::string("tracking stopped: ") + e.what();
       }
     }
+    x.labels = Volume<uint32_t>{};  // only the tracker keeps a stage's labels (the previous one)
     const size_t m = match_snapshot(dem.strains, x.strain, n);
     const double vox_m = opt.voxel_um > 0 ? opt.voxel_um * 1e-6 : x.geometry.voxel_size_m[0];
     if (!(vox_m > 0)) throw UsageError("compare: " + in.xct[n] + " has no voxel size: give --voxel-um");

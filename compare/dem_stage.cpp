@@ -107,6 +107,8 @@ DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth
     d.imaged.coordination = mean_interior_coordination(d.imaged.particles);
   }
   d.ideal.info["voxelise"] = voxelise_json(snapshot, vo, v, imaging_from);
+  d.ideal.info["voxelise"]["render_s"] = v.render_s;
+  d.ideal.info["voxelise"]["imaging_s"] = v.imaging_s;
   d.ideal.info["exact_coordination"] = d.exact_coordination;  // from the spheres: the image method's reference
   return d;
 }

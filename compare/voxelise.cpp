@@ -140,8 +140,6 @@ nlohmann::json voxelise_json(const std::string& input, const VoxeliseOptions& op
           {"voxel_um", opt.voxel_m * 1e6},
           {"shape", {s.nz, s.ny, s.nx}},
           {"solid_fraction", v.solid_fraction},
-          {"render_s", v.render_s},
-          {"imaging_s", v.imaging_s},
           {"void_grey", opt.imaging.void_grey},
           {"solid_grey", opt.imaging.solid_grey},
           {"noise_sigma", opt.imaging.noise_sigma},

@@ -78,8 +78,9 @@ std::pair<Shape, Geometry> voxel_grid(const SphereTable& s, const VoxeliseOption
 Voxelised voxelise(const SphereTable& s, const VoxeliseOptions& opt);
 
 // What a voxelised scan is, as JSON (the .h5's `voxelise` attribute and the
-// report's provenance): input, voxel_um, shape, solid_fraction, render_s,
-// imaging_s, void_grey, solid_grey, noise_sigma, psf_sigma_vox, imaging_from.
+// report's provenance): input, voxel_um, shape, solid_fraction, void_grey,
+// solid_grey, noise_sigma, psf_sigma_vox, imaging_from. No timings: the same
+// input gives the same bytes (tests/determinism).
 nlohmann::json voxelise_json(const std::string& input, const VoxeliseOptions& opt, const Voxelised& v,
                              const std::string& imaging_from);
 

@@ -49,6 +49,7 @@ int run_segment(SegmentJob& o) {
   s.fill_pores = !o.no_pores;
   s.watershed_lines = !o.no_lines;
   s.merge = !o.no_merge;
+  s.grey_evidence = !o.no_grey_evidence;
   if (o.grain_radius_vox > 0) {
     s.grain_radius_vox = o.grain_radius_vox;
   } else {
@@ -67,6 +68,9 @@ int run_segment(SegmentJob& o) {
   fmt::print("  threshold {} = {} (voxels above are solid), solid fraction {:.4f}\n",
              tg::threshold_method_name(res.threshold.method), res.threshold.value, res.solid_fraction);
   for (const auto& n : res.notes) fmt::print("  note: {}\n", n);
+  if (res.graded)
+    fmt::print("  grey evidence: solid above {} is bright; {:.1f} % of the solid dim; {} dim pockets filled\n",
+               res.bright_value, 100.0 * res.dim_fraction, res.dim_pockets.filled);
   fmt::print("  pores filled {} of {} enclosed; markers {}; merges {}; labels {} ({} dropped below {} voxels)\n",
              res.pores.filled, res.pores.enclosed, res.markers, res.merge.merges, res.count, res.dropped,
              r.min_size_vox);
@@ -101,6 +105,10 @@ static tg::app::Registrar reg{{"segment", 30, [](CLI::App& app, CLI::App*& sub) 
       "filling of small near-spherical enclosed pores, exact Euclidean distance map, h-maxima\n"
       "markers (one per grain and per split fragment), marker-controlled watershed with 1-voxel\n"
       "void lines between touching grains, merging of over-segmented pieces, size filter.\n"
+      "Grey evidence: solid darker than halfway between the threshold and the mean solid grey\n"
+      "is 'dim' (partial volume: grain surfaces, the blurred gap between two fragments a voxel\n"
+      "apart). The distance map stops at dim voxels, so fragments keep one marker each even\n"
+      "where noise bridges their gap, and only the bright part of an interface counts for a merge.\n"
       "Defaults derive from the expected grain radius R in voxels: pores up to 2 % of a grain's\n"
       "volume are filled; marker depth h = 0.7 voxels. Distances are in voxels of the finest axis.\n"
       "Writes labels (uint32, 0 = void) to /labels of the HDF5 output and a JSON summary\n"
@@ -140,6 +148,12 @@ static tg::app::Registrar reg{{"segment", 30, [](CLI::App& app, CLI::App*& sub) 
   sub->add_flag("--no-lines", o->no_lines, "Touching grains touch in the labels (no void line between them)");
   sub->add_option("--buckets-per-voxel", o->seg.buckets_per_unit, "Watershed distance quantisation, levels per voxel")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_flag("--no-grey-evidence", o->no_grey_evidence,
+                "Decide from the solid mask alone (no dim/bright grading of the solid)");
+  sub->add_option("--bright-fraction", o->seg.bright_fraction,
+                  "Solid darker than t + f (mean solid grey - t) is dim, f in 0..1")
+      ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   sub->add_flag("--no-merge", o->no_merge, "Do not merge over-segmented pieces");
   sub->add_option("--merge-ratio", o->seg.merge_ratio,

@@ -16,7 +16,7 @@ struct SegmentJob {
   double voxel_um = 0, grain_radius_vox = 0, grain_diameter_um = 1360.0;
   int manual = -1;
   tg::SegmentOptions seg;
-  bool no_pores = false, no_lines = false, no_merge = false;
+  bool no_pores = false, no_lines = false, no_merge = false, no_grey_evidence = false;
   int compression = 1;
 };
 int run_segment(SegmentJob& job);

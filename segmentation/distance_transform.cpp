@@ -131,14 +131,14 @@ namespace {
 constexpr int64_t kBlock = detail::kEdtBlock;  // columns solved together: 16 floats = one 64-byte cache line
 
 // Pass x on one row: squared distance to the nearest void voxel of the row.
-void row_x(const uint8_t* m, float* d, int64_t nx, double w2) {
+void row_x(const uint8_t* m, float* d, int64_t nx, double w2, uint8_t solid_from) {
   // Distances in voxels counted in float (exact up to 2^24; +inf + 1 stays
   // +inf when no void came yet), selects instead of branches.
   float run = std::numeric_limits<float>::infinity();
-  for (int64_t i = 0; i < nx; ++i) d[i] = run = m[i] == 0 ? 0.f : run + 1.f;
+  for (int64_t i = 0; i < nx; ++i) d[i] = run = m[i] < solid_from ? 0.f : run + 1.f;
   run = std::numeric_limits<float>::infinity();
   for (int64_t i = nx - 1; i >= 0; --i) {
-    run = m[i] == 0 ? 0.f : run + 1.f;
+    run = m[i] < solid_from ? 0.f : run + 1.f;
     const double t = std::min(d[i], run);
     d[i] = float(t * t * w2);
   }
@@ -199,6 +199,7 @@ void transform(const Volume<uint8_t>& solid, Volume<float>& out, const EdtOption
   for (double w : opt.spacing)
     if (!(w > 0) || !std::isfinite(w))
       throw UsageError("distance transform: voxel spacing must be positive and finite (got " + std::to_string(w) + ")");
+  if (opt.solid_from == 0) throw UsageError("distance transform: solid_from must be >= 1 (0 would leave no void)");
   const Shape s = solid.shape();
   if (out.shape() != s) out = Volume<float>(s, solid.geometry());
   out.set_geometry(solid.geometry());
@@ -215,7 +216,7 @@ void transform(const Volume<uint8_t>& solid, Volume<float>& out, const EdtOption
       Slab slab(ny, nx);
 #pragma omp for schedule(static)
       for (int64_t k = 0; k < nz; ++k) {
-        for (int64_t j = 0; j < ny; ++j) row_x(solid.data() + k * sz + j * nx, slab.row(j), nx, wx2);
+        for (int64_t j = 0; j < ny; ++j) row_x(solid.data() + k * sz + j * nx, slab.row(j), nx, wx2, opt.solid_from);
         slab.solve(wy);
         slab.store(out.data() + k * sz, nx, last);
       }

@@ -56,6 +56,9 @@ struct EdtOptions {
   // segment() passes the voxel size divided by its smallest component, so
   // distances are in units of the finest voxel edge.
   std::array<double, 3> spacing{1.0, 1.0, 1.0};
+  // Mask values >= solid_from are solid, the rest void (segment() passes 2
+  // on its graded mask: the distance to the nearest void or dim voxel).
+  uint8_t solid_from = 1;
 };
 
 // Squared distances into `out` (reallocated if its shape differs; geometry

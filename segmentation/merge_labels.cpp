@@ -49,6 +49,7 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
   const int64_t n = labels.size();
   uint32_t* L = labels.data();
   const uint8_t* m = solid.data();
+  const uint8_t bright = std::max<uint8_t>(opt.bright_level, 1);
   uint32_t maxl = 0;
 #pragma omp parallel for schedule(static) reduction(max : maxl)
   for (int64_t i = 0; i < n; ++i) maxl = std::max(maxl, L[i]);
@@ -106,7 +107,7 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
               uint32_t ls[3];
               if (neighbour_labels(labels, nb, k, j, i, idx, ls) == 2) {
                 const uint64_t key = pair_key(ls[0], ls[1]);
-                count_pair(key);
+                if (m[idx] >= bright) count_pair(key);
                 my_two.emplace_back(idx, key);
               }
             }
@@ -117,9 +118,12 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
               const uint32_t by = up ? up[i] : 0, bz = back ? back[i] : 0;
               const bool x_other = i + 1 == i1 && i1 < s.nx && L[row + i1] != 0;
               if (!x_other && (by == 0 || by == a) && (bz == 0 || bz == a)) continue;
-              if (x_other) count_pair(pair_key(a, L[row + i1]));
-              if (by != 0 && by != a) count_pair(pair_key(a, by));
-              if (bz != 0 && bz != a) count_pair(pair_key(a, bz));
+              // A face counts when both its voxels are bright.
+              const int64_t idx = row + i;
+              if (m[idx] < bright) continue;
+              if (x_other && m[idx + 1] >= bright) count_pair(pair_key(a, L[row + i1]));
+              if (by != 0 && by != a && m[idx + sy] >= bright) count_pair(pair_key(a, by));
+              if (bz != 0 && bz != a && m[idx + sz] >= bright) count_pair(pair_key(a, bz));
             }
           }
           i0 = i1;
@@ -141,13 +145,25 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
     while (parent[a] != a) a = parent[a] = parent[parent[a]];
     return a;
   };
+  // Each label's best partner: among the pairs that pass the criterion with
+  // it as the smaller label (equal volumes: the higher number is the
+  // smaller), the one with the largest interface (ties: the lowest number,
+  // the first in key order).
   const std::map<uint64_t, int64_t> ordered(iface.begin(), iface.end());  // deterministic order
+  std::vector<uint32_t> best(size_t(maxl) + 1, 0);
+  std::vector<int64_t> best_area(size_t(maxl) + 1, 0);
   for (const auto& [key, area] : ordered) {
-    const uint32_t a = uint32_t(key >> 32), b = uint32_t(key & 0xffffffffu);
-    const double vmin = double(std::min(vol[a], vol[b]));
-    const double r = std::cbrt(3.0 * vmin / (4.0 * std::numbers::pi));
+    uint32_t a = uint32_t(key >> 32), b = uint32_t(key & 0xffffffffu);  // a < b
+    if (vol[a] < vol[b] || (vol[a] == vol[b] && a > b)) std::swap(a, b);
+    const uint32_t small = b, large = a;
+    const double r = std::cbrt(3.0 * double(vol[small]) / (4.0 * std::numbers::pi));
     if (double(area) < opt.ratio * std::numbers::pi * r * r) continue;
-    const uint32_t ra = find(a), rb = find(b);
+    ++res.candidates;
+    if (area > best_area[small]) best_area[small] = area, best[small] = large;
+  }
+  for (uint32_t l = 1; l <= maxl; ++l) {
+    if (best[l] == 0) continue;
+    const uint32_t ra = find(l), rb = find(best[l]);
     if (ra == rb) continue;
     parent[std::max(ra, rb)] = std::min(ra, rb);
     ++res.merges;

@@ -19,11 +19,26 @@
 // Interface area in voxel faces: with watershed lines, a line voxel whose
 // 26-neighbours carry exactly two labels counts one unit for that pair
 // (the line is one voxel thick); without lines, each face between voxels
-// of two labels counts one. Pairs are decided from the labels as the
-// watershed left them (one pass, no cascade of re-evaluations), merged with
-// union-find in increasing (a, b) order, and the line voxels between merged
-// labels join them. Merged labels keep the smallest number of the group;
-// segment() renumbers them 1..count afterwards (relabel_consecutive).
+// of two labels counts one.
+//
+// Grey evidence (segment.hpp): only the *bright* part of an interface
+// counts (line voxels, or both voxels of a face, at level >= bright_level).
+// The gap between two fragments a voxel apart stays darker than solid even
+// where blur and noise bridge it, so their interface is mostly dim and they
+// stay apart however wide it is; an interface cutting through one grain is
+// as bright as its interior and counts in full. bright_level 1 counts every
+// solid voxel (a plain mask: no grey evidence).
+//
+// Whole-graph decision: pairs are decided from the labels as the watershed
+// left them (one pass, no cascade of re-evaluations), and each label joins
+// at most one neighbour, its best partner: among the passing pairs in
+// which it is the smaller label, the one with the largest interface. So a
+// small piece in the neck between two grains joins one of them and never
+// chains them together (deciding pair by pair joined both: one label held
+// 26 % of a real scan's solid). Unions in label order; the line voxels
+// between merged labels join them. Merged labels keep the smallest number
+// of the group; segment() renumbers them 1..count afterwards
+// (relabel_consecutive).
 //
 // Cost: one parallel pass over the volume (per-thread tables and interface
 // counts, summed; the line voxels between two labels listed on the way, so
@@ -39,6 +54,7 @@ namespace tg {
 
 struct MergeOptions {
   double ratio = 1.0;  // merge when interface >= ratio * pi r^2 (r: smaller label's equivalent radius)
+  uint8_t bright_level = 1;  // interface voxels with a lower level in `solid` do not count (grey evidence)
   // false: the merged labels' voxels keep their old labels and `root` says
   // where each goes, for a caller that renumbers anyway (relabel_consecutive
   // takes it as its premap): one pass over the volume less.
@@ -47,6 +63,7 @@ struct MergeOptions {
 
 struct MergeResult {
   int64_t touching_pairs = 0;  // label pairs sharing an interface
+  int64_t candidates = 0;      // pairs passing the criterion (before the best-partner choice)
   int64_t merges = 0;          // unions made
   std::vector<uint32_t> root;  // with apply = false and merges > 0: label l merges into root[l]
 };

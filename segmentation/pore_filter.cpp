@@ -51,9 +51,11 @@ void for_overlaps(const Run* row, const Run* end, int64_t a, int64_t b, F&& f) {
 
 }  // namespace
 
-PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt) {
+PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt, uint8_t solid_from,
+                            uint8_t fill_value) {
   if (opt.max_volume_vox < 0 || !(opt.min_sphericity >= 0 && opt.min_sphericity <= 1))
     throw UsageError("pore filter: max volume must be >= 0 and min sphericity in [0, 1]");
+  if (solid_from == 0 || fill_value < solid_from) throw UsageError("pore filter: filled voxels must be solid");
   const Shape s = solid.shape();
   const int64_t nx = s.nx, ny = s.ny, rows = s.nz * s.ny;
   uint8_t* m = solid.data();
@@ -61,7 +63,7 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
   if (s.empty()) return res;
 
   // The void as runs, row by row (counted, then written: rows in parallel).
-  const std::vector<int64_t> first = seg::run_offsets(solid, [](uint8_t v) { return v == 0; });
+  const std::vector<int64_t> first = seg::run_offsets(solid, [solid_from](uint8_t v) { return v < solid_from; });
   const int64_t R = first[size_t(rows)];
   if (R == 0) return res;
   std::vector<Run> run(static_cast<size_t>(R));
@@ -70,12 +72,12 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
     const uint8_t* row = m + r * nx;
     Run* out = run.data() + first[size_t(r)];
     for (int64_t i = 0; i < nx;) {
-      if (row[i]) {
+      if (row[i] >= solid_from) {
         ++i;
         continue;
       }
       const int64_t a = i;
-      while (i < nx && !row[i]) ++i;
+      while (i < nx && row[i] < solid_from) ++i;
       *out++ = {a, i};
     }
   }
@@ -186,7 +188,7 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
     for (int64_t p = first[size_t(r)]; p < first[size_t(r) + 1]; ++p)
       if (fill[size_t(comp[size_t(p)])]) {
         const Run& u = run[size_t(p)];
-        std::fill(m + r * nx + u.a, m + r * nx + u.b, uint8_t(1));
+        std::fill(m + r * nx + u.a, m + r * nx + u.b, fill_value);
       }
   return res;
 }

@@ -55,7 +55,12 @@ struct PoreFilterResult {
 // Sphericity 36 pi V^2 / A^3 with A = (2/3) faces, clipped to [0, 1].
 double voxel_sphericity(int64_t volume_vox, int64_t faces);
 
-// Fills qualifying pores in `solid` (0 void, nonzero solid) in place.
-PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt);
+// Fills qualifying pores in `solid` in place: voxels below `solid_from` are
+// void (0 only, by default), filled voxels get `fill_value`. segment() runs
+// it twice on its graded mask (0 void, 1 dim, 2 bright): the void pores
+// (solid_from 1), then the dim shells and noise pockets enclosed by bright
+// solid (solid_from 2), both filled bright.
+PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt, uint8_t solid_from = 1,
+                            uint8_t fill_value = 1);
 
 }  // namespace tg

@@ -44,7 +44,9 @@ void validate(const SegmentOptions& o) {
   seg::check_connectivity(o.connectivity);
 }
 
-ThresholdResult choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o) {
+// The threshold, and with `bright` the grey level above which solid is
+// bright (SegmentOptions::bright_fraction).
+ThresholdResult choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o, uint16_t* bright) {
   const auto hist = histogram_u16(grey);
   ThresholdResult t;
   if (o.threshold == ThresholdMethod::manual) {
@@ -54,19 +56,31 @@ ThresholdResult choose_threshold(const Volume<uint16_t>& grey, const SegmentOpti
     t = o.threshold == ThresholdMethod::otsu ? otsu_threshold(hist) : moments_threshold(hist);
   }
   t.separability = separability(hist, t.value);
+  if (bright) {
+    const double b = double(t.value) + o.bright_fraction * (mean_above(hist, t.value) - double(t.value));
+    *bright = uint16_t(std::clamp(std::lround(b), long(t.value), 65535L));
+  }
   return t;
 }
+
+SegmentResult segment_graded(Volume<uint8_t> mask, const SegmentOptions& opt, bool graded);
 
 SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owned, const SegmentOptions& opt) {
   validate(opt);
   SegmentResult r0;
   StageClock clock(r0);
-  const ThresholdResult t = choose_threshold(grey, opt);
+  uint16_t bright = 0;
+  const ThresholdResult t = choose_threshold(grey, opt, opt.grey_evidence ? &bright : nullptr);
   // An owned scan becomes the mask in its own storage.
-  auto mask = owned ? binarise(std::move(*owned), t.value) : binarise(grey, t.value);
+  Volume<uint8_t> mask;
+  if (opt.grey_evidence)
+    mask = owned ? binarise_graded(std::move(*owned), t.value, bright) : binarise_graded(grey, t.value, bright);
+  else
+    mask = owned ? binarise(std::move(*owned), t.value) : binarise(grey, t.value);
   clock.lap("threshold");
-  SegmentResult r = segment_mask(std::move(mask), opt);
+  SegmentResult r = segment_graded(std::move(mask), opt, opt.grey_evidence);
   r.threshold = t;
+  r.bright_value = bright;
   if (!t.note.empty()) r.notes.insert(r.notes.begin(), t.note);
   if (t.separability < 0.75)
     r.notes.push_back("the grey histogram is hardly bimodal (separability " + std::to_string(t.separability) +
@@ -83,6 +97,8 @@ SegmentOptions SegmentOptions::resolved() const {
   validate(o);
   if (o.pore_max_volume_vox < 0) o.pore_max_volume_vox = PoreFilterOptions::from_grain_radius(grain_radius_vox).max_volume_vox;
   if (!(o.h >= 0)) throw UsageError("segment: the marker depth h must be >= 0");
+  if (!(o.bright_fraction >= 0 && o.bright_fraction <= 1))
+    throw UsageError("segment: the bright fraction must be in [0, 1]");
   return o;
 }
 
@@ -95,22 +111,44 @@ SegmentResult segment(Volume<uint16_t>&& grey, const SegmentOptions& opt) {
   return run_from_grey(g, &g, opt);
 }
 
-SegmentResult segment_mask(Volume<uint8_t> solid, const SegmentOptions& opt_in) {
+SegmentResult segment_mask(Volume<uint8_t> solid, const SegmentOptions& opt) {
+  return segment_graded(std::move(solid), opt, false);
+}
+
+namespace {
+
+// The chain from a mask: 0/nonzero (graded = false), or graded 0 void,
+// 1 dim, 2 bright (the header's grey evidence).
+SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in, bool graded) {
   const SegmentOptions opt = opt_in.resolved();
   SegmentResult r;
   StageClock clock(r);
   const Shape s = solid.shape();
   const int64_t n = solid.size();
   int64_t nsolid = 0;
-  const uint8_t* sm = solid.data();
+  uint8_t* sm = solid.data();
 #pragma omp parallel for schedule(static) reduction(+ : nsolid)
   for (int64_t i = 0; i < n; ++i) nsolid += sm[i] != 0;
   r.solid_fraction = n ? double(nsolid) / double(n) : 0.0;
   r.h = opt.h;
+  r.graded = graded;
+  const uint8_t bright = graded ? 2 : 1;
 
   r.pore_criteria = {opt.pore_max_volume_vox, opt.pore_min_sphericity};
-  if (opt.fill_pores) r.pores = fill_pores(solid, r.pore_criteria);
+  if (opt.fill_pores) r.pores = fill_pores(solid, r.pore_criteria, 1, bright);
   nsolid += r.pores.filled_voxels;
+  if (graded && opt.fill_pores) {
+    // Dim pockets enclosed by bright solid: a filled pore's partial-volume
+    // shell, noise specks. Any shape (an enclosed pocket cannot part two
+    // pieces that the bright solid around it joins), twice the pore volume
+    // (the pore with its shell).
+    r.dim_pockets = fill_pores(solid, {2 * opt.pore_max_volume_vox, 0.0}, 2, 2);
+    if (r.dim_pockets.filled) {  // an enclosed pocket may hold void voxels too
+      nsolid = 0;
+#pragma omp parallel for schedule(static) reduction(+ : nsolid)
+      for (int64_t i = 0; i < n; ++i) nsolid += sm[i] != 0;
+    }
+  }
   clock.lap("pores");
 
   Volume<uint32_t> lab;  // the markers, then the labels
@@ -141,8 +179,23 @@ SegmentResult segment_mask(Volume<uint8_t> solid, const SegmentOptions& opt_in) 
     const double w = std::min({vs[0], vs[1], vs[2]});
     eo.spacing = {vs[0] / w, vs[1] / w, vs[2] / w};
   }
+  eo.solid_from = bright;
   Volume<float> dist;
   distance_transform(solid, dist, eo);
+  if (graded) {
+    // Dim solid: the lowest solid height (below any bright voxel, >= 1), so
+    // it is solid for the markers and the flood, and flooded last.
+    constexpr float kDim = 1e-3f;
+    float* d = dist.data();
+    int64_t ndim = 0;
+#pragma omp parallel for schedule(static) reduction(+ : ndim)
+    for (int64_t i = 0; i < n; ++i) {
+      const bool dim = sm[i] == 1;
+      ndim += dim;
+      d[i] = dim ? kDim : d[i];
+    }
+    r.dim_fraction = nsolid ? double(ndim) / double(nsolid) : 0.0;
+  }
   clock.lap("edt");
 
   solid = Volume<uint8_t>();
@@ -157,7 +210,12 @@ SegmentResult segment_mask(Volume<uint8_t> solid, const SegmentOptions& opt_in) 
   clock.lap("watershed");
 
   // The merge's roots are applied by the renumbering below (one pass less).
-  if (opt.merge) r.merge = merge_oversegmented(lab, levels, {opt.merge_ratio, false});  // levels > 0: the solid
+  // levels > 0: the solid; level 1 is the dim solid when q >= 1 (bright
+  // voxels, d >= 1, get 1 + floor(q d) >= 2).
+  if (graded && r.buckets_per_unit < 1)
+    r.notes.push_back("grey evidence not used by the merge: grains over 254 voxels deep leave no level for dim voxels");
+  const uint8_t merge_bright = graded && r.buckets_per_unit >= 1 ? 2 : 1;
+  if (opt.merge) r.merge = merge_oversegmented(lab, levels, {opt.merge_ratio, merge_bright, false});
   clock.lap("merge");
   levels = Volume<uint8_t>();
   const auto rl = relabel_consecutive(lab, opt.min_size_vox, r.merge.root.empty() ? nullptr : &r.merge.root);
@@ -169,6 +227,8 @@ SegmentResult segment_mask(Volume<uint8_t> solid, const SegmentOptions& opt_in) 
   r.peak_rss_bytes = peak_rss_bytes();
   return r;
 }
+
+}  // namespace
 
 std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
   const SegmentOptions o = opt_in.resolved();
@@ -193,6 +253,13 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                 {"enclosed", r.pores.enclosed},
                 {"filled", r.pores.filled},
                 {"filled_voxels", r.pores.filled_voxels}};
+  j["grey_evidence"] = {{"enabled", r.graded},
+                        {"bright_fraction", o.bright_fraction},
+                        {"bright_value", r.bright_value},
+                        {"rule", "solid voxels with grey value <= bright_value are dim"},
+                        {"dim_fraction_of_solid", r.dim_fraction},
+                        {"dim_pockets_filled", r.dim_pockets.filled},
+                        {"dim_pocket_voxels_filled", r.dim_pockets.filled_voxels}};
   j["markers"] = {{"h", r.h}, {"connectivity", o.connectivity}, {"count", r.markers}};
   j["watershed"] = {{"lines", o.watershed_lines},
                     {"buckets_per_unit", o.buckets_per_unit},
@@ -200,6 +267,7 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
   j["merge"] = {{"enabled", o.merge},
                 {"ratio", o.merge_ratio},
                 {"touching_pairs", r.merge.touching_pairs},
+                {"passing_pairs", r.merge.candidates},
                 {"merges", r.merge.merges}};
   j["labels"] = {{"count", r.count}, {"min_size_vox", o.min_size_vox}, {"dropped", r.dropped}};
   json st = json::object();

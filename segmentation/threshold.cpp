@@ -181,4 +181,27 @@ Volume<uint8_t> binarise(Volume<uint16_t>&& v, uint16_t t) {
   return std::move(v).convert_in_place<uint8_t>([t](uint16_t x) -> uint8_t { return x > t ? 1 : 0; });
 }
 
+Volume<uint8_t> binarise_graded(const Volume<uint16_t>& v, uint16_t t, uint16_t tb) {
+  Volume<uint8_t> m(v.shape(), v.geometry());
+  const uint16_t* x = v.data();
+  uint8_t* y = m.data();
+  const int64_t n = v.size();
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < n; ++i) y[i] = uint8_t((x[i] > t) + (x[i] > tb));
+  return m;
+}
+
+Volume<uint8_t> binarise_graded(Volume<uint16_t>&& v, uint16_t t, uint16_t tb) {
+  return std::move(v).convert_in_place<uint8_t>([t, tb](uint16_t x) -> uint8_t { return uint8_t((x > t) + (x > tb)); });
+}
+
+double mean_above(const std::vector<int64_t>& hist, uint16_t t) {
+  double n = 0, sum = 0;
+  for (size_t g = size_t(t) + 1; g < hist.size(); ++g) {
+    n += double(hist[g]);
+    sum += double(hist[g]) * double(g);
+  }
+  return n > 0 ? sum / n : double(t);
+}
+
 }  // namespace tg

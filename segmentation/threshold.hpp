@@ -70,4 +70,14 @@ Volume<uint8_t> binarise(const Volume<uint16_t>& v, uint16_t t);
 // The same written over the scan's own storage (taken): no second volume.
 Volume<uint8_t> binarise(Volume<uint16_t>&& v, uint16_t t);
 
+// Graded mask, the grey evidence the later stages use where the geometry is
+// ambiguous (segment.hpp, "Grey evidence"): 0 void (v <= t), 1 dim solid
+// (t < v <= t_bright), 2 bright solid (v > t_bright). Same storage rules.
+Volume<uint8_t> binarise_graded(const Volume<uint16_t>& v, uint16_t t, uint16_t t_bright);
+Volume<uint8_t> binarise_graded(Volume<uint16_t>&& v, uint16_t t, uint16_t t_bright);
+
+// Mean grey level of the voxels above t (the solid phase, partial-volume
+// voxels included); t itself when none is above.
+double mean_above(const std::vector<int64_t>& hist, uint16_t t);
+
 }  // namespace tg

@@ -155,6 +155,10 @@ static tg::app::Registrar reg{{"segment", 30, [](CLI::App& app, CLI::App*& sub) 
                   "Solid darker than t + f (mean solid grey - t) is dim, f in 0..1")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
+  sub->add_option("--bright-sigmas", o->seg.bright_sigmas,
+                  "...and at least this many noise sigmas below the solid's peak grey")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   sub->add_flag("--no-merge", o->no_merge, "Do not merge over-segmented pieces");
   sub->add_option("--merge-ratio", o->seg.merge_ratio,
                   "Merge when the shared interface >= ratio * pi r^2 (r: smaller piece's equivalent radius)")

@@ -15,6 +15,16 @@
 namespace tg {
 namespace {
 
+// An interface's size in units (line voxels or faces): all of it, and its
+// bright part (grey evidence).
+struct Area {
+  int64_t all = 0, bright = 0;
+  Area& operator+=(const Area& o) {
+    all += o.all, bright += o.bright;
+    return *this;
+  }
+};
+
 uint64_t pair_key(uint32_t a, uint32_t b) {
   if (a > b) std::swap(a, b);
   return (uint64_t(a) << 32) | b;
@@ -60,7 +70,7 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
   // summed at the end (integer counts: the sums do not depend on the order;
   // the pairs are visited in key order below).
   const seg::Neighbourhood nb(s, 26);
-  std::unordered_map<uint64_t, int64_t> iface;
+  std::unordered_map<uint64_t, Area> iface;
   // Line voxels between exactly two labels, per thread in index order:
   // those between two labels that merge join them below, without a second
   // look at their neighbours.
@@ -70,19 +80,20 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
 #pragma omp parallel num_threads(nthreads) if (parallel)
   {
     std::vector<int64_t> my_vol(vol.size(), 0);
-    std::unordered_map<uint64_t, int64_t> my_iface;
+    std::unordered_map<uint64_t, Area> my_iface;
     auto& my_two = two[size_t(omp_get_thread_num())];
     // Neighbouring interface voxels mostly share their pair: counts go to
     // the map when the pair changes, not one lookup a voxel.
     uint64_t last_key = 0;
-    int64_t pending = 0;
-    auto count_pair = [&](uint64_t key) {
+    Area pending;
+    auto count_pair = [&](uint64_t key, bool is_bright) {
       if (key != last_key) {
-        if (pending) my_iface[last_key] += pending;
+        if (pending.all) my_iface[last_key] += pending;
         last_key = key;
-        pending = 0;
+        pending = {};
       }
-      ++pending;
+      ++pending.all;
+      pending.bright += is_bright;
     };
     // Row by row, in runs of one label: a run adds its length to the
     // label's volume; its voxels are looked at one by one only where that
@@ -107,7 +118,7 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
               uint32_t ls[3];
               if (neighbour_labels(labels, nb, k, j, i, idx, ls) == 2) {
                 const uint64_t key = pair_key(ls[0], ls[1]);
-                if (m[idx] >= bright) count_pair(key);
+                count_pair(key, m[idx] >= bright);
                 my_two.emplace_back(idx, key);
               }
             }
@@ -118,18 +129,18 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
               const uint32_t by = up ? up[i] : 0, bz = back ? back[i] : 0;
               const bool x_other = i + 1 == i1 && i1 < s.nx && L[row + i1] != 0;
               if (!x_other && (by == 0 || by == a) && (bz == 0 || bz == a)) continue;
-              // A face counts when both its voxels are bright.
+              // A face is bright when both its voxels are.
               const int64_t idx = row + i;
-              if (m[idx] < bright) continue;
-              if (x_other && m[idx + 1] >= bright) count_pair(pair_key(a, L[row + i1]));
-              if (by != 0 && by != a && m[idx + sy] >= bright) count_pair(pair_key(a, by));
-              if (bz != 0 && bz != a && m[idx + sz] >= bright) count_pair(pair_key(a, bz));
+              const bool here = m[idx] >= bright;
+              if (x_other) count_pair(pair_key(a, L[row + i1]), here && m[idx + 1] >= bright);
+              if (by != 0 && by != a) count_pair(pair_key(a, by), here && m[idx + sy] >= bright);
+              if (bz != 0 && bz != a) count_pair(pair_key(a, bz), here && m[idx + sz] >= bright);
             }
           }
           i0 = i1;
         }
       }
-    if (pending) my_iface[last_key] += pending;
+    if (pending.all) my_iface[last_key] += pending;
 #pragma omp critical
     {
       for (size_t l = 0; l < vol.size(); ++l) vol[l] += my_vol[l];
@@ -149,7 +160,7 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
   // it as the smaller label (equal volumes: the higher number is the
   // smaller), the one with the largest interface (ties: the lowest number,
   // the first in key order).
-  const std::map<uint64_t, int64_t> ordered(iface.begin(), iface.end());  // deterministic order
+  const std::map<uint64_t, Area> ordered(iface.begin(), iface.end());  // deterministic order
   std::vector<uint32_t> best(size_t(maxl) + 1, 0);
   std::vector<int64_t> best_area(size_t(maxl) + 1, 0);
   for (const auto& [key, area] : ordered) {
@@ -157,9 +168,10 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
     if (vol[a] < vol[b] || (vol[a] == vol[b] && a > b)) std::swap(a, b);
     const uint32_t small = b, large = a;
     const double r = std::cbrt(3.0 * double(vol[small]) / (4.0 * std::numbers::pi));
-    if (double(area) < opt.ratio * std::numbers::pi * r * r) continue;
+    if (double(area.bright) < opt.ratio * std::numbers::pi * r * r) continue;
+    if (double(area.bright) < opt.min_bright_share * double(area.all)) continue;
     ++res.candidates;
-    if (area > best_area[small]) best_area[small] = area, best[small] = large;
+    if (area.bright > best_area[small]) best_area[small] = area.bright, best[small] = large;
   }
   for (uint32_t l = 1; l <= maxl; ++l) {
     if (best[l] == 0) continue;

@@ -22,11 +22,15 @@
 // of two labels counts one.
 //
 // Grey evidence (segment.hpp): only the *bright* part of an interface
-// counts (line voxels, or both voxels of a face, at level >= bright_level).
-// The gap between two fragments a voxel apart stays darker than solid even
-// where blur and noise bridge it, so their interface is mostly dim and they
-// stay apart however wide it is; an interface cutting through one grain is
-// as bright as its interior and counts in full. bright_level 1 counts every
+// counts (line voxels, or both voxels of a face, at level >= bright_level),
+// and it must be at least min_bright_share of the whole interface. The gap
+// between two fragments a voxel apart stays darker than solid even where
+// blur and noise bridge it, so their interface is mostly dim and they stay
+// apart however wide it is (bright only where a diagonal step of an oblique
+// gap lets two bright voxels touch corner to corner: 20-30 % of a chip's
+// face, which passed the area test of a small chip before the share test
+// was added); an interface cutting through one grain is as bright as its
+// interior but for its rim and counts in full. bright_level 1 counts every
 // solid voxel (a plain mask: no grey evidence).
 //
 // Whole-graph decision: pairs are decided from the labels as the watershed
@@ -55,6 +59,7 @@ namespace tg {
 struct MergeOptions {
   double ratio = 1.0;  // merge when interface >= ratio * pi r^2 (r: smaller label's equivalent radius)
   uint8_t bright_level = 1;  // interface voxels with a lower level in `solid` do not count (grey evidence)
+  double min_bright_share = 0.5;  // and the bright part must be at least this share of the interface
   // false: the merged labels' voxels keep their old labels and `root` says
   // where each goes, for a caller that renumbers anyway (relabel_consecutive
   // takes it as its premap): one pass over the volume less.

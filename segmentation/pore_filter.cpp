@@ -55,6 +55,8 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
                             uint8_t fill_value) {
   if (opt.max_volume_vox < 0 || !(opt.min_sphericity >= 0 && opt.min_sphericity <= 1))
     throw UsageError("pore filter: max volume must be >= 0 and min sphericity in [0, 1]");
+  if (opt.void_connectivity != 6 && opt.void_connectivity != 26)
+    throw UsageError("pore filter: the void's connectivity must be 6 or 26");
   if (solid_from == 0 || fill_value < solid_from) throw UsageError("pore filter: filled voxels must be solid");
   const Shape s = solid.shape();
   const int64_t nx = s.nx, ny = s.ny, rows = s.nz * s.ny;
@@ -99,14 +101,20 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
     }
     return x;
   };
+  // 26-connectivity (slack 1): runs also touch corner to corner, in the
+  // diagonal rows too.
+  const int64_t slack = opt.void_connectivity == 26 ? 1 : 0;
   auto unite_with = [&](int64_t k, int64_t j, int64_t kk, int64_t jj) {
+    if (jj < 0 || jj >= ny) return;
     const auto [b0, e0] = row_runs(k, j);
     const auto [b1, e1] = row_runs(kk, jj);
     // Both rows' runs are sorted: one walk over the two, uniting each
-    // overlapping pair (u and v overlap when each starts before the other ends).
+    // overlapping pair (u and v overlap when each starts before the other
+    // ends, give or take the slack; runs of a row are a voxel apart at
+    // least, so advancing the one that ends first still misses none).
     const Run *u = b0, *v = b1;
     while (u < e0 && v < e1) {
-      if (u->a < v->b && v->a < u->b) {
+      if (u->a < v->b + slack && v->a < u->b + slack) {
         const int64_t x = find(u - run.data()), y = find(v - run.data());
         if (x < y) parent[size_t(y)] = x;
         else if (y < x) parent[size_t(x)] = y;
@@ -122,10 +130,12 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
     for (int64_t k = slab_begin(p); k < slab_begin(p + 1); ++k)
       for (int64_t j = 0; j < ny; ++j) {
         if (j > 0) unite_with(k, j, k, j - 1);
-        if (k > slab_begin(p)) unite_with(k, j, k - 1, j);
+        if (k > slab_begin(p))
+          for (int64_t dj = -slack; dj <= slack; ++dj) unite_with(k, j, k - 1, j + dj);
       }
   for (int64_t p = 1; p < slabs; ++p)
-    for (int64_t j = 0; j < ny; ++j) unite_with(slab_begin(p), j, slab_begin(p) - 1, j);
+    for (int64_t j = 0; j < ny; ++j)
+      for (int64_t dj = -slack; dj <= slack; ++dj) unite_with(slab_begin(p), j, slab_begin(p) - 1, j + dj);
   // Component numbers in raster order of their first run (parent[p] <= p).
   std::vector<int64_t> comp(static_cast<size_t>(R));
   int64_t count = 0;

@@ -41,6 +41,12 @@ namespace tg {
 struct PoreFilterOptions {
   int64_t max_volume_vox = 0;   // enclosed voids with more voxels are kept void
   double min_sphericity = 0.5;  // enclosed voids with lower Psi are kept void
+  // 6: the dual of 26-connected solid (pores). 26: the dual of 6-connected
+  // solid, for segment()'s dim pockets: a 1-voxel-thick oblique dim sheet
+  // (a blurred gap) is one 26-connected piece reaching the outside, but
+  // falls apart into hundreds of 6-connected specks that the solid seems
+  // to enclose, and filling those closed the gap.
+  int void_connectivity = 6;
   static PoreFilterOptions from_grain_radius(double grain_radius_vox);
   std::string describe() const;  // one line for logs and summaries
 };

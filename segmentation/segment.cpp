@@ -46,7 +46,8 @@ void validate(const SegmentOptions& o) {
 
 // The threshold, and with `bright` the grey level above which solid is
 // bright (SegmentOptions::bright_fraction).
-ThresholdResult choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o, uint16_t* bright) {
+ThresholdResult choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o, uint16_t* bright,
+                                 double* noise_sigma) {
   const auto hist = histogram_u16(grey);
   ThresholdResult t;
   if (o.threshold == ThresholdMethod::manual) {
@@ -57,8 +58,14 @@ ThresholdResult choose_threshold(const Volume<uint16_t>& grey, const SegmentOpti
   }
   t.separability = separability(hist, t.value);
   if (bright) {
-    const double b = double(t.value) + o.bright_fraction * (mean_above(hist, t.value) - double(t.value));
+    // Halfway to the solid's mean grey, and at least bright_sigmas noise
+    // sigmas below the solid's peak (a noisy scan lowers it, down to t:
+    // then nothing is dim, and the grey evidence is off).
+    const SolidPeak peak = solid_peak(hist, t.value);
+    const double b = std::min(double(t.value) + o.bright_fraction * (mean_above(hist, t.value) - double(t.value)),
+                              peak.mode - o.bright_sigmas * peak.sigma);
     *bright = uint16_t(std::clamp(std::lround(b), long(t.value), 65535L));
+    if (noise_sigma) *noise_sigma = peak.sigma;
   }
   return t;
 }
@@ -70,7 +77,8 @@ SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owne
   SegmentResult r0;
   StageClock clock(r0);
   uint16_t bright = 0;
-  const ThresholdResult t = choose_threshold(grey, opt, opt.grey_evidence ? &bright : nullptr);
+  double noise = 0;
+  const ThresholdResult t = choose_threshold(grey, opt, opt.grey_evidence ? &bright : nullptr, &noise);
   // An owned scan becomes the mask in its own storage.
   Volume<uint8_t> mask;
   if (opt.grey_evidence)
@@ -81,6 +89,11 @@ SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owne
   SegmentResult r = segment_graded(std::move(mask), opt, opt.grey_evidence);
   r.threshold = t;
   r.bright_value = bright;
+  r.solid_noise_sigma = noise;
+  if (opt.grey_evidence && bright <= t.value)
+    r.notes.push_back("grey evidence off: the solid's noise (sigma " + std::to_string(long(noise)) +
+                      " grey levels) leaves no dim band between the threshold and " +
+                      std::to_string(int(opt.bright_sigmas)) + " sigmas below the solid's peak");
   if (!t.note.empty()) r.notes.insert(r.notes.begin(), t.note);
   if (t.separability < 0.75)
     r.notes.push_back("the grey histogram is hardly bimodal (separability " + std::to_string(t.separability) +
@@ -99,6 +112,8 @@ SegmentOptions SegmentOptions::resolved() const {
   if (!(o.h >= 0)) throw UsageError("segment: the marker depth h must be >= 0");
   if (!(o.bright_fraction >= 0 && o.bright_fraction <= 1))
     throw UsageError("segment: the bright fraction must be in [0, 1]");
+  if (!(o.bright_sigmas >= 0) || !std::isfinite(o.bright_sigmas))
+    throw UsageError("segment: bright sigmas must be >= 0");
   return o;
 }
 
@@ -125,10 +140,14 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   StageClock clock(r);
   const Shape s = solid.shape();
   const int64_t n = solid.size();
-  int64_t nsolid = 0;
   uint8_t* sm = solid.data();
-#pragma omp parallel for schedule(static) reduction(+ : nsolid)
-  for (int64_t i = 0; i < n; ++i) nsolid += sm[i] != 0;
+  auto count_solid = [&] {
+    int64_t c = 0;
+#pragma omp parallel for schedule(static) reduction(+ : c)
+    for (int64_t i = 0; i < n; ++i) c += sm[i] != 0;
+    return c;
+  };
+  int64_t nsolid = count_solid();
   r.solid_fraction = n ? double(nsolid) / double(n) : 0.0;
   r.h = opt.h;
   r.graded = graded;
@@ -138,16 +157,13 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   if (opt.fill_pores) r.pores = fill_pores(solid, r.pore_criteria, 1, bright);
   nsolid += r.pores.filled_voxels;
   if (graded && opt.fill_pores) {
-    // Dim pockets enclosed by bright solid: a filled pore's partial-volume
-    // shell, noise specks. Any shape (an enclosed pocket cannot part two
+    // Dim pockets enclosed by bright solid (26-connected: see
+    // PoreFilterOptions): a filled pore's partial-volume shell, noise
+    // specks. Any shape (an enclosed pocket cannot part two
     // pieces that the bright solid around it joins), twice the pore volume
     // (the pore with its shell).
-    r.dim_pockets = fill_pores(solid, {2 * opt.pore_max_volume_vox, 0.0}, 2, 2);
-    if (r.dim_pockets.filled) {  // an enclosed pocket may hold void voxels too
-      nsolid = 0;
-#pragma omp parallel for schedule(static) reduction(+ : nsolid)
-      for (int64_t i = 0; i < n; ++i) nsolid += sm[i] != 0;
-    }
+    r.dim_pockets = fill_pores(solid, {2 * opt.pore_max_volume_vox, 0.0, 26}, 2, 2);
+    if (r.dim_pockets.filled) nsolid = count_solid();  // an enclosed pocket may hold void voxels too
   }
   clock.lap("pores");
 
@@ -215,7 +231,11 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   if (graded && r.buckets_per_unit < 1)
     r.notes.push_back("grey evidence not used by the merge: grains over 254 voxels deep leave no level for dim voxels");
   const uint8_t merge_bright = graded && r.buckets_per_unit >= 1 ? 2 : 1;
-  if (opt.merge) r.merge = merge_oversegmented(lab, levels, {opt.merge_ratio, merge_bright, false});
+  MergeOptions mo;
+  mo.ratio = opt.merge_ratio;
+  mo.bright_level = merge_bright;
+  mo.apply = false;
+  if (opt.merge) r.merge = merge_oversegmented(lab, levels, mo);
   clock.lap("merge");
   levels = Volume<uint8_t>();
   const auto rl = relabel_consecutive(lab, opt.min_size_vox, r.merge.root.empty() ? nullptr : &r.merge.root);
@@ -255,6 +275,8 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                 {"filled_voxels", r.pores.filled_voxels}};
   j["grey_evidence"] = {{"enabled", r.graded},
                         {"bright_fraction", o.bright_fraction},
+                        {"bright_sigmas", o.bright_sigmas},
+                        {"solid_noise_sigma", r.solid_noise_sigma},
                         {"bright_value", r.bright_value},
                         {"rule", "solid voxels with grey value <= bright_value are dim"},
                         {"dim_fraction_of_solid", r.dim_fraction},

@@ -204,4 +204,44 @@ double mean_above(const std::vector<int64_t>& hist, uint16_t t) {
   return n > 0 ? sum / n : double(t);
 }
 
+SolidPeak solid_peak(const std::vector<int64_t>& hist, uint16_t t) {
+  const size_t lo = size_t(t) + 1;
+  int64_t n = 0;
+  for (size_t g = lo; g < hist.size(); ++g) n += hist[g];
+  if (n == 0) return {double(t), 0.0};
+  // Top: the 99.9th percentile of the solid voxels (saturated outliers out).
+  size_t top = lo;
+  for (int64_t c = 0; top < hist.size(); ++top)
+    if ((c += hist[top]) >= n - n / 1000) break;
+  constexpr int kBins = 256;
+  const double w = std::max(1.0, double(top + 1 - lo) / kBins);
+  std::vector<double> bin(kBins, 0.0), gsum(kBins, 0.0);
+  for (size_t g = lo; g <= top && g < hist.size(); ++g) {
+    const int b = std::min(kBins - 1, int(double(g - lo) / w));
+    bin[size_t(b)] += double(hist[g]);
+    gsum[size_t(b)] += double(hist[g]) * double(g);
+  }
+  int best = 0;
+  double best_count = -1;
+  for (int b = 0; b < kBins; ++b) {
+    double c = 0;
+    for (int d = std::max(0, b - 2); d <= std::min(kBins - 1, b + 2); ++d) c += bin[size_t(d)];
+    if (c > best_count) best_count = c, best = b;
+  }
+  SolidPeak p;
+  p.mode = bin[size_t(best)] > 0 ? gsum[size_t(best)] / bin[size_t(best)] : double(lo) + (best + 0.5) * w;
+  // Median of the deviations above the mode.
+  const size_t m0 = size_t(std::ceil(p.mode));
+  int64_t above = 0;
+  for (size_t g = m0; g < hist.size(); ++g) above += hist[g];
+  int64_t c = 0;
+  for (size_t g = m0; g < hist.size(); ++g)
+    if ((c += hist[g]) * 2 >= above) {
+      p.sigma = (double(g) - p.mode) / 0.6745;
+      break;
+    }
+  p.sigma = std::max(0.0, p.sigma);
+  return p;
+}
+
 }  // namespace tg

@@ -80,4 +80,15 @@ Volume<uint8_t> binarise_graded(Volume<uint16_t>&& v, uint16_t t, uint16_t t_bri
 // voxels included); t itself when none is above.
 double mean_above(const std::vector<int64_t>& hist, uint16_t t);
 
+// The solid phase's peak above t: its mode (the histogram above t in 256
+// bins up to its 99.9th percentile, smoothed over 5 bins, the fullest bin's
+// mean grey) and its noise sigma from the upper side of the peak only
+// (partial-volume voxels lie below the mode, the noise on both sides):
+// sigma = median(g - mode | g >= mode) / 0.6745, the half-normal's median.
+// {t, 0} when nothing is above t.
+struct SolidPeak {
+  double mode = 0, sigma = 0;
+};
+SolidPeak solid_peak(const std::vector<int64_t>& hist, uint16_t t);
+
 }  // namespace tg

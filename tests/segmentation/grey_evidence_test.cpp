@@ -38,6 +38,22 @@ TEST(GreyEvidence, MeanAboveTheThreshold) {
   EXPECT_DOUBLE_EQ(mean_above(h, 300), 300.0);  // nothing above: t itself
 }
 
+TEST(GreyEvidence, SolidPeakModeAndNoiseFromTheUpperSide) {
+  // A Gaussian solid peak (mode 30000, sigma 1500) with a partial-volume
+  // tail below it and a void peak: the tail must not widen the estimate.
+  std::vector<int64_t> h(65536, 0);
+  for (int g = 20001; g < 40000; ++g) {
+    const double z = (g - 30000) / 1500.0;
+    h[size_t(g)] += std::llround(1e6 * std::exp(-0.5 * z * z));
+  }
+  for (int g = 20001; g < 29000; ++g) h[size_t(g)] += 300;  // the tail
+  for (int g = 5000; g <= 15000; ++g) h[size_t(g)] += 1000;  // void (below t)
+  const auto p = solid_peak(h, 20000);
+  EXPECT_NEAR(p.mode, 30000, 100);
+  EXPECT_NEAR(p.sigma, 1500, 60);
+  EXPECT_EQ(solid_peak(h, 65535).sigma, 0.0);  // nothing above t
+}
+
 TEST(GreyEvidence, DistanceToVoidOrDim) {
   // The EDT of a graded mask from level 2 equals the EDT of the mask of its 2s.
   auto m = Volume<uint8_t>::filled(Shape{20, 21, 22}, 0);
@@ -90,6 +106,31 @@ struct Halves {
     }
   }
 };
+
+TEST(GreyEvidence, AnObliqueDimSheetIsOneComponentWith26Connectivity) {
+  // A 1-voxel-thick oblique dim sheet z + y + x = 45 through a bright ball:
+  // its voxels meet edge to edge only. 6-connected it is hundreds of specks
+  // that bright solid encloses (and filling them closed the gap);
+  // 26-connected it is one sheet reaching the dim surface shell.
+  auto sheet = [] {
+    auto m = Volume<uint8_t>::filled(Shape{30, 30, 30}, 0);
+    draw_ball(m, 15, 15, 15, 12, 1);
+    draw_ball(m, 15, 15, 15, 11, 2);
+    for (int64_t k = 0; k < 30; ++k)
+      for (int64_t j = 0; j < 30; ++j) {
+        const int64_t i = 45 - k - j;
+        if (i >= 0 && i < 30 && m(k, j, i)) m(k, j, i) = 1;
+      }
+    return m;
+  };
+  auto m26 = sheet();
+  EXPECT_EQ(fill_pores(m26, {1000, 0.0, 26}, 2, 2).filled, 0);
+  EXPECT_EQ(m26(15, 15, 15), 1);
+  auto m6 = sheet();
+  EXPECT_GT(fill_pores(m6, {1000, 0.0, 6}, 2, 2).filled, 100);
+  EXPECT_EQ(m6(15, 15, 15), 2);
+  EXPECT_THROW(fill_pores(m6, {1000, 0.0, 18}, 2, 2), UsageError);
+}
 
 TEST(GreyEvidence, OnlyTheBrightPartOfAnInterfaceCounts) {
   Halves bright(5), dim(1);

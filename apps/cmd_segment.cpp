@@ -110,7 +110,8 @@ static tg::app::Registrar reg{{"segment", 30, [](CLI::App& app, CLI::App*& sub) 
       "apart). The distance map stops at dim voxels, so fragments keep one marker each even\n"
       "where noise bridges their gap, and only the bright part of an interface counts for a merge.\n"
       "Defaults derive from the expected grain radius R in voxels: pores up to 2 % of a grain's\n"
-      "volume are filled; marker depth h = 0.7 voxels. Distances are in voxels of the finest axis.\n"
+      "volume are filled; marker depth h = max(0.7, 0.035 R) voxels (bumps grow with the grain).\n"
+      "Distances are in voxels of the finest axis.\n"
       "Writes labels (uint32, 0 = void) to /labels of the HDF5 output and a JSON summary\n"
       "(threshold, pore criteria and pores filled, markers, merges, labels, seconds per stage,\n"
       "peak memory) beside it as OUTPUT.segment.json. float32 input is normalised to 16 bits\n"
@@ -142,7 +143,7 @@ static tg::app::Registrar reg{{"segment", 30, [](CLI::App& app, CLI::App*& sub) 
                   "Least sphericity 36 pi V^2/A^3 of a filled pore, 0..1")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
-  sub->add_option("--h", o->seg.h, "Marker depth (h-maxima dynamic) in voxels")->capture_default_str();
+  sub->add_option("--h", o->seg.h, "Marker depth (h-maxima dynamic) in voxels (default: max(0.7, 0.035 R))");
   sub->add_option("--connectivity", o->seg.connectivity, "Markers and watershed neighbourhood: 6, 18 or 26")
       ->capture_default_str();
   sub->add_flag("--no-lines", o->no_lines, "Touching grains touch in the labels (no void line between them)");

@@ -78,7 +78,12 @@ def segment_rows(base):
         (["--no-lines"], "differs"),
         (["--buckets-per-voxel", "1"], "differs"),
         (["--no-merge"], ("merge", "enabled", False)),  # intact grains: nothing to merge
-        (["--merge-ratio", "0.2"], "differs"),
+        # Grey evidence: this crop's contacts are dim, so no interface is
+        # bright enough to merge at any ratio; the ratio shows on the plain mask.
+        (["--merge-ratio", "0.2", "--no-grey-evidence"], "differs"),
+        (["--no-grey-evidence"], "differs"),
+        (["--bright-fraction", "0.1"], "differs"),
+        (["--bright-sigmas", "0"], ("grey_evidence", "bright_sigmas", 0.0)),
         (["--min-size", "5000"], "differs"),
         # The scale: recorded in the summary (the labels of this crop do not
         # move with it: it sets only the default pore size limit).

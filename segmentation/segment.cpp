@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <fmt/core.h>
 #include <nlohmann/json.hpp>
 #include <omp.h>
 
@@ -41,37 +42,92 @@ void validate(const SegmentOptions& o) {
   if (o.threshold == ThresholdMethod::manual && (o.manual_threshold < 0 || o.manual_threshold > 65535))
     throw UsageError("segment: a manual threshold must be a grey level in 0..65535");
   if (o.min_size_vox < 1) throw UsageError("segment: the minimum label size must be >= 1 voxel");
+  if (o.saturation_level < 1 || o.saturation_level > 65535)
+    throw UsageError("segment: the saturation level must be a grey level in 1..65535");
+  if (o.local_window_vox < 0 || o.local_window_vox == 1)
+    throw UsageError("segment: the local threshold's window must be >= 2 voxels (0: the default, 10 R)");
   seg::check_connectivity(o.connectivity);
 }
 
-ThresholdResult choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o) {
-  const auto hist = histogram_u16(grey);
+// The grey -> mask decisions: which voxels are data (field of view,
+// pre-masked zeros, saturation), then the threshold on their histogram.
+struct GreyDecision {
+  FieldOfView fov;
+  LevelScreen levels;
   ThresholdResult t;
+  LocalThreshold local;
+};
+
+GreyDecision choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o) {
+  GreyDecision d;
+  d.fov = find_field_of_view(grey, o.fov);
+  auto hist = histogram_in_fov(grey, d.fov);
+  d.levels = screen_levels(hist, o.saturation_level);
+  bool any = false;
+  for (const int64_t c : hist) any = any || c > 0;
+  if (!any)
+    throw InputError(std::string("segment: every voxel") + (d.fov.active ? " inside the field of view" : "") +
+                     " is 0 (" + d.levels.action() + "): nothing to threshold");
   if (o.threshold == ThresholdMethod::manual) {
-    t.method = ThresholdMethod::manual;
-    t.value = static_cast<uint16_t>(o.manual_threshold);
+    d.t.method = ThresholdMethod::manual;
+    d.t.value = static_cast<uint16_t>(o.manual_threshold);
   } else {
-    t = o.threshold == ThresholdMethod::otsu ? otsu_threshold(hist) : moments_threshold(hist);
+    d.t = o.threshold == ThresholdMethod::otsu ? otsu_threshold(hist) : moments_threshold(hist);
   }
-  t.separability = separability(hist, t.value);
-  return t;
+  d.t.separability = separability(hist, d.t.value);
+  if (o.threshold == ThresholdMethod::local) {
+    d.t.method = ThresholdMethod::local;
+    const int64_t w = o.local_window_vox > 0 ? o.local_window_vox : default_local_window(o.grain_radius_vox);
+    d.local = local_moments_thresholds(grey, d.fov, hist, w, d.t.value);
+  }
+  return d;
 }
 
 SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owned, const SegmentOptions& opt) {
   validate(opt);
   SegmentResult r0;
   StageClock clock(r0);
-  const ThresholdResult t = choose_threshold(grey, opt);
+  GreyDecision d = choose_threshold(grey, opt);
+  const ThresholdResult& t = d.t;
   // An owned scan becomes the mask in its own storage.
-  auto mask = owned ? binarise(std::move(*owned), t.value) : binarise(grey, t.value);
+  Volume<uint8_t> mask;
+  if (t.method == ThresholdMethod::local) {
+    mask = owned ? binarise_local(std::move(*owned), d.local, d.fov) : binarise_local(grey, d.local, d.fov);
+  } else {
+    mask = owned ? binarise(std::move(*owned), t.value) : binarise(grey, t.value);
+    clear_outside(mask, d.fov);
+  }
+  int64_t nsolid = 0;  // solid fraction of the field of view (segment_mask's is of the whole volume)
+  if (d.fov.active) {
+    const uint8_t* m = mask.data();
+#pragma omp parallel for schedule(static) reduction(+ : nsolid)
+    for (int64_t i = 0; i < mask.size(); ++i) nsolid += m[i];
+  }
   clock.lap("threshold");
   SegmentResult r = segment_mask(std::move(mask), opt);
   r.threshold = t;
-  if (!t.note.empty()) r.notes.insert(r.notes.begin(), t.note);
+  if (d.fov.active) {
+    const int64_t inside = d.fov.inside_voxels(r.labels.shape());
+    r.solid_fraction = inside ? double(nsolid) / double(inside) : 0.0;
+  }
+  std::vector<std::string> notes;
+  if (!t.note.empty()) notes.push_back(t.note);
+  if (!d.fov.note.empty()) notes.push_back(d.fov.note);
+  if (d.fov.active)
+    notes.push_back(fmt::format("field of view ({}): centre (y {:.1f}, x {:.1f}), radius {:.1f} voxels; {:.3g} % of the "
+                                "voxels outside, not thresholded nor labelled",
+                                d.fov.source, d.fov.centre_y, d.fov.centre_x, d.fov.radius,
+                                100.0 * double(d.fov.outside_voxels) / double(std::max<int64_t>(1, r.labels.size()))));
+  notes.insert(notes.end(), d.levels.notes.begin(), d.levels.notes.end());
+  if (!d.local.note.empty()) notes.push_back(d.local.note);
+  r.notes.insert(r.notes.begin(), notes.begin(), notes.end());
   if (t.separability < 0.75)
     r.notes.push_back("the grey histogram is hardly bimodal (separability " + std::to_string(t.separability) +
                       " < 0.75; one noisy phase gives 0.64): the scan may hold void only or solid only, and the "
                       "labels may be noise");
+  r.fov = std::move(d.fov);
+  r.levels = std::move(d.levels);
+  r.local = std::move(d.local);
   r.stage_seconds.insert(r.stage_seconds.begin(), r0.stage_seconds.begin(), r0.stage_seconds.end());
   return r;
 }
@@ -184,7 +240,29 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                     {"separability", r.threshold.separability},
                     {"z0", r.threshold.z0},
                     {"z1", r.threshold.z1}};
+  if (r.threshold.method == ThresholdMethod::local)
+    j["threshold"]["local"] = {{"window_vox", r.local.window},
+                               {"blocks_zyx", {r.local.nbz, r.local.nby, r.local.nbx}},
+                               {"blocks_bimodal", r.local.trusted},
+                               {"blocks_from_neighbours", r.local.filled},
+                               {"min", r.local.min},
+                               {"max", r.local.max},
+                               {"global_value_is", "the global moments threshold, the fallback"}};
   j["solid_fraction"] = r.solid_fraction;
+  j["field_of_view"] = {{"source", r.fov.source},
+                        {"active", r.fov.active},
+                        {"centre_yx", {r.fov.centre_y, r.fov.centre_x}},
+                        {"radius_vox", r.fov.radius},
+                        {"outside_value", r.fov.outside_value},
+                        {"fit_rms_vox", r.fov.fit_rms},
+                        {"voxels_outside", r.fov.outside_voxels},
+                        {"premasked_zero_voxels", r.levels.zeros_premasked ? r.levels.zero_count : int64_t(0)},
+                        {"detection", o.fov.detect}};
+  j["saturation"] = {{"level", r.levels.top_level},
+                     {"fraction", r.levels.top_fraction()},
+                     {"zero_fraction", r.levels.zero_fraction()},
+                     {"zeros", r.levels.zeros_premasked ? "pre-masked" : r.levels.zeros_clipped ? "clipped" : "data"},
+                     {"action", r.levels.action()}};
   j["pores"] = {{"enabled", o.fill_pores},
                 {"criteria", r.pore_criteria.describe()},
                 {"max_volume_vox", r.pore_criteria.max_volume_vox},

@@ -81,7 +81,7 @@ class RowThresholds {
 
 }  // namespace
 
-int64_t default_local_window(double r) { return std::max<int64_t>(32, int64_t(std::lround(10.0 * r))); }
+int64_t default_local_window(double r) { return std::max<int64_t>(32, int64_t(std::lround(4.0 * r))); }
 
 LocalThreshold local_moments_thresholds(const Volume<uint16_t>& grey, const FieldOfView& fov,
                                         const std::vector<int64_t>& screened, int64_t window, uint16_t fallback) {

@@ -45,7 +45,7 @@ void validate(const SegmentOptions& o) {
   if (o.saturation_level < 1 || o.saturation_level > 65535)
     throw UsageError("segment: the saturation level must be a grey level in 1..65535");
   if (o.local_window_vox < 0 || o.local_window_vox == 1)
-    throw UsageError("segment: the local threshold's window must be >= 2 voxels (0: the default, 10 R)");
+    throw UsageError("segment: the local threshold's window must be >= 2 voxels (0: the default, 4 R)");
   seg::check_connectivity(o.connectivity);
 }
 

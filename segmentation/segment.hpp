@@ -56,7 +56,7 @@ struct SegmentOptions {
 
   ThresholdMethod threshold = ThresholdMethod::moments;
   int manual_threshold = -1;  // grey level for ThresholdMethod::manual (voxels above are solid)
-  int64_t local_window_vox = 0;  // ThresholdMethod::local: block edge; 0: 10 R (default_local_window)
+  int64_t local_window_vox = 0;  // ThresholdMethod::local: block edge; 0: 4 R (default_local_window)
 
   // Which voxels are data (field_of_view.hpp): the circular field of view
   // (detected from a constant outside, given, or none) and the input's top

@@ -82,6 +82,8 @@ TEST(FieldOfView, SaturatedBlockLeavesTheThresholdAlone) {
     EXPECT_FALSE(r0.levels.top_saturated);
     EXPECT_NEAR(r1.levels.top_fraction(), 29.0 * 29 * 29 / (96.0 * 96 * 96), 1e-9);
     EXPECT_TRUE(has_note(r1, "2.76 % of the voxels saturated at 65535: left out of the threshold's histogram"));
+    const auto js = summary_json(r1, opts(6));
+    EXPECT_NE(js.find("\"action\": \"level 65535 left out of the histogram, kept solid\""), std::string::npos) << js;
     auto outside = [&](int64_t k, int64_t j, int64_t i) { return !in_block(k, j, i); };
     const double f0 = fraction_in(solid_of(r0.labels), outside), f1 = fraction_in(solid_of(r1.labels), outside);
     EXPECT_NEAR(f1, f0, 0.002);
@@ -184,6 +186,10 @@ TEST(FieldOfView, ZeroedOutsideGivesTheCropsThreshold) {
       for (int64_t i = 0; i < s.nx; ++i)
         if (std::hypot(double(j) - cy, double(i) - cx) > rad && rf.labels(k, j, i)) ++outside_labelled;
   EXPECT_EQ(outside_labelled, 0);
+  const auto js = summary_json(rf, opts(6));
+  EXPECT_NE(js.find("\"source\": \"detected\""), std::string::npos) << js;
+  EXPECT_NE(js.find("\"voxels_outside\": " + std::to_string(rf.fov.outside_voxels)), std::string::npos) << js;
+  EXPECT_NE(js.find("\"premasked_zero_voxels\": 0"), std::string::npos) << js;  // the zeros were all outside
 }
 
 // A bright constant outside (35000, above the solid): without the field of

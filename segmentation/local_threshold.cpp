@@ -103,47 +103,54 @@ LocalThreshold local_moments_thresholds(const Volume<uint16_t>& grey, const Fiel
   if (lo < 0) throw InputError("segment: no grey level left to threshold");
   int shift = 0;
   while (((hi - lo) >> shift) >= kBins) ++shift;
-  std::vector<int64_t> hist(size_t(nb * kBins), 0);
   const Axis ax = axis(s.nx, lt.nbx);
-  // Each (bz, by) row of blocks is one iteration: its blocks' histograms
-  // are written by one thread only.
-#pragma omp parallel for schedule(static)
-  for (int64_t q = 0; q < lt.nbz * lt.nby; ++q) {
-    const int64_t bz = q / lt.nby, by = q % lt.nby;
-    int64_t* h = hist.data() + q * lt.nbx * kBins;
-    for (int64_t k = bound(bz, s.nz, lt.nbz); k < bound(bz + 1, s.nz, lt.nbz); ++k)
-      for (int64_t j = bound(by, s.ny, lt.nby); j < bound(by + 1, s.ny, lt.nby); ++j) {
-        const uint16_t* row = &grey(k, j, 0);
-        const int64_t a = fov.active ? fov.x0[size_t(j)] : 0, e = fov.active ? fov.x1[size_t(j)] : s.nx;
-        for (int64_t i = a; i < e; ++i) {
-          const int64_t g = row[i];
-          if (g >= lo && g <= hi) ++h[ax.blk[size_t(i)] * kBins + ((g - lo) >> shift)];
-        }
-      }
-  }
-  // Own thresholds of the bimodal blocks.
   lt.t.assign(size_t(nb), 0.f);
   std::vector<uint8_t> known(size_t(nb), 0);
-  for (int64_t b = 0; b < nb; ++b) {
-    const std::vector<int64_t> h(hist.begin() + b * kBins, hist.begin() + (b + 1) * kBins);
-    int64_t n = 0;
-    for (auto c : h) n += c;
-    if (n < 64) continue;
-    ThresholdResult r;
-    try {
-      r = moments_threshold(h);
-    } catch (const InputError&) {
-      continue;  // a constant block
+  int64_t trusted = 0;
+  // Each (bz, by) row of blocks is one iteration: its histograms are made,
+  // thresholded and dropped by one thread (memory: nbx histograms per
+  // thread, not one per block of the volume).
+#pragma omp parallel reduction(+ : trusted)
+  {
+    std::vector<int64_t> hist(size_t(lt.nbx * kBins));
+#pragma omp for schedule(static)
+    for (int64_t q = 0; q < lt.nbz * lt.nby; ++q) {
+      const int64_t bz = q / lt.nby, by = q % lt.nby;
+      std::fill(hist.begin(), hist.end(), int64_t(0));
+      for (int64_t k = bound(bz, s.nz, lt.nbz); k < bound(bz + 1, s.nz, lt.nbz); ++k)
+        for (int64_t j = bound(by, s.ny, lt.nby); j < bound(by + 1, s.ny, lt.nby); ++j) {
+          const uint16_t* row = &grey(k, j, 0);
+          const int64_t a = fov.active ? fov.x0[size_t(j)] : 0, e = fov.active ? fov.x1[size_t(j)] : s.nx;
+          for (int64_t i = a; i < e; ++i) {
+            const int64_t g = row[i];
+            if (g >= lo && g <= hi) ++hist[size_t(ax.blk[size_t(i)] * kBins + ((g - lo) >> shift))];
+          }
+        }
+      // Own thresholds of the bimodal blocks.
+      for (int64_t bx = 0; bx < lt.nbx; ++bx) {
+        const std::vector<int64_t> h(hist.begin() + bx * kBins, hist.begin() + (bx + 1) * kBins);
+        int64_t n = 0;
+        for (auto c : h) n += c;
+        if (n < 64) continue;
+        ThresholdResult r;
+        try {
+          r = moments_threshold(h);
+        } catch (const InputError&) {
+          continue;  // a constant block
+        }
+        if (!r.note.empty()) continue;  // two grey levels only
+        int64_t below = 0;
+        for (int64_t g = 0; g <= r.value; ++g) below += h[size_t(g)];
+        const double f0 = double(below) / double(n);
+        if (std::min(f0, 1 - f0) < kMinPhase || separability(h, r.value) < kMinSeparability) continue;
+        const int64_t blk = q * lt.nbx + bx;
+        lt.t[size_t(blk)] = float(lo + (int64_t(r.value) << shift) + (int64_t(1) << shift) - 1);
+        known[size_t(blk)] = 1;
+        ++trusted;
+      }
     }
-    if (!r.note.empty()) continue;  // two grey levels only
-    int64_t below = 0;
-    for (int64_t g = 0; g <= r.value; ++g) below += h[size_t(g)];
-    const double f0 = double(below) / double(n);
-    if (std::min(f0, 1 - f0) < kMinPhase || separability(h, r.value) < kMinSeparability) continue;
-    lt.t[size_t(b)] = float(lo + (int64_t(r.value) << shift) + (int64_t(1) << shift) - 1);
-    known[size_t(b)] = 1;
-    ++lt.trusted;
   }
+  lt.trusted = trusted;
   if (lt.trusted == 0) {
     lt.t.assign(size_t(nb), float(fallback));
     lt.min = lt.max = float(fallback);

@@ -29,8 +29,9 @@
 // W 64 -2.4 %, W 48 (4 R) -1.9 %, W 32 -1.4 %.
 //
 // Deviation, for memory: a block's histogram has at most 4096 bins over
-// the screened global range (32 KiB per block, no 65536-bin histogram per
-// block; exact for 8-bit data, bins of 2^k levels otherwise, e.g. 8 levels
+// the screened global range (32 KiB; one row of blocks at a time per
+// thread, so the memory does not grow with the number of blocks; no
+// 65536-bin histogram per block; exact for 8-bit data, bins of 2^k levels otherwise, e.g. 8 levels
 // for a range of 30000); its threshold is the top of Tsai's bin, exact to
 // a bin, far below the noise of a scan.
 //

@@ -15,8 +15,10 @@
 namespace {
 
 
-// Any input type as u16: float32 is normalised (auto range, printed), u8 widened.
-tg::Volume<uint16_t> to_grey(tg::AnyVolume&& v, const std::string& name) {
+// Any input type as u16: float32 is normalised (auto range, printed), u8
+// widened. `top` is the input's saturation level in the u16 grey (255 for u8).
+tg::Volume<uint16_t> to_grey(tg::AnyVolume&& v, const std::string& name, int& top) {
+  top = 65535;
   if (auto* g = std::get_if<tg::Volume<uint16_t>>(&v)) return std::move(*g);
   if (auto* f = std::get_if<tg::Volume<float>>(&v)) {
     const auto r = tg::auto_range(*f);
@@ -24,6 +26,7 @@ tg::Volume<uint16_t> to_grey(tg::AnyVolume&& v, const std::string& name) {
     return tg::normalise_to_u16(*f, r);
   }
   if (auto* b = std::get_if<tg::Volume<uint8_t>>(&v)) {
+    top = 255;
     tg::Volume<uint16_t> g(b->shape(), b->geometry());
     for (int64_t i = 0; i < b->size(); ++i) g[i] = (*b)[i];
     return g;
@@ -38,11 +41,24 @@ namespace tg::app {
 int run_segment(SegmentJob& o) {
   tg::ReadOptions ro;
   ro.voxel_um = o.voxel_um;
-  tg::Volume<uint16_t> grey = to_grey(tg::read_volume(o.in, ro), o.in);
+  int top = 65535;
+  tg::Volume<uint16_t> grey = to_grey(tg::read_volume(o.in, ro), o.in, top);
   const tg::Geometry geom = grey.geometry();
 
   tg::SegmentOptions s = o.seg;
+  s.saturation_level = top;
   s.threshold = tg::parse_threshold_method(o.threshold);
+  if (s.local_window_vox > 0 && s.threshold != tg::ThresholdMethod::local) {
+    if (o.threshold != "moments")
+      throw tg::UsageError("--local-window-vox is the window of --threshold local, not of --threshold " + o.threshold);
+    s.threshold = tg::ThresholdMethod::local;
+  }
+  s.fov.detect = !o.no_fov;
+  if (!o.fov_centre.empty()) {
+    if (o.fov_centre.size() != 2) throw tg::UsageError("--fov-centre-vox takes Y,X (two numbers)");
+    s.fov.centre_y = o.fov_centre[0];
+    s.fov.centre_x = o.fov_centre[1];
+  }
   s.manual_threshold = o.manual;
   if (s.threshold == tg::ThresholdMethod::manual && o.manual < 0)
     throw tg::UsageError("--threshold manual needs --manual-value GREY");
@@ -64,9 +80,21 @@ int run_segment(SegmentJob& o) {
   fmt::print("  markers: h-maxima of the distance map, h = {:.3g} voxels; watershed {}; merge ratio {}\n", r.h,
              s.watershed_lines ? "with lines" : "without lines", s.merge ? fmt::format("{}", s.merge_ratio) : "off");
 
-  auto res = tg::segment(std::move(grey), s);
-  fmt::print("  threshold {} = {} (voxels above are solid), solid fraction {:.4f}\n",
-             tg::threshold_method_name(res.threshold.method), res.threshold.value, res.solid_fraction);
+  tg::SegmentResult res;
+  try {
+    res = tg::segment(std::move(grey), s);
+  } catch (const tg::InputError& e) {
+    throw tg::InputError(o.in + ": " + e.what());  // the library does not know the file
+  }
+  if (res.threshold.method == tg::ThresholdMethod::local)
+    fmt::print("  threshold local: blocks of {} voxels, {} bimodal, {} from neighbours, {:.0f}..{:.0f} (global moments "
+               "{}), solid fraction {:.4f}\n",
+               res.local.window, res.local.trusted, res.local.filled, res.local.min, res.local.max,
+               res.threshold.value, res.solid_fraction);
+  else
+    fmt::print("  threshold {} = {} (voxels above are solid), solid fraction {:.4f}{}\n",
+               tg::threshold_method_name(res.threshold.method), res.threshold.value, res.solid_fraction,
+               res.fov.active ? " (of the field of view)" : "");
   for (const auto& n : res.notes) fmt::print("  note: {}\n", n);
   if (res.graded)
     fmt::print("  grey evidence: solid above {} is bright; {:.1f} % of the solid dim; {} dim pockets filled\n",
@@ -116,10 +144,25 @@ static tg::app::Registrar reg{{"segment", 30, [](CLI::App& app, CLI::App*& sub) 
       "(threshold, pore criteria and pores filled, markers, merges, labels, seconds per stage,\n"
       "peak memory) beside it as OUTPUT.segment.json. float32 input is normalised to 16 bits\n"
       "first (auto range).\n\n"
+      "Real scans, before the threshold (the summary's field_of_view and saturation objects):\n"
+      "  field of view: when every slice's corners hold one constant (a reconstruction's outside),\n"
+      "    the circle bounding the non-constant region is fitted; voxels outside it are neither\n"
+      "    in the histogram nor labelled. Give it with --fov-radius-vox (centre: the slice centre\n"
+      "    or --fov-centre-vox), or turn the detection off with --no-fov.\n"
+      "  pre-masked zeros: voxels exactly 0 are a mask, not data, when they are >= 1 % of the voxels\n"
+      "    and the next 1/256 of the grey range holds < 1/100 as many (a real void is noisy):\n"
+      "    left out of the histogram, never solid.\n"
+      "  saturation: a top level (65535; 255 for 8-bit input) or clipped 0 holding > 0.1 % of the\n"
+      "    voxels is left out of the histogram (kept solid / void) with a note; > 50 % saturated\n"
+      "    is an error (exit 2).\n"
+      "  uneven brightness (cupping, drift along z): --threshold local, Tsai per block of\n"
+      "    --local-window-vox voxels (default 4 R), interpolated between block centres.\n\n"
       "Examples:\n"
       "  tomograin segment scan.h5 -o labels.h5 --voxel-um 12.3            (R from 1360 um grains)\n"
       "  tomograin segment scan.tif -o labels.h5 --grain-radius-vox 20 --h 2\n"
-      "  tomograin segment scan.h5 -o labels.h5 --grain-radius-vox 20 --threshold otsu --no-lines");
+      "  tomograin segment scan.h5 -o labels.h5 --grain-radius-vox 20 --threshold otsu --no-lines\n"
+      "  tomograin segment scan.tif -o labels.h5 --grain-radius-vox 20 --threshold local   (cupping)\n"
+      "  tomograin segment scan.tif -o labels.h5 --grain-radius-vox 20 --fov-radius-vox 600");
   auto o = std::make_shared<tg::app::SegmentJob>();
   sub->add_option("input", o->in, "Grey scan (.tif/.tiff, folder, .json sidecar, .h5[:/dataset]); uint16 or float32")
       ->required();
@@ -133,7 +176,19 @@ static tg::app::Registrar reg{{"segment", 30, [](CLI::App& app, CLI::App*& sub) 
                   "Expected grain diameter in micrometres, used with the voxel size (study: 1360)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  sub->add_option("--threshold", o->threshold, "moments | otsu | manual")->capture_default_str();
+  sub->add_option("--threshold", o->threshold,
+                  "moments | otsu | manual | local (moments per block, for uneven brightness)")
+      ->capture_default_str();
+  sub->add_option("--local-window-vox", o->seg.local_window_vox,
+                  "Block edge of --threshold local in voxels (default 4 R, at least 32); implies --threshold local")
+      ->check(CLI::Range(int64_t(2), int64_t(1) << 30));
+  sub->add_flag("--no-fov", o->no_fov, "Do not look for a circular field of view (constant outside)");
+  sub->add_option("--fov-radius-vox", o->seg.fov.radius_vox,
+                  "Radius of the circular field of view in voxels (replaces the detection)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--fov-centre-vox", o->fov_centre, "Centre Y,X of the field of view (default: the slice centre)")
+      ->delimiter(',')
+      ->expected(2);
   sub->add_option("--manual-value", o->manual, "Grey level for --threshold manual (voxels above are solid)")
       ->check(CLI::Range(0, 65535));
   sub->add_flag("--no-pores", o->no_pores, "Do not fill enclosed pores");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <fmt/core.h>
 #include <nlohmann/json.hpp>
 #include <omp.h>
 
@@ -41,33 +42,61 @@ void validate(const SegmentOptions& o) {
   if (o.threshold == ThresholdMethod::manual && (o.manual_threshold < 0 || o.manual_threshold > 65535))
     throw UsageError("segment: a manual threshold must be a grey level in 0..65535");
   if (o.min_size_vox < 1) throw UsageError("segment: the minimum label size must be >= 1 voxel");
+  if (o.saturation_level < 1 || o.saturation_level > 65535)
+    throw UsageError("segment: the saturation level must be a grey level in 1..65535");
+  if (o.local_window_vox < 0 || o.local_window_vox == 1)
+    throw UsageError("segment: the local threshold's window must be >= 2 voxels (0: the default, 4 R)");
   seg::check_connectivity(o.connectivity);
 }
 
-// The threshold, and with `bright` the grey level above which solid is
-// bright (SegmentOptions::bright_fraction).
-ThresholdResult choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o, uint16_t* bright,
-                                 double* noise_sigma) {
-  const auto hist = histogram_u16(grey);
+// The grey -> mask decisions: which voxels are data (field of view,
+// pre-masked zeros, saturation), then the threshold on their histogram,
+// and the grey level above which solid is bright (grey evidence; 0 when
+// not graded).
+struct GreyDecision {
+  FieldOfView fov;
+  LevelScreen levels;
   ThresholdResult t;
+  LocalThreshold local;
+  bool graded = false;
+  uint16_t bright = 0;
+  double noise_sigma = 0;  // the solid peak's (graded only)
+};
+
+GreyDecision choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o) {
+  GreyDecision d;
+  d.fov = find_field_of_view(grey, o.fov);
+  auto hist = histogram_in_fov(grey, d.fov);
+  d.levels = screen_levels(hist, o.saturation_level);
+  bool any = false;
+  for (const int64_t c : hist) any = any || c > 0;
+  if (!any)
+    throw InputError(std::string("segment: every voxel") + (d.fov.active ? " inside the field of view" : "") +
+                     " is 0 (" + d.levels.action() + "): nothing to threshold");
   if (o.threshold == ThresholdMethod::manual) {
-    t.method = ThresholdMethod::manual;
-    t.value = static_cast<uint16_t>(o.manual_threshold);
+    d.t.method = ThresholdMethod::manual;
+    d.t.value = static_cast<uint16_t>(o.manual_threshold);
   } else {
-    t = o.threshold == ThresholdMethod::otsu ? otsu_threshold(hist) : moments_threshold(hist);
+    d.t = o.threshold == ThresholdMethod::otsu ? otsu_threshold(hist) : moments_threshold(hist);
   }
-  t.separability = separability(hist, t.value);
-  if (bright) {
+  d.t.separability = separability(hist, d.t.value);
+  if (o.threshold == ThresholdMethod::local) {
+    d.t.method = ThresholdMethod::local;
+    const int64_t w = o.local_window_vox > 0 ? o.local_window_vox : default_local_window(o.grain_radius_vox);
+    d.local = local_moments_thresholds(grey, d.fov, hist, w, d.t.value);
+  } else if (o.grey_evidence) {
     // Halfway to the solid's mean grey, and at least bright_sigmas noise
     // sigmas below the solid's peak (a noisy scan lowers it, down to t:
     // then nothing is dim, and the grey evidence is off).
-    const SolidPeak peak = solid_peak(hist, t.value);
-    const double b = std::min(double(t.value) + o.bright_fraction * (mean_above(hist, t.value) - double(t.value)),
-                              peak.mode - o.bright_sigmas * peak.sigma);
-    *bright = uint16_t(std::clamp(std::lround(b), long(t.value), 65535L));
-    if (noise_sigma) *noise_sigma = peak.sigma;
+    const SolidPeak peak = solid_peak(hist, d.t.value);
+    const double b =
+        std::min(double(d.t.value) + o.bright_fraction * (mean_above(hist, d.t.value) - double(d.t.value)),
+                 peak.mode - o.bright_sigmas * peak.sigma);
+    d.graded = true;
+    d.bright = uint16_t(std::clamp(std::lround(b), long(d.t.value), 65535L));
+    d.noise_sigma = peak.sigma;
   }
-  return t;
+  return d;
 }
 
 SegmentResult segment_graded(Volume<uint8_t> mask, const SegmentOptions& opt, bool graded);
@@ -76,29 +105,58 @@ SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owne
   validate(opt);
   SegmentResult r0;
   StageClock clock(r0);
-  uint16_t bright = 0;
-  double noise = 0;
-  const ThresholdResult t = choose_threshold(grey, opt, opt.grey_evidence ? &bright : nullptr, &noise);
+  GreyDecision d = choose_threshold(grey, opt);
+  const ThresholdResult& t = d.t;
   // An owned scan becomes the mask in its own storage.
   Volume<uint8_t> mask;
-  if (opt.grey_evidence)
-    mask = owned ? binarise_graded(std::move(*owned), t.value, bright) : binarise_graded(grey, t.value, bright);
-  else
-    mask = owned ? binarise(std::move(*owned), t.value) : binarise(grey, t.value);
+  if (t.method == ThresholdMethod::local) {
+    mask = owned ? binarise_local(std::move(*owned), d.local, d.fov) : binarise_local(grey, d.local, d.fov);
+  } else {
+    if (d.graded)
+      mask = owned ? binarise_graded(std::move(*owned), t.value, d.bright) : binarise_graded(grey, t.value, d.bright);
+    else
+      mask = owned ? binarise(std::move(*owned), t.value) : binarise(grey, t.value);
+    clear_outside(mask, d.fov);
+  }
+  int64_t nsolid = 0;  // solid fraction of the field of view (segment_mask's is of the whole volume)
+  if (d.fov.active) {
+    const uint8_t* m = mask.data();
+#pragma omp parallel for schedule(static) reduction(+ : nsolid)
+    for (int64_t i = 0; i < mask.size(); ++i) nsolid += m[i] != 0;
+  }
   clock.lap("threshold");
-  SegmentResult r = segment_graded(std::move(mask), opt, opt.grey_evidence);
+  SegmentResult r = segment_graded(std::move(mask), opt, d.graded);
   r.threshold = t;
-  r.bright_value = bright;
-  r.solid_noise_sigma = noise;
-  if (opt.grey_evidence && bright <= t.value)
-    r.notes.push_back("grey evidence off: the solid's noise (sigma " + std::to_string(long(noise)) +
+  r.bright_value = d.bright;
+  r.solid_noise_sigma = d.noise_sigma;
+  if (d.graded && d.bright <= t.value)
+    r.notes.push_back("grey evidence off: the solid's noise (sigma " + std::to_string(long(d.noise_sigma)) +
                       " grey levels) leaves no dim band between the threshold and " +
                       std::to_string(int(opt.bright_sigmas)) + " sigmas below the solid's peak");
-  if (!t.note.empty()) r.notes.insert(r.notes.begin(), t.note);
+  if (opt.grey_evidence && t.method == ThresholdMethod::local)
+    r.notes.push_back("grey evidence off: it needs one global threshold (not --threshold local)");
+  if (d.fov.active) {
+    const int64_t inside = d.fov.inside_voxels(r.labels.shape());
+    r.solid_fraction = inside ? double(nsolid) / double(inside) : 0.0;
+  }
+  std::vector<std::string> notes;
+  if (!t.note.empty()) notes.push_back(t.note);
+  if (!d.fov.note.empty()) notes.push_back(d.fov.note);
+  if (d.fov.active)
+    notes.push_back(fmt::format("field of view ({}): centre (y {:.1f}, x {:.1f}), radius {:.1f} voxels; {:.3g} % of the "
+                                "voxels outside, not thresholded nor labelled",
+                                d.fov.source, d.fov.centre_y, d.fov.centre_x, d.fov.radius,
+                                100.0 * double(d.fov.outside_voxels) / double(std::max<int64_t>(1, r.labels.size()))));
+  notes.insert(notes.end(), d.levels.notes.begin(), d.levels.notes.end());
+  if (!d.local.note.empty()) notes.push_back(d.local.note);
+  r.notes.insert(r.notes.begin(), notes.begin(), notes.end());
   if (t.separability < 0.75)
     r.notes.push_back("the grey histogram is hardly bimodal (separability " + std::to_string(t.separability) +
                       " < 0.75; one noisy phase gives 0.64): the scan may hold void only or solid only, and the "
                       "labels may be noise");
+  r.fov = std::move(d.fov);
+  r.levels = std::move(d.levels);
+  r.local = std::move(d.local);
   r.stage_seconds.insert(r.stage_seconds.begin(), r0.stage_seconds.begin(), r0.stage_seconds.end());
   return r;
 }
@@ -265,7 +323,29 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                     {"separability", r.threshold.separability},
                     {"z0", r.threshold.z0},
                     {"z1", r.threshold.z1}};
+  if (r.threshold.method == ThresholdMethod::local)
+    j["threshold"]["local"] = {{"window_vox", r.local.window},
+                               {"blocks_zyx", {r.local.nbz, r.local.nby, r.local.nbx}},
+                               {"blocks_bimodal", r.local.trusted},
+                               {"blocks_from_neighbours", r.local.filled},
+                               {"min", r.local.min},
+                               {"max", r.local.max},
+                               {"global_value_is", "the global moments threshold, the fallback"}};
   j["solid_fraction"] = r.solid_fraction;
+  j["field_of_view"] = {{"source", r.fov.source},
+                        {"active", r.fov.active},
+                        {"centre_yx", {r.fov.centre_y, r.fov.centre_x}},
+                        {"radius_vox", r.fov.radius},
+                        {"outside_value", r.fov.outside_value},
+                        {"fit_rms_vox", r.fov.fit_rms},
+                        {"voxels_outside", r.fov.outside_voxels},
+                        {"premasked_zero_voxels", r.levels.zeros_premasked ? r.levels.zero_count : int64_t(0)},
+                        {"detection", o.fov.detect}};
+  j["saturation"] = {{"level", r.levels.top_level},
+                     {"fraction", r.levels.top_fraction()},
+                     {"zero_fraction", r.levels.zero_fraction()},
+                     {"zeros", r.levels.zeros_premasked ? "pre-masked" : r.levels.zeros_clipped ? "clipped" : "data"},
+                     {"action", r.levels.action()}};
   j["pores"] = {{"enabled", o.fill_pores},
                 {"criteria", r.pore_criteria.describe()},
                 {"max_volume_vox", r.pore_criteria.max_volume_vox},

@@ -70,6 +70,8 @@
 #include <vector>
 
 #include "core/volume.hpp"
+#include "segmentation/field_of_view.hpp"
+#include "segmentation/local_threshold.hpp"
 #include "segmentation/merge_labels.hpp"
 #include "segmentation/pore_filter.hpp"
 #include "segmentation/threshold.hpp"
@@ -89,6 +91,13 @@ struct SegmentOptions {
 
   ThresholdMethod threshold = ThresholdMethod::moments;
   int manual_threshold = -1;  // grey level for ThresholdMethod::manual (voxels above are solid)
+  int64_t local_window_vox = 0;  // ThresholdMethod::local: block edge; 0: 4 R (default_local_window)
+
+  // Which voxels are data (field_of_view.hpp): the circular field of view
+  // (detected from a constant outside, given, or none) and the input's top
+  // grey level, whose saturation is screened (255 for 8-bit scans).
+  FovOptions fov;
+  int saturation_level = 65535;
 
   bool fill_pores = true;
   int64_t pore_max_volume_vox = -1;  // < 0: 2 % of the expected grain volume (PoreFilterOptions::from_grain_radius)
@@ -127,7 +136,10 @@ struct SegmentOptions {
 struct SegmentResult {
   Volume<uint32_t> labels;  // 0 void, 1..count particles, geometry of the input
   ThresholdResult threshold;
-  double solid_fraction = 0;  // after thresholding, before pore filling
+  double solid_fraction = 0;  // after thresholding, before pore filling; of the voxels inside the field of view
+  FieldOfView fov;            // inactive when the whole volume is data
+  LevelScreen levels;         // pre-masked zeros, saturation
+  LocalThreshold local;       // ThresholdMethod::local only
   PoreFilterOptions pore_criteria;
   PoreFilterResult pores;
   bool graded = false;          // grey evidence used (a grey scan and grey_evidence)

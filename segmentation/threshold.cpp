@@ -47,6 +47,7 @@ const char* threshold_method_name(ThresholdMethod m) {
     case ThresholdMethod::moments: return "moments";
     case ThresholdMethod::otsu: return "otsu";
     case ThresholdMethod::manual: return "manual";
+    case ThresholdMethod::local: return "local";
   }
   return "?";
 }
@@ -55,7 +56,8 @@ ThresholdMethod parse_threshold_method(const std::string& s) {
   if (s == "moments") return ThresholdMethod::moments;
   if (s == "otsu") return ThresholdMethod::otsu;
   if (s == "manual") return ThresholdMethod::manual;
-  throw UsageError("threshold method '" + s + "': expected moments, otsu or manual");
+  if (s == "local") return ThresholdMethod::local;
+  throw UsageError("threshold method '" + s + "': expected moments, otsu, manual or local");
 }
 
 std::vector<int64_t> histogram_u16(const Volume<uint16_t>& v) {

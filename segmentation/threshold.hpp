@@ -37,9 +37,11 @@
 
 namespace tg {
 
-enum class ThresholdMethod { moments, otsu, manual };
+// local: Tsai per block, interpolated (local_threshold.hpp); ThresholdResult
+// then holds the global moments threshold, for the summary and as fallback.
+enum class ThresholdMethod { moments, otsu, manual, local };
 const char* threshold_method_name(ThresholdMethod m);
-// "moments" | "otsu" | "manual"; throws UsageError naming the valid set.
+// "moments" | "otsu" | "manual" | "local"; throws UsageError naming the valid set.
 ThresholdMethod parse_threshold_method(const std::string& s);
 
 struct ThresholdResult {

@@ -70,6 +70,12 @@ expect_bad "bad --range" "--range must be" -- "$TG" convert f.json -o out.h5 --t
 expect_bad "measure --face-offset 0" "--face-offset must be in (0, 1]" -- "$TG" measure lab.h5 -o out.csv --face-offset 0
 expect_bad "unknown option" "tomograin:" -- "$TG" convert good.tif -o out.h5 --frobnicate
 
+# A scan mostly saturated at 65535 (60 % of the voxels): a threshold on the
+# rest would be meaningless (issue 19: a saturated block silently ruined it).
+printf '{"shape_zyx":[4,64,64],"dtype":"uint16","voxel_size_um":10}' > sat.json
+{ head -c 19660 /dev/zero | tr '\0' '\377'; head -c 13108 /dev/urandom; } > sat.raw
+expect_bad "mostly saturated scan" "sat.json: 60 % of the voxels are saturated" -- "$TG" segment sat.json -o out.h5 --grain-radius-vox 5
+
 # NaN policy: `info` reports instead of refusing.
 "$TG" info nan.json | grep -q "2 NaN/Inf voxels" && { echo "ok   info reports NaN"; passes=$((passes+1)); } || { echo "FAIL info NaN"; fails=$((fails+1)); }
 

@@ -89,6 +89,13 @@ def segment_rows(base):
         # move with it: it sets only the default pore size limit).
         (["--grain-radius-vox", "10"], ("grain_radius_vox", None, 10.0)),
         (["--grain-diameter-um", "400"], ("grain_radius_vox", None, 400 / 2 / 30)),
+        # Real-scan options (docs/real_scans.md): this crop has no constant
+        # outside, so detection finds nothing and --no-fov shows in the summary only.
+        (["--threshold", "local", "--local-window-vox", "32"], "differs"),
+        (["--local-window-vox", "40"], ("threshold", "local", {"window_vox": 40})),
+        (["--fov-radius-vox", "30"], "differs"),
+        (["--fov-radius-vox", "30", "--fov-centre-vox", "30,50"], ("field_of_view", "centre_yx", [30.0, 50.0])),
+        (["--no-fov"], ("field_of_view", "detection", False)),
         (["--compress", "0"], "bigger"),
         (["--summary", "other.json"], "summary"),
     ]
@@ -167,7 +174,12 @@ def main():
             elif isinstance(what, tuple):  # recorded in the summary: (section, key, value)
                 j = json.load(open(out.replace(".h5", ".segment.json")))[what[0]]
                 v = j if what[1] is None else j[what[1]]
-                same = v == what[2] if isinstance(what[2], bool) else abs(v - what[2]) < 1e-9
+                if isinstance(what[2], dict):  # a sub-object: these keys with these values
+                    same = all(v.get(k2) == v2 for k2, v2 in what[2].items())
+                elif isinstance(what[2], (bool, list)):
+                    same = v == what[2]
+                else:
+                    same = abs(v - what[2]) < 1e-9
                 check(same, f"{name}: summary {what[0]} {what[1] or ''} = {v} (expected {what[2]})")
             elif what == "summary":
                 check(os.path.exists("other.json") and json.load(open("other.json")), f"{name}: the summary is there")

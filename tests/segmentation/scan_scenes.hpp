@@ -1,0 +1,89 @@
+// Grey stand-ins for the real-scan failures of issue 19 (field of view,
+// saturation, uneven brightness): a random packing of balls whose truth is
+// known voxel by voxel, imaged with the issue's contrast (void 10000, solid
+// 30000, Gaussian noise 1500), optional blur (partial volume) and a
+// brightness field.
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <random>
+#include <vector>
+
+#include "core/volume.hpp"
+
+namespace tg::test {
+
+// Balls of radius r (voxel centres within r) at uniform random centres
+// until the solid fraction reaches `fraction` (overlaps allowed).
+inline Volume<uint8_t> ball_packing(const Shape& s, double r, double fraction, unsigned seed) {
+  auto m = Volume<uint8_t>::filled(s, 0);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uz(0, double(s.nz)), uy(0, double(s.ny)), ux(0, double(s.nx));
+  int64_t solid = 0;
+  const int64_t target = int64_t(fraction * double(s.voxels()));
+  while (solid < target) {
+    const double cz = uz(rng), cy = uy(rng), cx = ux(rng);
+    for (int64_t k = std::max<int64_t>(0, int64_t(cz - r)); k <= std::min<int64_t>(s.nz - 1, int64_t(cz + r) + 1); ++k)
+      for (int64_t j = std::max<int64_t>(0, int64_t(cy - r)); j <= std::min<int64_t>(s.ny - 1, int64_t(cy + r) + 1); ++j)
+        for (int64_t i = std::max<int64_t>(0, int64_t(cx - r)); i <= std::min<int64_t>(s.nx - 1, int64_t(cx + r) + 1);
+             ++i) {
+          const double dz = double(k) - cz, dy = double(j) - cy, dx = double(i) - cx;
+          if (dz * dz + dy * dy + dx * dx <= r * r && !m(k, j, i)) m(k, j, i) = 1, ++solid;
+        }
+  }
+  return m;
+}
+
+// Separable Gaussian blur (sigma voxels, kernel to 3 sigma, edges clamped).
+inline void blur(Volume<float>& v, double sigma) {
+  const int rad = int(std::ceil(3 * sigma));
+  std::vector<double> w(size_t(2 * rad + 1));
+  double sum = 0;
+  for (int d = -rad; d <= rad; ++d) sum += w[size_t(d + rad)] = std::exp(-0.5 * d * d / (sigma * sigma));
+  for (auto& x : w) x /= sum;
+  const Shape s = v.shape();
+  const int64_t n[3] = {s.nz, s.ny, s.nx}, stride[3] = {s.ny * s.nx, s.nx, 1};
+  std::vector<float> line;
+  for (int a = 0; a < 3; ++a) {
+    line.resize(size_t(n[a]));
+    for (int64_t base = 0; base < s.voxels(); ++base) {
+      // base runs over the first voxel of each line along axis a
+      const auto c = s.coords(base);
+      if (c[size_t(a)] != 0) continue;
+      for (int64_t p = 0; p < n[a]; ++p) line[size_t(p)] = v[base + p * stride[a]];
+      for (int64_t p = 0; p < n[a]; ++p) {
+        double acc = 0;
+        for (int d = -rad; d <= rad; ++d)
+          acc += w[size_t(d + rad)] * line[size_t(std::clamp<int64_t>(p + d, 0, n[a] - 1))];
+        v[base + p * stride[a]] = float(acc);
+      }
+    }
+  }
+}
+
+// Brightness field: the grey of void and solid at a voxel, as offsets added
+// to both phases (cupping and drift move both).
+using Offset = std::function<double(int64_t k, int64_t j, int64_t i)>;
+
+// The grey scan of a truth: phase levels 10000 / 30000, blur sigma (0: none),
+// an offset field (may be null), Gaussian noise 1500, clipped to 16 bits.
+inline Volume<uint16_t> image(const Volume<uint8_t>& truth, double sigma, const Offset& offset, unsigned seed) {
+  const Shape s = truth.shape();
+  Volume<float> f(s);
+  for (int64_t q = 0; q < s.voxels(); ++q) f[q] = truth[q] ? 30000.f : 10000.f;
+  if (sigma > 0) blur(f, sigma);
+  Volume<uint16_t> g(s);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0, 1500);
+  for (int64_t k = 0; k < s.nz; ++k)
+    for (int64_t j = 0; j < s.ny; ++j)
+      for (int64_t i = 0; i < s.nx; ++i) {
+        const double x = f(k, j, i) + (offset ? offset(k, j, i) : 0.0) + noise(rng);
+        g(k, j, i) = uint16_t(std::clamp(std::lround(x), 0L, 65535L));
+      }
+  return g;
+}
+
+}  // namespace tg::test

@@ -165,9 +165,7 @@ int run_contacts(const Opts& o) {
 
 }  // namespace
 
-static tg::app::Registrar reg{{"contacts", 42, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "contacts",
+static tg::app::Registrar reg{{"contacts", 42,
       "Touching particles of a label volume: contact area, normal and point, coordination, fabric.\n\n"
       "Two labels touch when they share faces or are separated by at most one watershed line (the\n"
       "void line `segment` draws: 1 to 3 voxels along an axis, depending on its direction).\n"
@@ -179,7 +177,8 @@ static tg::app::Registrar reg{{"contacts", 42, [](CLI::App& app, CLI::App*& sub)
       "Method and measured accuracy: measure/contacts.hpp, docs/measure.md.\n\n"
       "Examples:\n"
       "  tomograin contacts labels.h5 -o contacts.csv\n"
-      "  tomograin contacts labels.tif --voxel-um 11.6 -o contacts.csv --summary fabric.json");
+      "  tomograin contacts labels.tif --voxel-um 11.6 -o contacts.csv --summary fabric.json",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<Opts>();
   sub->add_option("labels", o->in, "Label volume (u32): .h5[:/dataset], .tif, folder of slices, raw .json")->required();
   sub->add_option("-o,--output", o->out, "Contact table (.csv)")->required();

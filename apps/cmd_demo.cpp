@@ -163,15 +163,14 @@ int run_demo(const Opts& o) {
 
 }  // namespace
 
-static tg::app::Registrar reg{{"demo", 100, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "demo",
+static tg::app::Registrar reg{{"demo", 100,
       "Run the whole chain on a small embedded default and print where the report is:\n"
       "synthetic XCT loading stages (zeolite-stages preset, standing in for scans), a DEM oedometer\n"
       "with the study's breakage model, voxelisation of the DEM snapshots, the same segmentation and\n"
       "measurement on both, and the validation report (index.html with PSD, FR, AR, stress-strain,\n"
       "broken grains, slices). A few minutes on 2 cores.\n\n"
-      "Example:\n  tomograin demo -o out/demo");
+      "Example:\n  tomograin demo -o out/demo",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<Opts>();
   sub->add_option("-o,--output", o->out, "Output folder")->capture_default_str();
   sub->add_option("--xct-size", o->xct_size, "Edge of the synthetic scans in voxels (field 15 mm)")

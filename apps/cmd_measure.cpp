@@ -123,9 +123,7 @@ int run_measure(const MeasureJob& o) {
 
 namespace {
 
-tg::app::Registrar reg_measure{{"measure", 40, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "measure",
+tg::app::Registrar reg_measure{{"measure", 40,
       "Per-particle volume, centroid, size and shape from a label volume.\n\n"
       "Reads u32 labels (0 = void; an .h5 file's /labels by default) and writes one row per label:\n"
       "label, voxels, volume_mm3, cx_mm, cy_mm, cz_mm, d_eq_mm (equal-volume sphere), d_max_mm,\n"
@@ -147,7 +145,8 @@ tg::app::Registrar reg_measure{{"measure", 40, [](CLI::App& app, CLI::App*& sub)
       "Examples:\n"
       "  tomograin measure labels.h5 -o particles.csv\n"
       "  tomograin measure labels.h5 -o particles.csv -o particles.h5 --feret exact\n"
-      "  tomograin measure labels.tif --voxel-um 11.6 --sizing obb -o particles.csv");
+      "  tomograin measure labels.tif --voxel-um 11.6 --sizing obb -o particles.csv",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<tg::app::MeasureJob>();
   sub->add_option("labels", o->in, "Label volume (u32): .h5[:/dataset], .tif, folder of slices, raw .json")->required();
   sub->add_option("-o,--output", o->out,

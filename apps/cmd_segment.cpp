@@ -97,9 +97,7 @@ int run_segment(SegmentJob& o) {
 
 }  // namespace tg::app
 
-static tg::app::Registrar reg{{"segment", 30, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "segment",
+static tg::app::Registrar reg{{"segment", 30,
       "Segment a grey scan into one label per grain or fragment (reference study section 2.2):\n"
       "moment-preserving threshold (Tsai 1985, as Fiji 'Moments'; voxels above it are solid),\n"
       "filling of small near-spherical enclosed pores, exact Euclidean distance map, h-maxima\n"
@@ -118,7 +116,8 @@ static tg::app::Registrar reg{{"segment", 30, [](CLI::App& app, CLI::App*& sub) 
       "Examples:\n"
       "  tomograin segment scan.h5 -o labels.h5 --voxel-um 12.3            (R from 1360 um grains)\n"
       "  tomograin segment scan.tif -o labels.h5 --grain-radius-vox 20 --h 2\n"
-      "  tomograin segment scan.h5 -o labels.h5 --grain-radius-vox 20 --threshold otsu --no-lines");
+      "  tomograin segment scan.h5 -o labels.h5 --grain-radius-vox 20 --threshold otsu --no-lines",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<tg::app::SegmentJob>();
   sub->add_option("input", o->in, "Grey scan (.tif/.tiff, folder, .json sidecar, .h5[:/dataset]); uint16 or float32")
       ->required();

@@ -42,9 +42,8 @@ int main(int argc, char** argv) {
   std::sort(cmds.begin(), cmds.end(), [](const Command& a, const Command& b) { return a.order < b.order; });
   std::vector<std::pair<CLI::App*, Runner>> runners;
   for (const auto& c : cmds) {
-    CLI::App* sub = nullptr;
-    Runner r = c.setup(app, sub);
-    runners.emplace_back(sub, std::move(r));
+    CLI::App* sub = app.add_subcommand(c.name, c.description);
+    runners.emplace_back(sub, c.setup(sub));
   }
   try {
     app.parse(argc, argv);

@@ -2,7 +2,6 @@
 // tomograin compare --xct STAGES... --dem RUNDIR -o REPORT_DIR          experiment vs DEM report
 #include <fmt/core.h>
 
-#include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -18,7 +17,6 @@
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace tg;
 
 // ---------------------------------------------------------------- voxelise
@@ -68,7 +66,7 @@ int run_voxelise(const VoxOpts& o) {
     w.write_attribute("voxelise", prov.dump());
     w.commit();
   }
-  const std::string truth_csv = (fs::path(o.out).parent_path() / (fs::path(o.out).stem().string() + "_truth.csv")).string();
+  const std::string truth_csv = tg::app::beside(o.out, "_truth.csv");
   if (o.truth) write_csv(v.truth, truth_csv);
   const Shape sh = v.labels.shape();
   fmt::print("voxelised {} spheres as {} particles ({} clusters as separate tangent spheres, {} as exact unions) into "

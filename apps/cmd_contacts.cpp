@@ -36,8 +36,7 @@ nlohmann::json matrix(const Eigen::Matrix3d& m) {
 
 int run_contacts(const Opts& o) {
   if (fs::path(o.out).extension() != ".csv") throw UsageError("-o " + o.out + ": expected a .csv file");
-  const std::string summary =
-      !o.summary.empty() ? o.summary : (fs::path(o.out).parent_path() / (fs::path(o.out).stem().string() + "_fabric.json")).string();
+  const std::string summary = !o.summary.empty() ? o.summary : app::beside(o.out, "_fabric.json");
   if (fs::path(summary).extension() != ".json") throw UsageError("--summary " + summary + ": expected a .json file");
   const Volume<uint32_t> labels = app::read_labels(o.in, o.voxel_um);
 

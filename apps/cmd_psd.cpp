@@ -2,7 +2,6 @@
 // The grading itself is measure/grading.hpp (the same one the report uses).
 #include <fmt/core.h>
 
-#include <filesystem>
 #include <memory>
 
 #include "apps/command.hpp"
@@ -15,7 +14,6 @@
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace tg;
 
 Table read_particles(const std::string& file) {
@@ -96,8 +94,7 @@ int run_psd(PsdJob o) {
   for (size_t c = 0; c < fn.size(); ++c) sum.add(fn[c], frc[c]);
   for (size_t c = 0; c < an.size(); ++c) sum.add(an[c], arc[c]);
 
-  const std::string summary =
-      !o.summary.empty() ? o.summary : (fs::path(o.out).parent_path() / (fs::path(o.out).stem().string() + "_summary.csv")).string();
+  const std::string summary = !o.summary.empty() ? o.summary : beside(o.out, "_summary.csv");
   write_csv(lng, o.out);
   write_csv(sum, summary);
   fmt::print("{:>5} {:>9} {:>8} {:>8} {:>6} {:>8} {:>8}  file\n", "stage", "particles", "D50 mm", "D10 mm", "Cu",

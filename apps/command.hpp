@@ -34,4 +34,9 @@ struct Registrar {
 // --voxel-um: overrides (or supplies) the voxel size of an input volume.
 void add_voxel_option(CLI::App* sub, double& voxel_um);
 
+// The default name of a file written beside OUT: OUT's folder, OUT's stem and
+// suffix, e.g. beside("run/psd.csv", "_summary.csv") = "run/psd_summary.csv"
+// (psd's summary, contacts' fabric, voxelise's truth table).
+std::string beside(const std::string& out, const std::string& suffix);
+
 }  // namespace tg::app

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 
 #include "apps/command.hpp"
@@ -27,6 +28,10 @@ void add_voxel_option(CLI::App* sub, double& voxel_um) {
             return "must be a positive number of micrometres, got " + v;
           },
           "POSITIVE"));
+}
+std::string beside(const std::string& out, const std::string& suffix) {
+  const std::filesystem::path p(out);
+  return (p.parent_path() / (p.stem().string() + suffix)).string();
 }
 }  // namespace tg::app
 

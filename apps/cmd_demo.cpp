@@ -14,6 +14,7 @@
 #include <fstream>
 
 #include "apps/command.hpp"
+#include "apps/demo_toml.hpp"
 #include "compare/comparison.hpp"
 #include "core/atomic_file.hpp"
 #include "core/config.hpp"
@@ -26,22 +27,16 @@ namespace {
 namespace fs = std::filesystem;
 using clk = std::chrono::steady_clock;
 
-// The demo's DEM: the study's material, contact and breakage parameters
-// (Table 1) in a small Ø8 mm cell of ~130 grains so it runs in minutes.
-// One recorded deviation: only spheres of at least 0.7 mm split, i.e. the
-// original grains (fragment elements never split again); with the study's
-// 0.2 mm the time step collapses to ~3e-9 s once fragments split and the run
-// takes far longer than a demo should.
-constexpr const char* kDemoDem = R"(# tomograin demo oedometer (written by `tomograin demo`)
-[walls]
-cylinder_radius_m = 4.0e-3
-[pluviation]
-generation_height_m = 14.0e-3
-target_height_m = 6.0e-3
-max_time_s = 0.3
-[oedometer]
-target_strain = 0.1548
-history_every_steps = 500
+// The demo's DEM: dem/examples/demo.toml (compiled in), the study's material,
+// contact and breakage parameters (Table 1) in a small Ø8 mm cell of ~130
+// grains, so it runs in minutes. One recorded deviation: only spheres of at
+// least 0.7 mm split, i.e. the original grains (fragment elements never split
+// again); with the study's 0.2 mm the time step collapses to ~3e-9 s once
+// fragments split and the run takes far longer than a demo should.
+const std::string kDemoDem =
+    "# tomograin demo oedometer (written by `tomograin demo`): dem/examples/demo.toml, then [breakage]\n" +
+    std::string(kDemoToml) + R"(
+# only the original grains split (the demo's deviation from the study)
 [breakage]
 enabled = true
 min_split_diameter_m = 7.0e-4

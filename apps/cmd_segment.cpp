@@ -97,7 +97,11 @@ int run_segment(SegmentJob& o) {
 
 }  // namespace tg::app
 
-static tg::app::Registrar reg{{"segment", 30,
+// For now the description is set here rather than in the Command: the
+// field-of-view work of issue 19 edits its end in parallel, and moving it
+// would make the two changes conflict. Move it into the Command once merged.
+static tg::app::Registrar reg{{"segment", 30, "", [](CLI::App* sub) -> tg::app::Runner {
+  sub->description(
       "Segment a grey scan into one label per grain or fragment (reference study section 2.2):\n"
       "moment-preserving threshold (Tsai 1985, as Fiji 'Moments'; voxels above it are solid),\n"
       "filling of small near-spherical enclosed pores, exact Euclidean distance map, h-maxima\n"
@@ -116,8 +120,7 @@ static tg::app::Registrar reg{{"segment", 30,
       "Examples:\n"
       "  tomograin segment scan.h5 -o labels.h5 --voxel-um 12.3            (R from 1360 um grains)\n"
       "  tomograin segment scan.tif -o labels.h5 --grain-radius-vox 20 --h 2\n"
-      "  tomograin segment scan.h5 -o labels.h5 --grain-radius-vox 20 --threshold otsu --no-lines",
-      [](CLI::App* sub) -> tg::app::Runner {
+      "  tomograin segment scan.h5 -o labels.h5 --grain-radius-vox 20 --threshold otsu --no-lines");
   auto o = std::make_shared<tg::app::SegmentJob>();
   sub->add_option("input", o->in, "Grey scan (.tif/.tiff, folder, .json sidecar, .h5[:/dataset]); uint16 or float32")
       ->required();

@@ -186,9 +186,7 @@ static tg::app::Registrar reg{{"contacts", 42,
                   "Radius (voxels) of the ball whose a- and b-centroids give the normal")
       ->check(CLI::Range(2.0, 64.0))
       ->default_str("9");
-  sub->add_option("--threads", o->threads, "OpenMP threads (0 = all); results do not depend on it")
-      ->check(CLI::NonNegativeNumber)
-      ->default_str("0");
+  tg::app::add_threads_option(sub, o->threads);
   tg::app::add_voxel_option(sub, o->voxel_um);
   return [o] { return run_contacts(*o); };
 }}};

@@ -180,9 +180,7 @@ tg::app::Registrar reg_measure{{"measure", 40,
                 "Also surface_mm2 (normal-weighted voxel faces, within 0.2 % on spheres of radius >= 20 voxels) "
                 "and Wadell sphericity; costs several times the Feret step");
   sub->add_option("--seed", o->seed, "Random seed of CGAL's oriented-box optimiser")->default_str("42");
-  sub->add_option("--threads", o->threads, "OpenMP threads (0 = all); results do not depend on it")
-      ->check(CLI::NonNegativeNumber)
-      ->default_str("0");
+  tg::app::add_threads_option(sub, o->threads);
   tg::app::add_voxel_option(sub, o->voxel_um);
   return [o] { return tg::app::run_measure(*o); };
 }}};

@@ -66,9 +66,7 @@ static tg::app::Registrar reg{{"track", 47,
                   "Strain increment of the map used when too few grains match (identity + axial compression)")
       ->check(CLI::Range(0.0, 0.99))
       ->default_str("0");
-  sub->add_option("--threads", o->threads, "OpenMP threads (0 = all); results do not depend on it")
-      ->check(CLI::NonNegativeNumber)
-      ->default_str("0");
+  tg::app::add_threads_option(sub, o->threads);
   return [o] {
     tg::track::TrackOptions to;
     to.allow_extension = o->any_order;

@@ -33,6 +33,8 @@ struct Registrar {
 // Shared option helpers.
 // --voxel-um: overrides (or supplies) the voxel size of an input volume.
 void add_voxel_option(CLI::App* sub, double& voxel_um);
+// --threads: OpenMP threads of a command whose results do not depend on them.
+void add_threads_option(CLI::App* sub, int& threads);
 
 // The default name of a file written beside OUT: OUT's folder, OUT's stem and
 // suffix, e.g. beside("run/psd.csv", "_summary.csv") = "run/psd_summary.csv"

@@ -29,6 +29,11 @@ void add_voxel_option(CLI::App* sub, double& voxel_um) {
           },
           "POSITIVE"));
 }
+void add_threads_option(CLI::App* sub, int& threads) {
+  sub->add_option("--threads", threads, "OpenMP threads (0 = all); results do not depend on it")
+      ->check(CLI::NonNegativeNumber)
+      ->default_str("0");
+}
 std::string beside(const std::string& out, const std::string& suffix) {
   const std::filesystem::path p(out);
   return (p.parent_path() / (p.stem().string() + suffix)).string();

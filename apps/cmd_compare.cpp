@@ -109,15 +109,7 @@ int run_compare(const CmpOpts& o) {
   opt.synthetic_xct = o.synthetic;
   opt.plots = !o.no_plots;
   opt.track = !o.no_track;
-  if (o.feret == "exact") {
-    opt.measure.feret_exact = true;
-  } else {
-    try {
-      opt.measure.feret_directions = std::stoi(o.feret);
-    } catch (const std::exception&) {
-      throw UsageError("--feret must be a number of orientations or 'exact', got '" + o.feret + "'");
-    }
-  }
+  tg::app::parse_feret_option(o.feret, opt.measure.feret_exact, opt.measure.feret_directions);
   const compare::Report r = compare::run_comparison(in, opt);
   for (const auto& st : r.stages)
     fmt::print("{}: {} experiment / {} DEM ideal / {} DEM imaged particles; KS exp-imaged PSD {:.3f} FR {:.3f} AR "

@@ -38,17 +38,7 @@ Volume<uint32_t> read_labels(const std::string& in, double voxel_um) {
 
 int run_measure(const MeasureJob& o) {
   measure::ParticleOptions po;
-  if (o.feret == "exact") {
-    po.feret_exact = true;
-  } else {
-    try {
-      size_t used = 0;
-      po.feret_directions = std::stoi(o.feret, &used);
-      if (used != o.feret.size()) throw std::invalid_argument(o.feret);
-    } catch (const std::exception&) {
-      throw UsageError("--feret must be a number of orientations (>= 3) or 'exact', got '" + o.feret + "'");
-    }
-  }
+  parse_feret_option(o.feret, po.feret_exact, po.feret_directions);
   po.sizing = o.sizing == "obb" ? measure::Sizing::obb : measure::Sizing::feret;
   po.stats.detection_limit_m = o.limit_mm * 1e-3;
   po.face_offset = o.face_offset;

@@ -33,6 +33,9 @@ struct Registrar {
 // Shared option helpers.
 // --voxel-um: overrides (or supplies) the voxel size of an input volume.
 void add_voxel_option(CLI::App* sub, double& voxel_um);
+// --feret N|exact (measure, compare): `exact`, or N orientations, a whole
+// integer (the measurement refuses N < 3); else UsageError.
+void parse_feret_option(const std::string& value, bool& exact, int& directions);
 // --threads: OpenMP threads of a command whose results do not depend on them.
 void add_threads_option(CLI::App* sub, int& threads);
 

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <stdexcept>
 
 #include "apps/command.hpp"
 #include "core/errors.hpp"
@@ -28,6 +29,19 @@ void add_voxel_option(CLI::App* sub, double& voxel_um) {
             return "must be a positive number of micrometres, got " + v;
           },
           "POSITIVE"));
+}
+void parse_feret_option(const std::string& value, bool& exact, int& directions) {
+  if (value == "exact") {
+    exact = true;
+    return;
+  }
+  try {
+    size_t used = 0;
+    directions = std::stoi(value, &used);
+    if (used != value.size()) throw std::invalid_argument(value);
+  } catch (const std::exception&) {
+    throw tg::UsageError("--feret must be a number of orientations (>= 3) or 'exact', got '" + value + "'");
+  }
 }
 void add_threads_option(CLI::App* sub, int& threads) {
   sub->add_option("--threads", threads, "OpenMP threads (0 = all); results do not depend on it")

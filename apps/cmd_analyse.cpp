@@ -54,16 +54,15 @@ int run_analyse(const Opts& o) {
 
 }  // namespace
 
-static tg::app::Registrar reg{{"analyse", 50, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "analyse",
+static tg::app::Registrar reg{{"analyse", 50,
       "Segment a scan, measure every particle and compute its grading, in one go:\n"
       "the jobs of `segment`, `measure` and `psd` with their defaults (run those for every option).\n"
       "Writes DIR/labels.h5 (+ labels.segment.json), DIR/particles.csv, DIR/psd.csv and\n"
       "DIR/psd_summary.csv (D10/D50/D60/Cu, FR and AR classes). DIR appears only when all succeed.\n\n"
       "Examples:\n"
       "  tomograin analyse stage0.h5 -o results/stage0\n"
-      "  tomograin analyse slices/ -o results/stage3 --voxel-um 12.3 --feret exact");
+      "  tomograin analyse slices/ -o results/stage3 --voxel-um 12.3 --feret exact",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<Opts>();
   sub->add_option("scan", o->in, "Grey scan (uint16, float32 is normalised; any volume format)")->required();
   sub->add_option("-o,--output", o->out, "Results folder (must not be the input's folder)")->required();

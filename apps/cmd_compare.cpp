@@ -2,7 +2,6 @@
 // tomograin compare --xct STAGES... --dem RUNDIR -o REPORT_DIR          experiment vs DEM report
 #include <fmt/core.h>
 
-#include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -18,7 +17,6 @@
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace tg;
 
 // ---------------------------------------------------------------- voxelise
@@ -68,7 +66,7 @@ int run_voxelise(const VoxOpts& o) {
     w.write_attribute("voxelise", prov.dump());
     w.commit();
   }
-  const std::string truth_csv = (fs::path(o.out).parent_path() / (fs::path(o.out).stem().string() + "_truth.csv")).string();
+  const std::string truth_csv = tg::app::beside(o.out, "_truth.csv");
   if (o.truth) write_csv(v.truth, truth_csv);
   const Shape sh = v.labels.shape();
   fmt::print("voxelised {} spheres as {} particles ({} clusters as separate tangent spheres, {} as exact unions) into "
@@ -111,15 +109,7 @@ int run_compare(const CmpOpts& o) {
   opt.synthetic_xct = o.synthetic;
   opt.plots = !o.no_plots;
   opt.track = !o.no_track;
-  if (o.feret == "exact") {
-    opt.measure.feret_exact = true;
-  } else {
-    try {
-      opt.measure.feret_directions = std::stoi(o.feret);
-    } catch (const std::exception&) {
-      throw UsageError("--feret must be a number of orientations or 'exact', got '" + o.feret + "'");
-    }
-  }
+  tg::app::parse_feret_option(o.feret, opt.measure.feret_exact, opt.measure.feret_directions);
   const compare::Report r = compare::run_comparison(in, opt);
   for (const auto& st : r.stages)
     fmt::print("{}: {} experiment / {} DEM ideal / {} DEM imaged particles; KS exp-imaged PSD {:.3f} FR {:.3f} AR "
@@ -134,9 +124,7 @@ int run_compare(const CmpOpts& o) {
 
 }  // namespace
 
-static tg::app::Registrar reg_vox{{"voxelise", 70, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "voxelise",
+static tg::app::Registrar reg_vox{{"voxelise", 70,
       "Turn a DEM snapshot or packing into a CT-like scan with exact truth labels.\n\n"
       "Input: CSV or HDF5 table (file.h5[:/group]) of spheres, columns x_m,y_m,z_m,r_m (metres; cylinder axis z,\n"
       "centre x=y=0, bottom platen z=0) and optionally `particle` (or `cluster`): spheres sharing an id are ONE\n"
@@ -153,7 +141,8 @@ static tg::app::Registrar reg_vox{{"voxelise", 70, [](CLI::App& app, CLI::App*& 
       "Field of view: the spheres' bounding box (default) or the oedometer cylinder, plus --margin voxels.\n\n"
       "Examples:\n"
       "  tomograin voxelise run/snapshots/snap_0003.csv -o scan.h5 --voxel-um 12.3\n"
-      "  tomograin voxelise snap.h5 -o scan.h5 --voxel-um 58.6 --like stage0.h5 --field cylinder");
+      "  tomograin voxelise snap.h5 -o scan.h5 --voxel-um 58.6 --like stage0.h5 --field cylinder",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<VoxOpts>();
   sub->add_option("snapshot", o->in, "Spheres: .csv or .h5[:/group] with x_m,y_m,z_m,r_m[,particle]")->required();
   sub->add_option("-o,--output", o->out, "Output .h5 file")->required();
@@ -175,9 +164,7 @@ static tg::app::Registrar reg_vox{{"voxelise", 70, [](CLI::App& app, CLI::App*& 
   return [o] { return run_voxelise(*o); };
 }}};
 
-static tg::app::Registrar reg_cmp{{"compare", 80, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "compare",
+static tg::app::Registrar reg_cmp{{"compare", 80,
       "Put XCT stages and DEM snapshots side by side, measured by the same code; write an HTML report.\n\n"
       "For every XCT stage (a grey scan, segmented with `segment`'s defaults and measured; or a particle\n"
       "CSV from `tomograin measure`) the DEM snapshot at the nearest axial strain is voxelised at the scan's\n"
@@ -196,7 +183,8 @@ static tg::app::Registrar reg_cmp{{"compare", 80, [](CLI::App& app, CLI::App*& s
       "Plots need Debian's /usr/bin/python3 with python3-matplotlib.\n\n"
       "Example:\n"
       "  tomograin compare --xct run_stage0.h5 run_stage1.h5 --dem dem_run -o report\n"
-      "  tomograin compare --xct s0.csv s1.csv --xct-strains 0 0.044 --voxel-um 12.3 --dem dem_run -o report");
+      "  tomograin compare --xct s0.csv s1.csv --xct-strains 0 0.044 --voxel-um 12.3 --dem dem_run -o report",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<CmpOpts>();
   sub->add_option("--xct", o->xct, "XCT stages in loading order: scans (.h5/.tif/.json) or particle tables (.csv)")
       ->required();

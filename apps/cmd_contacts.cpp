@@ -36,8 +36,7 @@ nlohmann::json matrix(const Eigen::Matrix3d& m) {
 
 int run_contacts(const Opts& o) {
   if (fs::path(o.out).extension() != ".csv") throw UsageError("-o " + o.out + ": expected a .csv file");
-  const std::string summary =
-      !o.summary.empty() ? o.summary : (fs::path(o.out).parent_path() / (fs::path(o.out).stem().string() + "_fabric.json")).string();
+  const std::string summary = !o.summary.empty() ? o.summary : app::beside(o.out, "_fabric.json");
   if (fs::path(summary).extension() != ".json") throw UsageError("--summary " + summary + ": expected a .json file");
   const Volume<uint32_t> labels = app::read_labels(o.in, o.voxel_um);
 
@@ -165,9 +164,7 @@ int run_contacts(const Opts& o) {
 
 }  // namespace
 
-static tg::app::Registrar reg{{"contacts", 42, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "contacts",
+static tg::app::Registrar reg{{"contacts", 42,
       "Touching particles of a label volume: contact area, normal and point, coordination, fabric.\n\n"
       "Two labels touch when they share faces or are separated by at most one watershed line (the\n"
       "void line `segment` draws: 1 to 3 voxels along an axis, depending on its direction).\n"
@@ -179,7 +176,8 @@ static tg::app::Registrar reg{{"contacts", 42, [](CLI::App& app, CLI::App*& sub)
       "Method and measured accuracy: measure/contacts.hpp, docs/measure.md.\n\n"
       "Examples:\n"
       "  tomograin contacts labels.h5 -o contacts.csv\n"
-      "  tomograin contacts labels.tif --voxel-um 11.6 -o contacts.csv --summary fabric.json");
+      "  tomograin contacts labels.tif --voxel-um 11.6 -o contacts.csv --summary fabric.json",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<Opts>();
   sub->add_option("labels", o->in, "Label volume (u32): .h5[:/dataset], .tif, folder of slices, raw .json")->required();
   sub->add_option("-o,--output", o->out, "Contact table (.csv)")->required();
@@ -188,9 +186,7 @@ static tg::app::Registrar reg{{"contacts", 42, [](CLI::App& app, CLI::App*& sub)
                   "Radius (voxels) of the ball whose a- and b-centroids give the normal")
       ->check(CLI::Range(2.0, 64.0))
       ->default_str("9");
-  sub->add_option("--threads", o->threads, "OpenMP threads (0 = all); results do not depend on it")
-      ->check(CLI::NonNegativeNumber)
-      ->default_str("0");
+  tg::app::add_threads_option(sub, o->threads);
   tg::app::add_voxel_option(sub, o->voxel_um);
   return [o] { return run_contacts(*o); };
 }}};

@@ -90,9 +90,7 @@ int run_convert(const Opts& o) {
 
 }  // namespace
 
-static tg::app::Registrar reg{{"convert", 20, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "convert",
+static tg::app::Registrar reg{{"convert", 20,
       "Convert a volume between formats (TIFF file, TIFF slice folder, raw+JSON, HDF5) and,\n"
       "with --to, between element types. Float reconstructions become 16-bit by the study's\n"
       "linear normalisation: [LO, HI] -> [0, 65535], clipped; --range auto uses the 0.01 % and\n"
@@ -103,7 +101,8 @@ static tg::app::Registrar reg{{"convert", 20, [](CLI::App& app, CLI::App*& sub) 
       "  tomograin convert slices/ -o scan.h5 --voxel-um 12.3\n"
       "  tomograin convert recon.tif -o scan.h5 --to uint16 --range auto\n"
       "  tomograin convert recon.h5:/volume -o scan16.tif --to uint16 --range -0.2,1.5\n"
-      "  tomograin convert scan.h5 -o scan.json          (raw + JSON sidecar)");
+      "  tomograin convert scan.h5 -o scan.json          (raw + JSON sidecar)",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<Opts>();
   sub->add_option("input", o->in, "Input volume (.tif/.tiff, folder, .json sidecar, .h5[:/dataset])")->required();
   sub->add_option("-o,--output", o->out, "Output volume; format from the name")->required();

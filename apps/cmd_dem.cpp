@@ -27,18 +27,19 @@ tg::dem::OedometerSetup load(const std::string& path) {
 }
 }  // namespace
 
-static tg::app::Registrar reg{{"dem", 60, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand("dem", "DEM of the oedometer test: specimen preparation and compression.\n\n"
-                                  "Subcommands:\n"
-                                  "  pack       pluviate a specimen and write it as CSV (x_m,y_m,z_m,r_m)\n"
-                                  "  oedometer  compress a specimen at constant platen speed; writes a run folder\n"
-                                  "  crush      single-grain crushing test with the breakage model (history CSV)\n\n"
-                                  "Every parameter is a key of one TOML config (SI units, defaults from the\n"
-                                  "reference study); see dem/examples/oedometer.toml for all keys, documented.\n\n"
-                                  "Examples:\n"
-                                  "  tomograin dem pack dem/examples/oedometer.toml -o packing.csv\n"
-                                  "  tomograin dem oedometer dem/examples/demo.toml -o runs/demo\n"
-                                  "  tomograin dem oedometer cfg.toml -o runs/a --restart   # continue from checkpoint");
+static tg::app::Registrar reg{{"dem", 60,
+      "DEM of the oedometer test: specimen preparation and compression.\n\n"
+      "Subcommands:\n"
+      "  pack       pluviate a specimen and write it as CSV (x_m,y_m,z_m,r_m)\n"
+      "  oedometer  compress a specimen at constant platen speed; writes a run folder\n"
+      "  crush      single-grain crushing test with the breakage model (history CSV)\n\n"
+      "Every parameter is a key of one TOML config (SI units, defaults from the\n"
+      "reference study); see dem/examples/oedometer.toml for all keys, documented.\n\n"
+      "Examples:\n"
+      "  tomograin dem pack dem/examples/oedometer.toml -o packing.csv\n"
+      "  tomograin dem oedometer dem/examples/demo.toml -o runs/demo\n"
+      "  tomograin dem oedometer cfg.toml -o runs/a --restart   # continue from checkpoint",
+      [](CLI::App* sub) -> tg::app::Runner {
   sub->require_subcommand(1);
   auto o = std::make_shared<Opts>();
   CLI::App* oed = sub->add_subcommand(

@@ -14,6 +14,7 @@
 #include <fstream>
 
 #include "apps/command.hpp"
+#include "apps/demo_toml.hpp"
 #include "compare/comparison.hpp"
 #include "core/atomic_file.hpp"
 #include "core/config.hpp"
@@ -26,22 +27,16 @@ namespace {
 namespace fs = std::filesystem;
 using clk = std::chrono::steady_clock;
 
-// The demo's DEM: the study's material, contact and breakage parameters
-// (Table 1) in a small Ø8 mm cell of ~130 grains so it runs in minutes.
-// One recorded deviation: only spheres of at least 0.7 mm split, i.e. the
-// original grains (fragment elements never split again); with the study's
-// 0.2 mm the time step collapses to ~3e-9 s once fragments split and the run
-// takes far longer than a demo should.
-constexpr const char* kDemoDem = R"(# tomograin demo oedometer (written by `tomograin demo`)
-[walls]
-cylinder_radius_m = 4.0e-3
-[pluviation]
-generation_height_m = 14.0e-3
-target_height_m = 6.0e-3
-max_time_s = 0.3
-[oedometer]
-target_strain = 0.1548
-history_every_steps = 500
+// The demo's DEM: dem/examples/demo.toml (compiled in), the study's material,
+// contact and breakage parameters (Table 1) in a small Ø8 mm cell of ~130
+// grains, so it runs in minutes. One recorded deviation: only spheres of at
+// least 0.7 mm split, i.e. the original grains (fragment elements never split
+// again); with the study's 0.2 mm the time step collapses to ~3e-9 s once
+// fragments split and the run takes far longer than a demo should.
+const std::string kDemoDem =
+    "# tomograin demo oedometer (written by `tomograin demo`): dem/examples/demo.toml, then [breakage]\n" +
+    std::string(kDemoToml) + R"(
+# only the original grains split (the demo's deviation from the study)
 [breakage]
 enabled = true
 min_split_diameter_m = 7.0e-4
@@ -163,15 +158,14 @@ int run_demo(const Opts& o) {
 
 }  // namespace
 
-static tg::app::Registrar reg{{"demo", 100, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "demo",
+static tg::app::Registrar reg{{"demo", 100,
       "Run the whole chain on a small embedded default and print where the report is:\n"
       "synthetic XCT loading stages (zeolite-stages preset, standing in for scans), a DEM oedometer\n"
       "with the study's breakage model, voxelisation of the DEM snapshots, the same segmentation and\n"
       "measurement on both, and the validation report (index.html with PSD, FR, AR, stress-strain,\n"
       "broken grains, slices). A few minutes on 2 cores.\n\n"
-      "Example:\n  tomograin demo -o out/demo");
+      "Example:\n  tomograin demo -o out/demo",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<Opts>();
   sub->add_option("-o,--output", o->out, "Output folder")->capture_default_str();
   sub->add_option("--xct-size", o->xct_size, "Edge of the synthetic scans in voxels (field 15 mm)")

@@ -94,14 +94,14 @@ int run_info(const Opts& o) {
 
 }  // namespace
 
-static tg::app::Registrar reg{{"info", 10, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand("info",
-                           "Describe a volume: shape, element type, voxel size, value range, percentiles,\n"
-                           "16-bit saturation, NaN/Inf count, label count, HDF5 datasets.\n\n"
-                           "Examples:\n"
-                           "  tomograin info scan.tif\n"
-                           "  tomograin info slices/ --voxel-um 12.3\n"
-                           "  tomograin info specimen.h5:/labels --json");
+static tg::app::Registrar reg{{"info", 10,
+      "Describe a volume: shape, element type, voxel size, value range, percentiles,\n"
+      "16-bit saturation, NaN/Inf count, label count, HDF5 datasets.\n\n"
+      "Examples:\n"
+      "  tomograin info scan.tif\n"
+      "  tomograin info slices/ --voxel-um 12.3\n"
+      "  tomograin info specimen.h5:/labels --json",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<Opts>();
   sub->add_option("file", o->in, "Volume: .tif/.tiff, folder of slices, .json (raw sidecar), .h5[:/dataset]")
       ->required();

@@ -38,17 +38,7 @@ Volume<uint32_t> read_labels(const std::string& in, double voxel_um) {
 
 int run_measure(const MeasureJob& o) {
   measure::ParticleOptions po;
-  if (o.feret == "exact") {
-    po.feret_exact = true;
-  } else {
-    try {
-      size_t used = 0;
-      po.feret_directions = std::stoi(o.feret, &used);
-      if (used != o.feret.size()) throw std::invalid_argument(o.feret);
-    } catch (const std::exception&) {
-      throw UsageError("--feret must be a number of orientations (>= 3) or 'exact', got '" + o.feret + "'");
-    }
-  }
+  parse_feret_option(o.feret, po.feret_exact, po.feret_directions);
   po.sizing = o.sizing == "obb" ? measure::Sizing::obb : measure::Sizing::feret;
   po.stats.detection_limit_m = o.limit_mm * 1e-3;
   po.face_offset = o.face_offset;
@@ -123,9 +113,7 @@ int run_measure(const MeasureJob& o) {
 
 namespace {
 
-tg::app::Registrar reg_measure{{"measure", 40, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "measure",
+tg::app::Registrar reg_measure{{"measure", 40,
       "Per-particle volume, centroid, size and shape from a label volume.\n\n"
       "Reads u32 labels (0 = void; an .h5 file's /labels by default) and writes one row per label:\n"
       "label, voxels, volume_mm3, cx_mm, cy_mm, cz_mm, d_eq_mm (equal-volume sphere), d_max_mm,\n"
@@ -147,7 +135,8 @@ tg::app::Registrar reg_measure{{"measure", 40, [](CLI::App& app, CLI::App*& sub)
       "Examples:\n"
       "  tomograin measure labels.h5 -o particles.csv\n"
       "  tomograin measure labels.h5 -o particles.csv -o particles.h5 --feret exact\n"
-      "  tomograin measure labels.tif --voxel-um 11.6 --sizing obb -o particles.csv");
+      "  tomograin measure labels.tif --voxel-um 11.6 --sizing obb -o particles.csv",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<tg::app::MeasureJob>();
   sub->add_option("labels", o->in, "Label volume (u32): .h5[:/dataset], .tif, folder of slices, raw .json")->required();
   sub->add_option("-o,--output", o->out,
@@ -181,9 +170,7 @@ tg::app::Registrar reg_measure{{"measure", 40, [](CLI::App& app, CLI::App*& sub)
                 "Also surface_mm2 (normal-weighted voxel faces, within 0.2 % on spheres of radius >= 20 voxels) "
                 "and Wadell sphericity; costs several times the Feret step");
   sub->add_option("--seed", o->seed, "Random seed of CGAL's oriented-box optimiser")->default_str("42");
-  sub->add_option("--threads", o->threads, "OpenMP threads (0 = all); results do not depend on it")
-      ->check(CLI::NonNegativeNumber)
-      ->default_str("0");
+  tg::app::add_threads_option(sub, o->threads);
   tg::app::add_voxel_option(sub, o->voxel_um);
   return [o] { return tg::app::run_measure(*o); };
 }}};

@@ -2,7 +2,6 @@
 // The grading itself is measure/grading.hpp (the same one the report uses).
 #include <fmt/core.h>
 
-#include <filesystem>
 #include <memory>
 
 #include "apps/command.hpp"
@@ -15,7 +14,6 @@
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace tg;
 
 Table read_particles(const std::string& file) {
@@ -96,8 +94,7 @@ int run_psd(PsdJob o) {
   for (size_t c = 0; c < fn.size(); ++c) sum.add(fn[c], frc[c]);
   for (size_t c = 0; c < an.size(); ++c) sum.add(an[c], arc[c]);
 
-  const std::string summary =
-      !o.summary.empty() ? o.summary : (fs::path(o.out).parent_path() / (fs::path(o.out).stem().string() + "_summary.csv")).string();
+  const std::string summary = !o.summary.empty() ? o.summary : beside(o.out, "_summary.csv");
   write_csv(lng, o.out);
   write_csv(sum, summary);
   fmt::print("{:>5} {:>9} {:>8} {:>8} {:>6} {:>8} {:>8}  file\n", "stage", "particles", "D50 mm", "D10 mm", "Cu",
@@ -113,9 +110,7 @@ int run_psd(PsdJob o) {
 
 namespace {
 
-tg::app::Registrar reg_psd{{"psd", 45, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "psd",
+tg::app::Registrar reg_psd{{"psd", 45,
       "Grading (PSD by mass), D10/D50/D60/Cu, FR/AR classes and breakage of one or more stages.\n\n"
       "Each input is a particle table from `tomograin measure` (.csv, or .h5 with a /particles table);\n"
       "the first is the initial grading. Mass = volume (uniform density). D-values come from the sorted\n"
@@ -129,7 +124,8 @@ tg::app::Registrar reg_psd{{"psd", 45, [](CLI::App& app, CLI::App*& sub) -> tg::
       "Examples:\n"
       "  tomograin psd particles.csv -o psd.csv\n"
       "  tomograin psd stage0.csv stage1.csv stage2.csv -o psd.csv --exclude-below-limit\n"
-      "  tomograin psd p.csv -o psd.csv --sieves-mm 0.2,0.4,0.8,1.6 --fr-bins 0.5,0.7,0.9");
+      "  tomograin psd p.csv -o psd.csv --sieves-mm 0.2,0.4,0.8,1.6 --fr-bins 0.5,0.7,0.9",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<tg::app::PsdJob>();
   sub->add_option("tables", o->in, "Particle tables, initial stage first")->required()->check(CLI::ExistingFile);
   sub->add_option("-o,--output", o->out, "Grading table (.csv)")->required();

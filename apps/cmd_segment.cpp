@@ -125,9 +125,11 @@ int run_segment(SegmentJob& o) {
 
 }  // namespace tg::app
 
-static tg::app::Registrar reg{{"segment", 30, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "segment",
+// For now the description is set here rather than in the Command: the
+// field-of-view work of issue 19 edits its end in parallel, and moving it
+// would make the two changes conflict. Move it into the Command once merged.
+static tg::app::Registrar reg{{"segment", 30, "", [](CLI::App* sub) -> tg::app::Runner {
+  sub->description(
       "Segment a grey scan into one label per grain or fragment (reference study section 2.2):\n"
       "moment-preserving threshold (Tsai 1985, as Fiji 'Moments'; voxels above it are solid),\n"
       "filling of small near-spherical enclosed pores, exact Euclidean distance map, h-maxima\n"

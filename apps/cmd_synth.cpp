@@ -17,9 +17,7 @@ struct Opts {
 };
 }  // namespace
 
-static tg::app::Registrar reg{{"synth", 25, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "synth",
+static tg::app::Registrar reg{{"synth", 25,
       "Make a synthetic 16-bit XCT scan of a granular specimen whose every grain, fragment and pore is known.\n\n"
       "Writes an HDF5 file with /volume (u16 grey), /labels (u32 truth: the particle covering the largest\n"
       "part of each voxel, 0 where solid < 0.5), /truth (particle table) and, with --float, /reconstruction\n"
@@ -43,7 +41,8 @@ static tg::app::Registrar reg{{"synth", 25, [](CLI::App& app, CLI::App*& sub) ->
       "  tomograin synth --preset zeolite --size 512 -o zeolite512.h5\n"
       "  tomograin synth --preset zeolite --voxel-um 12.3 --size 400 -o crop.h5   # full resolution, crop\n"
       "  tomograin synth --preset zeolite-stages --seed 7 -o stages.h5\n"
-      "  tomograin synth --preset zeolite --scene noisy.toml -o noisy.h5");
+      "  tomograin synth --preset zeolite --scene noisy.toml -o noisy.h5",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<Opts>();
   sub->add_option("--preset", o->preset, "spheres | zeolite | zeolite-stages | extremes (default spheres)");
   sub->add_option("-o,--output", o->out, "Output .h5 file (a prefix for zeolite-stages and extremes)")->required();

@@ -20,9 +20,7 @@ struct Opts {
 };
 }  // namespace
 
-static tg::app::Registrar reg{{"track", 47, [](CLI::App& app, CLI::App*& sub) -> tg::app::Runner {
-  sub = app.add_subcommand(
-      "track",
+static tg::app::Registrar reg{{"track", 47,
       "Follow every grain and fragment through the label volumes of loading stages, and classify each\n"
       "breakage event.\n\n"
       "Give the stages' labels (u32, from `tomograin segment`; an .h5 file's /labels by default) in\n"
@@ -48,7 +46,8 @@ static tg::app::Registrar reg{{"track", 47, [](CLI::App& app, CLI::App*& sub) ->
       "  tomograin synth --preset zeolite-stages --scene motion.toml --size 256 -o run.h5\n"
       "  for s in 0 1 2 3 4; do tomograin segment run_stage$s.h5 -o seg$s.h5; done\n"
       "  tomograin track seg0.h5 seg1.h5 seg2.h5 seg3.h5 seg4.h5 -o tracked\n"
-      "  # tracked/summary.csv: pct_intact_broken per stage; run_lineage.csv is the truth");
+      "  # tracked/summary.csv: pct_intact_broken per stage; run_lineage.csv is the truth",
+      [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<Opts>();
   sub->add_option("labels", o->in, "Label volumes of the stages, in loading order")->required()->expected(1, -1);
   sub->add_option("-o,--output", o->out, "Output folder (lineage.csv, events.csv, summary.csv)")->required();
@@ -67,9 +66,7 @@ static tg::app::Registrar reg{{"track", 47, [](CLI::App& app, CLI::App*& sub) ->
                   "Strain increment of the map used when too few grains match (identity + axial compression)")
       ->check(CLI::Range(0.0, 0.99))
       ->default_str("0");
-  sub->add_option("--threads", o->threads, "OpenMP threads (0 = all); results do not depend on it")
-      ->check(CLI::NonNegativeNumber)
-      ->default_str("0");
+  tg::app::add_threads_option(sub, o->threads);
   return [o] {
     tg::track::TrackOptions to;
     to.allow_extension = o->any_order;

@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
+#include <stdexcept>
 
 #include "apps/command.hpp"
 #include "core/errors.hpp"
@@ -28,6 +30,28 @@ void add_voxel_option(CLI::App* sub, double& voxel_um) {
           },
           "POSITIVE"));
 }
+void parse_feret_option(const std::string& value, bool& exact, int& directions) {
+  if (value == "exact") {
+    exact = true;
+    return;
+  }
+  try {
+    size_t used = 0;
+    directions = std::stoi(value, &used);
+    if (used != value.size()) throw std::invalid_argument(value);
+  } catch (const std::exception&) {
+    throw tg::UsageError("--feret must be a number of orientations (>= 3) or 'exact', got '" + value + "'");
+  }
+}
+void add_threads_option(CLI::App* sub, int& threads) {
+  sub->add_option("--threads", threads, "OpenMP threads (0 = all); results do not depend on it")
+      ->check(CLI::NonNegativeNumber)
+      ->default_str("0");
+}
+std::string beside(const std::string& out, const std::string& suffix) {
+  const std::filesystem::path p(out);
+  return (p.parent_path() / (p.stem().string() + suffix)).string();
+}
 }  // namespace tg::app
 
 int main(int argc, char** argv) {
@@ -42,9 +66,8 @@ int main(int argc, char** argv) {
   std::sort(cmds.begin(), cmds.end(), [](const Command& a, const Command& b) { return a.order < b.order; });
   std::vector<std::pair<CLI::App*, Runner>> runners;
   for (const auto& c : cmds) {
-    CLI::App* sub = nullptr;
-    Runner r = c.setup(app, sub);
-    runners.emplace_back(sub, std::move(r));
+    CLI::App* sub = app.add_subcommand(c.name, c.description);
+    runners.emplace_back(sub, c.setup(sub));
   }
   try {
     app.parse(argc, argv);

@@ -11,15 +11,8 @@ STRAIN=${2:-0.1}
 REPS=${3:-3}
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
-cat > "$W/pack.toml" <<TOML
-[walls]
-cylinder_radius_m = 4.0e-3
-[pluviation]
-generation_height_m = 14.0e-3
-target_height_m = 6.0e-3
-max_time_s = 0.3
-TOML
-"$BIN" dem pack "$W/pack.toml" -o "$W/packing.csv" >/dev/null
+# The demo cell, dem/examples/demo.toml (its [oedometer] table does not enter the packing).
+"$BIN" dem pack "$(dirname "$0")/../../dem/examples/demo.toml" -o "$W/packing.csv" >/dev/null
 for mode in off on_nothing_breaks; do
   {
     echo "[specimen]"; echo "packing_csv = \"$W/packing.csv\""

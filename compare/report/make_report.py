@@ -102,6 +102,16 @@ def plot_classes(out, stages, rows_, metric, classes, title):
     return save(fig, out, f"{metric}.png")
 
 
+def save_strain_plot(fig, ax, out, ylabel, title, name):
+    """The frame shared by the plots against axial strain (stress, broken grains), then save()."""
+    ax.set_xlabel("axial strain (%)")
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title)
+    return save(fig, out, name)
+
+
 def plot_stress(out, ss):
     fig, ax = plt.subplots(figsize=(5.5, 3.8))
     any_ = False
@@ -114,12 +124,7 @@ def plot_stress(out, ss):
             ax.plot(100 * np.array(x), y, **style)
     if not any_:
         ax.text(0.5, 0.5, "no stress–strain data given", ha="center", va="center", transform=ax.transAxes)
-    ax.set_xlabel("axial strain (%)")
-    ax.set_ylabel("axial stress (MPa)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title("Stress–strain")
-    return save(fig, out, "stress_strain.png")
+    return save_strain_plot(fig, ax, out, "axial stress (MPa)", "Stress–strain", "stress_strain.png")
 
 
 def plot_broken(out, br):
@@ -132,12 +137,7 @@ def plot_broken(out, br):
         if pts:
             x, y = zip(*pts)
             ax.plot(100 * np.array(x), 100 * np.array(y), **style)
-    ax.set_xlabel("axial strain (%)")
-    ax.set_ylabel("grains broken (%)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title("Broken grains vs strain")
-    return save(fig, out, "broken.png")
+    return save_strain_plot(fig, ax, out, "grains broken (%)", "Broken grains vs strain", "broken.png")
 
 
 def plot_distances(out, stages, dist):

@@ -69,6 +69,10 @@ expect_bad "bad --range" "--range must be" -- "$TG" convert f.json -o out.h5 --t
 "$TG" synth --preset spheres --size 32 -o lab.h5 >/dev/null
 expect_bad "measure --face-offset 0" "--face-offset must be in (0, 1]" -- "$TG" measure lab.h5 -o out.csv --face-offset 0
 expect_bad "unknown option" "tomograin:" -- "$TG" convert good.tif -o out.h5 --frobnicate
+# --feret takes `exact` or a whole number, the same rule in measure and compare
+# (compare read "60abc" as 60 before they shared apps/main.cpp's parser).
+expect_bad "measure --feret 60abc" "--feret must be a number of orientations (>= 3) or 'exact', got '60abc'" -- "$TG" measure lab.h5 -o out.csv --feret 60abc
+expect_bad "compare --feret 60abc" "--feret must be a number of orientations (>= 3) or 'exact', got '60abc'" -- "$TG" compare --xct lab.h5 -o out.report --dem . --feret 60abc
 
 # A scan mostly saturated at 65535 (60 % of the voxels): a threshold on the
 # rest would be meaningless (issue 19: a saturated block silently ruined it).

@@ -38,60 +38,22 @@ import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 
-import h5py
-import numpy as np
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+import pyharness as H  # noqa: E402
+from pyharness import TG, ENV, check, same_bytes  # noqa: E402
 
-TG = os.path.abspath(sys.argv[1])
 SEED = int(sys.argv[2]) if len(sys.argv) > 2 else 1
-ENV = dict(os.environ, TOMOGRAIN_QUIET="1", OMP_NUM_THREADS="1")
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what, flush=True)
-    if not cond:
-        failures.append(what)
-
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PACKING = os.path.join(HERE, "data", "crash_pack.csv")
 
-PACK_CFG = """# the demo cell (dem/examples/demo.toml)
-[walls]
-cylinder_radius_m = 4.0e-3
-[pluviation]
-generation_height_m = 14.0e-3
-target_height_m = 6.0e-3
-max_time_s = 0.3
-press_to_target_height = true   # pressed to 6 mm: the free deposit's height varies with its
-                                # realisation (6.55-7.06 mm over seeds 1-5), and a loose one saw no
-                                # split before the end of the run (seen when the force sums changed order)
-[run]
-threads = 1
-"""
+# How data/crash_pack.csv was poured (`dem pack`), single-threaded.
+PACK_CFG = H.demo_cell_pack_config("[run]\nthreads = 1\n")
 
-# Weak grains (sigma_t0 3 MPa instead of 12) so the first split comes at
-# ~1-2 % strain, well before the end (4 %); fragments (d < 0.7 mm) do not split again,
-# which keeps the time step (and the test) short.
-RUN_CFG = """[walls]
-cylinder_radius_m = 4.0e-3
-[specimen]
-packing_csv = "pack.csv"
-[run]
-threads = 1
-[oedometer]
-target_strain = 0.04
-snapshot_strains = [0.0, 0.02, 0.04]
-history_every_steps = 200
-checkpoint_every_steps = 4000
-[breakage]
-enabled = true
-sigma_t0_Pa = 3.0e6
-min_split_diameter_m = 7.0e-4
-"""
+# The weak-grain run (pyharness), single-threaded, a checkpoint every 4000 steps.
+RUN_CFG = H.weak_grain_run_config(run="threads = 1\n", oedometer="checkpoint_every_steps = 4000\n")
 
 
 def oedometer(rundir, restart, log):
@@ -109,35 +71,6 @@ def tree_state(d):
             with open(p, "rb") as fh:
                 out[os.path.relpath(p, d)] = (st.st_size, st.st_mtime_ns, hashlib.sha256(fh.read()).hexdigest())
     return out
-
-
-def same_bytes(a, b):
-    with open(a, "rb") as fa, open(b, "rb") as fb:
-        return fa.read() == fb.read()
-
-
-def same_h5(a, b):
-    """Every object, dataset (dtype, shape, bytes) and attribute identical."""
-    diffs = []
-    with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
-        na, nb = [], []
-        fa.visit(na.append)
-        fb.visit(nb.append)
-        if sorted(na) != sorted(nb):
-            return [f"objects differ: {sorted(set(na) ^ set(nb))}"]
-        for name in ["/"] + na:
-            oa, ob = fa[name], fb[name]
-            if set(oa.attrs) != set(ob.attrs):
-                diffs.append(f"{name}: attribute names differ")
-            for k in oa.attrs:
-                va, vb = np.asarray(oa.attrs[k]), np.asarray(ob.attrs[k])
-                if va.dtype != vb.dtype or va.shape != vb.shape or va.tobytes() != vb.tobytes():
-                    diffs.append(f"{name}@{k} differs")
-            if isinstance(oa, h5py.Dataset):
-                da, db = oa[()], ob[()]
-                if oa.dtype != ob.dtype or oa.shape != ob.shape or np.asarray(da).tobytes() != np.asarray(db).tobytes():
-                    diffs.append(f"{name}: data differ")
-    return diffs
 
 
 # Columns allowed to differ (column -> max relative difference). Empty: the
@@ -167,9 +100,7 @@ def compare_history(a, b, nrows):
 
 
 def main():
-    w = tempfile.mkdtemp(prefix="tg_crash_")
-    try:
-        os.chdir(w)
+    with H.workdir("tg_crash_"):
         with open("pack.toml", "w") as f:
             f.write(PACK_CFG)
         with open("cfg.toml", "w") as f:
@@ -255,7 +186,7 @@ def main():
             break
         log.close()
         check(kills == 3 and after_ckpt >= 1, f"3 SIGKILLs landed ({kills}), {after_ckpt} after a checkpoint existed")
-        if failures:
+        if H.failures:
             print(open("run.log").read())
             return
 
@@ -268,7 +199,7 @@ def main():
             if not os.path.exists(b):
                 continue
             if s.endswith(".h5"):
-                d = same_h5(a, b)
+                d = H.h5_diffs(a, b)
                 check(not d, f"snapshot {s}: every dataset and attribute identical" + (f" ({d[:3]})" if d else ""))
             else:
                 check(same_bytes(a, b), f"{s} identical")
@@ -306,14 +237,7 @@ def main():
             ok = r.returncode == 2 and len(lines) == 1 and "checkpoint.bin" in lines[0]
             check(ok, f"checkpoint {what}: exit {r.returncode}, {len(lines)} line(s): {r.stderr.strip()[:160]}")
             check(tree_state("bad") == before, f"checkpoint {what}: run folder untouched")
-    finally:
-        os.chdir("/")
-        if os.environ.get("TG_KEEP") is None:
-            shutil.rmtree(w, ignore_errors=True)
-        else:
-            print("kept", w)
 
 
 main()
-print(f"{'FAILED' if failures else 'passed'}: {len(failures)} failure(s)")
-sys.exit(1 if failures else 0)
+H.finish()

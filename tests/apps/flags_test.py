@@ -23,21 +23,15 @@ import os
 import shutil
 import subprocess
 import sys
-import tempfile
 
 import h5py
 import numpy as np
 
-TG = os.path.abspath(sys.argv[1])
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+import pyharness as H  # noqa: E402
+from pyharness import TG, ENV, check  # noqa: E402
+
 HERE = os.path.dirname(os.path.abspath(__file__))
-ENV = dict(os.environ, TOMOGRAIN_QUIET="1", OMP_NUM_THREADS="1")
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what, flush=True)
-    if not cond:
-        failures.append(what)
 
 
 def run(args, ok=True):
@@ -102,9 +96,7 @@ def segment_rows(base):
 
 
 def main():
-    w = tempfile.mkdtemp(prefix="tg_flags_")
-    try:
-        os.chdir(w)
+    with H.workdir("tg_flags_"):
         # ------------------------------------------------------------ synth
         run(["synth", "--preset", "spheres", "--size", "64", "-o", "s.h5"])
         base_grey = digest("s.h5", "/volume")
@@ -300,14 +292,7 @@ def main():
             args = ["dem", "crush", "-o", out] + (["--travel", "0.08"] if flags[0] != "--travel" else []) + flags
             run(args)
             check(os.path.exists(out) and ok(rows(out)), "dem crush " + " ".join(flags))
-    finally:
-        os.chdir("/")
-        if os.environ.get("TG_KEEP") is None:
-            shutil.rmtree(w, ignore_errors=True)
-        else:
-            print("kept", w)
 
 
 main()
-print(f"{'FAILED' if failures else 'passed'}: {len(failures)} failure(s)")
-sys.exit(1 if failures else 0)
+H.finish()

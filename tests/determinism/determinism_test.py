@@ -32,13 +32,11 @@ import os
 import shutil
 import subprocess
 import sys
-import tempfile
 import time
 
-import h5py
-import numpy as np
-
-TG = os.path.abspath(sys.argv[1])
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+import pyharness as H  # noqa: E402
+from pyharness import TG  # noqa: E402
 
 # Fields that legitimately depend on the run, not on the data: timings, peak
 # memory, the thread count itself. File (relative to the run folder) -> keys
@@ -54,33 +52,10 @@ IGNORED_H5_JSON = {
 # Outputs that hold nothing but timings (none at present).
 IGNORED_FILES = set()
 
-PACK_CFG = """[walls]
-cylinder_radius_m = 4.0e-3
-[pluviation]
-generation_height_m = 14.0e-3
-target_height_m = 6.0e-3
-max_time_s = 0.3
-press_to_target_height = true   # pressed to 6 mm: the free deposit's height varies with its
-                                # realisation (6.55-7.06 mm over seeds 1-5), and a loose one saw no
-                                # split before the end of the run (seen when the force sums changed order)
-"""
+PACK_CFG = H.demo_cell_pack_config()
 
-OED_CFG = """[walls]
-cylinder_radius_m = 4.0e-3
-[specimen]
-packing_csv = "pack.csv"
-[run]
-parallel_min_items = 100
-[oedometer]
-target_strain = 0.04
-snapshot_strains = [0.0, 0.02, 0.04]
-history_every_steps = 200
-[breakage]
-enabled = true
-sigma_t0_Pa = 3.0e6
-min_split_diameter_m = 7.0e-4
-time_step_safety = 1.0
-"""
+# The weak-grain run (pyharness); its loops run on two threads from 100 items.
+OED_CFG = H.weak_grain_run_config(run="parallel_min_items = 100\n", breakage="time_step_safety = 1.0\n")
 
 STEPS = [
     ("synth", ["synth", "--preset", "spheres", "--size", "48", "--seed", "3", "--float", "-o", "s.h5"]),
@@ -108,61 +83,12 @@ def run_all(d, threads, packing):
     return times
 
 
-def drop(obj, dotted):
-    keys = dotted.split(".")
-    for k in keys[:-1]:
-        obj = obj.get(k, {})
-    obj.pop(keys[-1], None)
-
-
-def h5_diffs(a, b, rel):
-    out = []
-    with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
-        na, nb = [], []
-        fa.visit(na.append)
-        fb.visit(nb.append)
-        if sorted(na) != sorted(nb):
-            return [f"objects differ: {sorted(set(na) ^ set(nb))}"]
-        for name in ["/"] + na:
-            oa, ob = fa[name], fb[name]
-            if set(oa.attrs) != set(ob.attrs):
-                out.append(f"{name}: attribute names differ")
-            for k in oa.attrs:
-                ignored = IGNORED_H5_JSON.get((rel, name, k))
-                if ignored is not None:
-                    ja, jb = json.loads(oa.attrs[k]), json.loads(ob.attrs[k])
-                    for key in ignored:
-                        drop(ja, key)
-                        drop(jb, key)
-                    if ja != jb:
-                        out.append(f"{name}@{k}: JSON differs")
-                    continue
-                va, vb = np.asarray(oa.attrs[k]), np.asarray(ob.attrs[k])
-                if va.dtype != vb.dtype or va.shape != vb.shape or va.tobytes() != vb.tobytes():
-                    out.append(f"{name}@{k}: {va} vs {vb}")
-            if isinstance(oa, h5py.Dataset):
-                if oa.dtype != ob.dtype or oa.shape != ob.shape:
-                    out.append(f"{name}: dtype/shape differ")
-                    continue
-                x, y = np.asarray(oa[()]), np.asarray(ob[()])
-                if x.tobytes() != y.tobytes():
-                    if x.dtype.kind in "fiu":
-                        xf, yf = x.astype(float), y.astype(float)
-                        out.append(f"{name}: {int(np.sum(xf != yf))} of {x.size} values differ, "
-                                   f"max |diff| {np.max(np.abs(xf - yf)):.3g}")
-                    else:
-                        out.append(f"{name}: contents differ")
-    return out
-
-
 def main():
-    w = tempfile.mkdtemp(prefix="tg_det_")
     failures = 0
-    try:
+    with H.workdir("tg_det_") as w:
         with open(os.path.join(w, "pack.toml"), "w") as f:
             f.write(PACK_CFG)
-        env = dict(os.environ, OMP_NUM_THREADS="1", TOMOGRAIN_QUIET="1")
-        subprocess.run([TG, "dem", "pack", "pack.toml", "-o", "pack.csv"], cwd=w, env=env, check=True,
+        subprocess.run([TG, "dem", "pack", "pack.toml", "-o", "pack.csv"], cwd=w, env=H.ENV, check=True,
                        stdout=subprocess.DEVNULL)
         t1 = run_all(os.path.join(w, "t1"), 1, os.path.join(w, "pack.csv"))
         t2 = run_all(os.path.join(w, "t2"), 2, os.path.join(w, "pack.csv"))
@@ -185,12 +111,12 @@ def main():
                 continue
             a, b = os.path.join(w, "t1", rel), os.path.join(w, "t2", rel)
             if rel.endswith(".h5"):
-                d = h5_diffs(a, b, rel)
+                d = H.h5_diffs(a, b, lambda name, attr: IGNORED_H5_JSON.get((rel, name, attr)))
             elif rel.endswith(".json"):
                 ja, jb = json.load(open(a)), json.load(open(b))
                 for k in IGNORED.get(rel, []):
-                    drop(ja, k)
-                    drop(jb, k)
+                    H.drop(ja, k)
+                    H.drop(jb, k)
                 d = [] if ja == jb else [f"JSON differs: {json.dumps(ja)[:200]} vs {json.dumps(jb)[:200]}"]
             else:
                 d = [] if open(a, "rb").read() == open(b, "rb").read() else ["bytes differ"]
@@ -201,8 +127,6 @@ def main():
                 print(f"FAIL {rel}: " + "; ".join(d[:5]))
             else:
                 print(f"ok   {rel}{note}")
-    finally:
-        shutil.rmtree(w, ignore_errors=True)
     print(f"{'FAILED' if failures else 'passed'}: {failures} file(s) differ between 1 and 2 threads")
     sys.exit(1 if failures else 0)
 

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "core/errors.hpp"
+#include "core/io/volume_io.hpp"
 
 namespace tg::fuzz {
 
@@ -34,6 +35,16 @@ inline void write_file(const std::string& path, const uint8_t* data, size_t size
 // Inputs may announce absurd sizes: the allocation check must refuse them
 // cleanly, well below libFuzzer's RSS limit.
 inline void limit_memory() { setenv("TOMOGRAIN_MEMORY_LIMIT", "256M", 1); }
+
+// How the volume harnesses read: no progress output, and NaN/Inf voxels
+// accepted, so that float inputs go on through the whole reader (their
+// refusal is the commands' policy, tested in tests/apps).
+inline tg::ReadOptions volume_read_options() {
+  tg::ReadOptions ro;
+  ro.progress = false;
+  ro.nonfinite = tg::NonFinite::allow;
+  return ro;
+}
 
 template <class F>
 void expect_clean(F&& f) {

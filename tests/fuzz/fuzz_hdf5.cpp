@@ -22,9 +22,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string file = tg::fuzz::scratch("in.h5");
   tg::fuzz::write_file(file, data, size);
-  tg::ReadOptions ro;
-  ro.progress = false;
-  ro.nonfinite = tg::NonFinite::allow;
+  const tg::ReadOptions ro = tg::fuzz::volume_read_options();
   tg::fuzz::expect_clean([&] { tg::read_volume(file, ro); });
   tg::fuzz::expect_clean([&] {
     tg::H5Reader r(file);

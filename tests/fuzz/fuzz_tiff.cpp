@@ -12,9 +12,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string file = tg::fuzz::scratch("in.tif");
   tg::fuzz::write_file(file, data, size);
-  tg::ReadOptions ro;
-  ro.progress = false;
-  ro.nonfinite = tg::NonFinite::allow;
+  const tg::ReadOptions ro = tg::fuzz::volume_read_options();
   tg::fuzz::expect_clean([&] { tg::read_volume(file, ro); });
   // The same bytes as the only slice of a folder (slice-folder code path).
   const std::string dir = tg::fuzz::scratch("slices");

@@ -1,0 +1,149 @@
+"""What the Python end-to-end tests of `tomograin` share (tests/apps/*_test.py,
+tests/determinism/determinism_test.py): the program under test and its quiet
+environment, the ok/FAIL record, a scratch working folder, bit-for-bit
+comparison of HDF5 files, and the demo's DEM cell as a packing config.
+
+A test script imports it with its own folder's parent on the path (ctest runs
+the scripts by absolute path, so this works from any working directory):
+
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+    import pyharness as H
+
+Usage of a test built on it: TEST.py TOMOGRAIN [ARGS]; TG_KEEP=1 keeps its
+scratch folder (printed) for a look after a failure.
+"""
+import contextlib
+import json
+import os
+import shutil
+import sys
+import tempfile
+
+import h5py
+import numpy as np
+
+TESTS = os.path.dirname(os.path.abspath(__file__))
+TG = os.path.abspath(sys.argv[1]) if len(sys.argv) > 1 else None
+# Single-threaded and without progress output unless a test says otherwise.
+ENV = dict(os.environ, TOMOGRAIN_QUIET="1", OMP_NUM_THREADS="1")
+
+failures = []
+
+
+def check(cond, what):
+    """Print one ok/FAIL line and remember the failures for finish()."""
+    print(("ok   " if cond else "FAIL ") + what, flush=True)
+    if not cond:
+        failures.append(what)
+
+
+def finish():
+    """The last line of a test's output and its exit status."""
+    print(f"{'FAILED' if failures else 'passed'}: {len(failures)} failure(s)")
+    sys.exit(1 if failures else 0)
+
+
+@contextlib.contextmanager
+def workdir(prefix):
+    """A fresh temporary folder as the working directory, removed afterwards
+    (kept, and its path printed, when TG_KEEP is set)."""
+    w = tempfile.mkdtemp(prefix=prefix)
+    os.chdir(w)
+    try:
+        yield w
+    finally:
+        os.chdir("/")
+        if os.environ.get("TG_KEEP") is None:
+            shutil.rmtree(w, ignore_errors=True)
+        else:
+            print("kept", w)
+
+
+def same_bytes(a, b):
+    with open(a, "rb") as fa, open(b, "rb") as fb:
+        return fa.read() == fb.read()
+
+
+def drop(obj, dotted):
+    """Remove the key at a dotted path ("a.b.c") of a parsed JSON object, if there."""
+    keys = dotted.split(".")
+    for k in keys[:-1]:
+        obj = obj.get(k, {})
+    obj.pop(keys[-1], None)
+
+
+def h5_diffs(a, b, json_ignored=lambda name, attr: None):
+    """Differences between two HDF5 files: the set of objects, every attribute
+    (dtype, shape, bytes) and every dataset (dtype, shape, bytes). Not the
+    file bytes: HDF5 stores object times. An attribute for which
+    json_ignored(object name, attribute name) gives a list of dotted keys
+    holds JSON text, compared parsed without those keys. [] when identical."""
+    out = []
+    with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
+        na, nb = [], []
+        fa.visit(na.append)
+        fb.visit(nb.append)
+        if sorted(na) != sorted(nb):
+            return [f"objects differ: {sorted(set(na) ^ set(nb))}"]
+        for name in ["/"] + na:
+            oa, ob = fa[name], fb[name]
+            if set(oa.attrs) != set(ob.attrs):
+                out.append(f"{name}: attribute names differ")
+            for k in oa.attrs:
+                ignored = json_ignored(name, k)
+                if ignored is not None:
+                    ja, jb = json.loads(oa.attrs[k]), json.loads(ob.attrs[k])
+                    for key in ignored:
+                        drop(ja, key)
+                        drop(jb, key)
+                    if ja != jb:
+                        out.append(f"{name}@{k}: JSON differs")
+                    continue
+                va, vb = np.asarray(oa.attrs[k]), np.asarray(ob.attrs[k])
+                if va.dtype != vb.dtype or va.shape != vb.shape or va.tobytes() != vb.tobytes():
+                    out.append(f"{name}@{k}: {va} vs {vb}")
+            if isinstance(oa, h5py.Dataset):
+                if oa.dtype != ob.dtype or oa.shape != ob.shape:
+                    out.append(f"{name}: dtype/shape differ")
+                    continue
+                x, y = np.asarray(oa[()]), np.asarray(ob[()])
+                if x.tobytes() != y.tobytes():
+                    if x.dtype.kind in "fiu":
+                        xf, yf = x.astype(float), y.astype(float)
+                        out.append(f"{name}: {int(np.sum(xf != yf))} of {x.size} values differ, "
+                                   f"max |diff| {np.max(np.abs(xf - yf)):.3g}")
+                    else:
+                        out.append(f"{name}: contents differ")
+    return out
+
+
+DEMO_TOML = os.path.join(TESTS, "..", "dem", "examples", "demo.toml")
+
+
+def demo_cell_pack_config(extra=""):
+    """dem/examples/demo.toml (the demo's Ø8 mm cell, ~130 grains) pressed to
+    its target height of 6 mm: the free deposit's height varies with its
+    realisation (6.55-7.06 mm over seeds 1-5), and a loose one saw no split
+    before the end of a short run (seen when the force sums changed order).
+    `extra` is appended (more tables)."""
+    with open(DEMO_TOML) as f:
+        text = f.read()
+    assert "[pluviation]\n" in text, DEMO_TOML
+    return text.replace("[pluviation]\n", "[pluviation]\npress_to_target_height = true\n", 1) + extra
+
+
+def weak_grain_run_config(run, oedometer="", breakage=""):
+    """A short oedometer run of a demo-cell packing (pack.csv in the working
+    folder, e.g. the committed tests/apps/data/crash_pack.csv) to 4 % strain,
+    snapshots at 0, 2 and 4 %, a history row every 200 steps. Weak grains
+    (sigma_t0 3 MPa instead of 12) so the first split comes at ~1-2 % strain,
+    well before the end; fragments (d < 0.7 mm) do not split again, which
+    keeps the time step (and the test) short. `run`, `oedometer`, `breakage`:
+    more keys of those tables, one "key = value\\n" each."""
+    return ("[walls]\ncylinder_radius_m = 4.0e-3\n"
+            "[specimen]\npacking_csv = \"pack.csv\"\n"
+            f"[run]\n{run}"
+            "[oedometer]\ntarget_strain = 0.04\nsnapshot_strains = [0.0, 0.02, 0.04]\nhistory_every_steps = 200\n"
+            f"{oedometer}"
+            "[breakage]\nenabled = true\nsigma_t0_Pa = 3.0e6\nmin_split_diameter_m = 7.0e-4\n"
+            f"{breakage}")

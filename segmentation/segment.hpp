@@ -1,8 +1,12 @@
 // The whole image pipeline, one function for both worlds (scans and
 // voxelised DEM snapshots, ../shared/DESIGN.md "Data flow"):
 //
-//   grey u16 -> threshold -> solid mask -> pore filter -> distance map
+//   grey u16 -> field of view, pre-masked zeros, saturation (field_of_view)
+//            -> threshold (global Tsai, or local) -> graded mask (void, dim,
+//               bright: the grey evidence below) -> pore filter (void pores,
+//               then dim pockets) -> distance map to void or dim
 //            -> h-maxima markers -> watershed (lines) -> merge repair
+//               (bright interfaces, one best partner per label)
 //            -> consecutive labels with a size filter -> labels u32
 //
 // Each stage is its own header (threshold, pore_filter, distance_transform,

@@ -49,6 +49,7 @@ TMP = "/tmp"
 MIDDLE = {"gap": 1.0, "psf": 0.7, "cnr": 13.0, "pores": "1,3", "cupping": 0.0, "drift": 0.0}
 FACTORS = {"gap": [0.5, 1.0, 1.5, 2.5], "psf": [0.5, 0.7, 1.0, 1.5], "cnr": [5.0, 8.0, 13.0, 30.0],
            "pores": ["1,2", "2,4", "3,5"], "cupping": [0.0, 0.15, 0.3], "drift": [0.0, 2.0]}
+SHORT = {"tomograin": "tg", "skimage": "sk"}
 R_SIZES = {8: 96, 12: 128, 20: 192, 40: 320, 60: 448}
 METRICS = ["f1", "halves_recovered", "halves", "over_segmented", "under_segmenting", "under_one_grain", "median_abs_dv",
            "pore_over_segmented_intact", "n_true", "n_pred", "segment_s", "peak_b_per_vox"]
@@ -152,11 +153,11 @@ def write_md(a, rows, header):
         groups.setdefault((r["factor"], str(r["level"])), {}).setdefault(r["pipeline"], []).append(r)
     lines = [header, ""]
     cols = [("F1", "f1"), ("halves rec.", "halves_frac"), ("over", "over_segmented"), ("under", "under_segmenting"),
-            ("med |dV/V|", "median_abs_dv"), ("pore-over intact", "pore_over_segmented_intact"),
+            ("med. abs dV/V", "median_abs_dv"), ("pore-over intact", "pore_over_segmented_intact"),
             ("segment s", "segment_s"), ("peak B/vox", "peak_b_per_vox")]
     head = "| factor | level | seeds | particles (true) |"
     for name, _ in cols:
-        head += "".join(f" {name} {p[:2]} |" for p in pipes)
+        head += "".join(f" {name} {SHORT[p]} |" for p in pipes)
     lines += [head, "|" + "---|" * (head.count("|") - 1)]
     for (fac, lev), by in groups.items():
         line = f"| {fac} | {lev} | {len(by['tomograin'])} | {sum(r['n_true'] for r in by['tomograin']) / len(by['tomograin']):.0f} |"
@@ -165,7 +166,7 @@ def write_md(a, rows, header):
                 rs = by.get(p, [])
                 if key == "halves_frac":
                     h = sum(r["halves"] for r in rs)
-                    v = f"{100 * sum(r['halves_recovered'] for r in rs) / h:.0f} % of {h}" if h else "-"
+                    v = f"{100 * sum(r['halves_recovered'] for r in rs) / h:.0f} % of {int(h)}" if h else "-"
                 else:
                     vals = [r[key] for r in rs if r[key] is not None]
                     v = fmt(sum(vals) / len(vals), key) if vals else "-"
@@ -175,8 +176,54 @@ def write_md(a, rows, header):
               "over: truth particles split into >= 2 labels of >= 20 % each; under: labels holding >= 2 truth",
               "particles >= 20 % each; pore-over intact: over-segmented intact (porous) grains; segment s: tomograin's",
               "seconds_total, the peer's threshold..relabel stages; peak B/vox: the command's max RSS (GNU time) / voxels."]
+    lines += scene_checks(a, groups)
     with open(os.path.join(a.dir, "sweep.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
+
+
+def scene_checks(a, groups):
+    """What the generator measured on its own scenes (PREFIX.json): solid
+    fraction, CNR from the image, split-gap width in the noiseless unblurred
+    solid fraction, generation time."""
+    lines = ["", "Scenes (blind_scene.py's own measurements, mean over seeds):", "",
+             "| factor | level | solid fraction | measured CNR | measured gap (vox) | particles | halves | gen s |",
+             "|---|---|---|---|---|---|---|---|"]
+    for (fac, lev), by in groups.items():
+        infos = []
+        for r in by["tomograin"]:
+            path = os.path.join(a.dir, "scenes", r["scene"] + ".json")
+            if os.path.exists(path):
+                infos.append(json.load(open(path)))
+        if not infos:
+            continue
+
+        def mean(get):
+            vals = [v for v in (get(i) for i in infos) if v is not None]
+            return sum(vals) / len(vals) if vals else None
+
+        sf = mean(lambda i: i["solid_fraction"])
+        cnr = mean(lambda i: (i.get("measured") or {}).get("cnr"))
+        gap = mean(lambda i: (i.get("measured_gap_vox") or {}).get("median"))
+        npart = mean(lambda i: i["particles"])
+        nh = mean(lambda i: i["by_kind"]["half"])
+        gen = mean(lambda i: i["seconds"]["total"])
+        lines.append(f"| {fac} | {lev} | {sf:.3f} | {'-' if cnr is None else f'{cnr:.2f}'} | "
+                     f"{'-' if gap is None else f'{gap:.3f}'} | {npart:.0f} | {nh:.0f} | {gen:.1f} |")
+    return lines
+
+
+def read_csv(path):
+    rows = []
+    for r in csv.DictReader(open(path)):
+        for k, v in r.items():
+            if k in ("factor", "level", "pipeline", "scene"):
+                continue
+            try:
+                r[k] = float(v) if v not in ("", "None") else None
+            except ValueError:
+                pass
+        rows.append(r)
+    return rows
 
 
 def main():
@@ -191,8 +238,15 @@ def main():
     ap.add_argument("--factors", help="only these factors, comma separated (gap,psf,cnr,pores,cupping,drift,R)")
     ap.add_argument("--quick", action="store_true", help="middle setting only")
     ap.add_argument("--reuse", action="store_true", help="do not regenerate scenes that exist")
+    ap.add_argument("--md-only", action="store_true", help="rewrite DIR/sweep.md from DIR/sweep.csv and the scenes, run nothing")
     a = ap.parse_args()
     a.tomograin = os.path.abspath(a.tomograin)
+    if a.md_only:
+        rows = read_csv(os.path.join(a.dir, "sweep.csv"))
+        a.skimage = any(r["pipeline"] == "skimage" for r in rows)
+        write_md(a, rows, open(os.path.join(a.dir, "sweep.md")).readline().rstrip())
+        print(open(os.path.join(a.dir, "sweep.md")).read())
+        return
     os.makedirs(os.path.join(a.dir, "scenes"), exist_ok=True)
     os.makedirs(os.path.join(a.dir, "seg"), exist_ok=True)
     version = subprocess.run([a.tomograin, "--version"], stdout=subprocess.PIPE, text=True).stdout.strip()

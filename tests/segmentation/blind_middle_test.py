@@ -42,6 +42,8 @@ SIZE, R = 160, 16
 
 def main():
     tomograin = os.path.abspath(sys.argv[1])
+    if not os.access(tomograin, os.X_OK):
+        sys.exit(f"FAIL: no tomograin program at {tomograin}")
     work = sys.argv[2] if len(sys.argv) > 2 else tempfile.mkdtemp(prefix="tg_blind_")
     os.makedirs(work, exist_ok=True)
     tot = {"matched": 0, "n_true": 0, "n_pred": 0, "halves": 0, "halves_recovered": 0, "pore_over_segmented_intact": 0}

@@ -87,7 +87,8 @@ def make_scene(a, prefix, size, R, s, seed):
 
 def segment_tomograin(a, prefix, R, nvox, truth, table):
     out = os.path.join(a.dir, "seg", os.path.basename(prefix) + "_tg.h5")
-    wall, cpu, rss, _ = run([a.tomograin, "segment", prefix + ".h5:/scan", "-o", out, "--grain-radius-vox", f"{R:g}"])
+    wall, cpu, rss, _ = run([a.tomograin, "segment", prefix + ".h5:/scan", "-o", out, "--grain-radius-vox", f"{R:g}"]
+                            + a.tomograin_args.split())
     summ = json.load(open(out[:-3] + ".segment.json"))
     res = blind_score.evaluate(truth, blind_score.load_labels(out, truth.shape), table)
     res.update(segment_s=summ["seconds_total"], wall_s=wall, cpu_s=cpu, peak_b_per_vox=rss / nvox,
@@ -231,6 +232,8 @@ def main():
     ap.add_argument("--tomograin", required=True, help="tomograin program")
     ap.add_argument("-o", "--dir", required=True, help="output folder (scenes, segmentations, sweep.csv, sweep.md)")
     ap.add_argument("--skimage", action="store_true", help="also run the scikit-image peer on every scene")
+    ap.add_argument("--tomograin-args", default="",
+                    help="extra arguments for tomograin segment, e.g. '--no-merge' (default none: only --grain-radius-vox)")
     ap.add_argument("--seeds", type=int, default=3, help="seeds 1..N per point (3)")
     ap.add_argument("--seed-list", help="explicit seeds, e.g. 1,2 (overrides --seeds)")
     ap.add_argument("--big-seeds", type=int, default=2, help="seeds used for scenes larger than 256^3 (2)")
@@ -250,7 +253,8 @@ def main():
     os.makedirs(os.path.join(a.dir, "scenes"), exist_ok=True)
     os.makedirs(os.path.join(a.dir, "seg"), exist_ok=True)
     version = subprocess.run([a.tomograin, "--version"], stdout=subprocess.PIPE, text=True).stdout.strip()
-    header = (f"# Blind sweep: {a.tomograin} ({version}), {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, "
+    header = (f"# Blind sweep: {a.tomograin} ({version}) segment --grain-radius-vox R {a.tomograin_args}, "
+              f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, "
               f"load {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
     done = {}
     rows = []

@@ -27,9 +27,12 @@ each pipeline's own report (tomograin's peak_rss_bytes_per_voxel, the
 peer's largest stage peak) is kept as own_peak_b_per_vox.
 
 Writes DIR/sweep.csv (one row per scene and pipeline), DIR/sweep.md (mean
-over seeds per factor level, both pipelines side by side) and keeps the
-scenes in DIR/scenes (--reuse skips generating a scene whose .h5 exists;
-segmentations are always rerun).
+over seeds per factor level, both pipelines side by side, and the
+generator's own checks of each scene) and keeps the scenes in DIR/scenes
+(--reuse skips generating a scene whose .h5 exists; segmentations are
+always rerun). A new binary on the same scenes without overwriting the
+first table:
+  sweep.py --tomograin NEW --reuse --tag _new -o DIR   (DIR/sweep_new.md)
 """
 import argparse
 import csv
@@ -86,7 +89,7 @@ def make_scene(a, prefix, size, R, s, seed):
 
 
 def segment_tomograin(a, prefix, R, nvox, truth, table):
-    out = os.path.join(a.dir, "seg", os.path.basename(prefix) + "_tg.h5")
+    out = os.path.join(a.dir, "seg", os.path.basename(prefix) + f"_tg{a.tag}.h5")
     wall, cpu, rss, _ = run([a.tomograin, "segment", prefix + ".h5:/scan", "-o", out, "--grain-radius-vox", f"{R:g}"]
                             + a.tomograin_args.split())
     summ = json.load(open(out[:-3] + ".segment.json"))
@@ -97,7 +100,7 @@ def segment_tomograin(a, prefix, R, nvox, truth, table):
 
 
 def segment_skimage(a, prefix, R, nvox, truth, table):
-    out = os.path.join(a.dir, "seg", os.path.basename(prefix) + "_sk")
+    out = os.path.join(a.dir, "seg", os.path.basename(prefix) + f"_sk{a.tag}")
     wall, cpu, rss, _ = run([PY, REF, prefix + ".tif", "--out", out, "--radius", f"{R:g}"])
     info = json.load(open(out + "_timing.json"))
     st = {r["stage"]: r for r in info["stages"]}
@@ -178,7 +181,7 @@ def write_md(a, rows, header):
               "particles >= 20 % each; pore-over intact: over-segmented intact (porous) grains; segment s: tomograin's",
               "seconds_total, the peer's threshold..relabel stages; peak B/vox: the command's max RSS (GNU time) / voxels."]
     lines += scene_checks(a, groups)
-    with open(os.path.join(a.dir, "sweep.md"), "w") as f:
+    with open(os.path.join(a.dir, f"sweep{a.tag}.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
 
 
@@ -233,7 +236,9 @@ def main():
     ap.add_argument("-o", "--dir", required=True, help="output folder (scenes, segmentations, sweep.csv, sweep.md)")
     ap.add_argument("--skimage", action="store_true", help="also run the scikit-image peer on every scene")
     ap.add_argument("--tomograin-args", default="",
-                    help="extra arguments for tomograin segment, e.g. '--no-merge' (default none: only --grain-radius-vox)")
+                    help="extra arguments for tomograin segment, as --tomograin-args='--no-merge --h 0.4' "
+                         "(default none: only --grain-radius-vox)")
+    ap.add_argument("--tag", default="", help="suffix of the CSV, the table and the segmentations: sweepTAG.csv (none)")
     ap.add_argument("--seeds", type=int, default=3, help="seeds 1..N per point (3)")
     ap.add_argument("--seed-list", help="explicit seeds, e.g. 1,2 (overrides --seeds)")
     ap.add_argument("--big-seeds", type=int, default=2, help="seeds used for scenes larger than 256^3 (2)")
@@ -245,10 +250,10 @@ def main():
     a = ap.parse_args()
     a.tomograin = os.path.abspath(a.tomograin)
     if a.md_only:
-        rows = read_csv(os.path.join(a.dir, "sweep.csv"))
+        rows = read_csv(os.path.join(a.dir, f"sweep{a.tag}.csv"))
         a.skimage = any(r["pipeline"] == "skimage" for r in rows)
-        write_md(a, rows, open(os.path.join(a.dir, "sweep.md")).readline().rstrip())
-        print(open(os.path.join(a.dir, "sweep.md")).read())
+        write_md(a, rows, open(os.path.join(a.dir, f"sweep{a.tag}.md")).readline().rstrip())
+        print(open(os.path.join(a.dir, f"sweep{a.tag}.md")).read())
         return
     os.makedirs(os.path.join(a.dir, "scenes"), exist_ok=True)
     os.makedirs(os.path.join(a.dir, "seg"), exist_ok=True)
@@ -258,7 +263,7 @@ def main():
               f"load {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
     done = {}
     rows = []
-    csv_path = os.path.join(a.dir, "sweep.csv")
+    csv_path = os.path.join(a.dir, f"sweep{a.tag}.csv")
     keys = ["factor", "level", "size", "R", "seed", "pipeline", "scene", "gen_s", "wall_s", "cpu_s", "own_peak_b_per_vox",
             "merges"] + METRICS + ["intact"]
     with open(csv_path + ".part", "w", newline="") as fcsv:
@@ -288,7 +293,7 @@ def main():
                       f"{r['segment_s']:.2f} s {r['peak_b_per_vox']:.1f} B/vox", flush=True)
             write_md(a, rows, header)
     os.replace(csv_path + ".part", csv_path)
-    print(open(os.path.join(a.dir, "sweep.md")).read())
+    print(open(os.path.join(a.dir, f"sweep{a.tag}.md")).read())
 
 
 if __name__ == "__main__":

@@ -185,9 +185,14 @@ LocalThreshold local_moments_thresholds(const Volume<uint16_t>& grey, const Fiel
   return lt;
 }
 
-Volume<uint8_t> binarise_local(const Volume<uint16_t>& grey, const LocalThreshold& lt, const FieldOfView& fov) {
+namespace {
+
+// Row by row (in parallel): out[i] = 1 where voxel i of the row is inside
+// the field of view and above its interpolated threshold, else 0. `out` may
+// be the grey row itself (each voxel is read before it is written).
+template <class Out>
+void decide_rows(const Volume<uint16_t>& grey, const LocalThreshold& lt, const FieldOfView& fov, Out* out) {
   const Shape s = grey.shape();
-  Volume<uint8_t> m(s, grey.geometry());
   const RowThresholds rt(lt, s);
   const int64_t rows = s.nz * s.ny;
 #pragma omp parallel
@@ -198,32 +203,25 @@ Volume<uint8_t> binarise_local(const Volume<uint16_t>& grey, const LocalThreshol
       const int64_t k = r / s.ny, j = r % s.ny;
       rt.fill(k, j, tb, t);
       const uint16_t* x = grey.data() + r * s.nx;
-      uint8_t* y = m.data() + r * s.nx;
+      Out* y = out + r * s.nx;
       const int64_t a = fov.active ? fov.x0[size_t(j)] : 0, e = fov.active ? fov.x1[size_t(j)] : s.nx;
       for (int64_t i = 0; i < s.nx; ++i) y[i] = (i >= a && i < e && float(x[i]) > t[size_t(i)]) ? 1 : 0;
     }
   }
+}
+
+}  // namespace
+
+Volume<uint8_t> binarise_local(const Volume<uint16_t>& grey, const LocalThreshold& lt, const FieldOfView& fov) {
+  Volume<uint8_t> m(grey.shape(), grey.geometry());
+  decide_rows(grey, lt, fov, m.data());
   return m;
 }
 
 Volume<uint8_t> binarise_local(Volume<uint16_t>&& grey, const LocalThreshold& lt, const FieldOfView& fov) {
   // Pass 1 writes 0/1 into the grey levels themselves; pass 2 is the plain
   // in-place binarisation at 0 (no second volume).
-  const Shape s = grey.shape();
-  const RowThresholds rt(lt, s);
-  const int64_t rows = s.nz * s.ny;
-#pragma omp parallel
-  {
-    std::vector<float> tb, t;
-#pragma omp for schedule(static)
-    for (int64_t r = 0; r < rows; ++r) {
-      const int64_t k = r / s.ny, j = r % s.ny;
-      rt.fill(k, j, tb, t);
-      uint16_t* x = grey.data() + r * s.nx;
-      const int64_t a = fov.active ? fov.x0[size_t(j)] : 0, e = fov.active ? fov.x1[size_t(j)] : s.nx;
-      for (int64_t i = 0; i < s.nx; ++i) x[i] = (i >= a && i < e && float(x[i]) > t[size_t(i)]) ? 1 : 0;
-    }
-  }
+  decide_rows(grey, lt, fov, grey.data());
   return binarise(std::move(grey), 0);
 }
 

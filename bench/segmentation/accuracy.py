@@ -88,10 +88,14 @@ def main():
     pred = load_labels(a.labels, truth.shape)
     with open(a.scan[:-3] + "_truth.csv") as f:
         table = list(csv.DictReader(f))
-    res = evaluate(truth, pred, table, a.min_voxels)
+    print_result(evaluate(truth, pred, table, a.min_voxels), a.json)
+
+
+def print_result(res, json_path=None):
+    """The scores on stdout (one JSON line) and, when asked, in a file."""
     print(json.dumps(res))
-    if a.json:
-        with open(a.json, "w") as f:
+    if json_path:
+        with open(json_path, "w") as f:
             json.dump(res, f, indent=1)
 
 

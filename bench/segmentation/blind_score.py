@@ -24,8 +24,13 @@ import csv
 import json
 import sys
 
+import os
+
 import numpy as np
 import h5py
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import accuracy  # noqa: E402  (print_result: one way to report scores)
 
 PIECE = 0.2
 
@@ -100,11 +105,7 @@ def main():
     ap.add_argument("--json")
     a = ap.parse_args()
     truth, table = load_truth(a.prefix)
-    res = evaluate(truth, load_labels(a.labels, truth.shape), table)
-    print(json.dumps(res))
-    if a.json:
-        with open(a.json, "w") as f:
-            json.dump(res, f, indent=1)
+    accuracy.print_result(evaluate(truth, load_labels(a.labels, truth.shape), table), a.json)
 
 
 if __name__ == "__main__":

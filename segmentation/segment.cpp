@@ -92,9 +92,9 @@ GreyDecision choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions
     const double b =
         std::min(double(d.t.value) + o.bright_fraction * (mean_above(hist, d.t.value) - double(d.t.value)),
                  peak.mode - o.bright_sigmas * peak.sigma);
-    d.graded = true;
     d.bright = uint16_t(std::clamp(std::lround(b), long(d.t.value), 65535L));
     d.noise_sigma = peak.sigma;
+    d.graded = d.bright > d.t.value;  // no dim band: the plain mask's chain (no second pore pass)
   }
   return d;
 }
@@ -129,7 +129,7 @@ SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owne
   r.threshold = t;
   r.bright_value = d.bright;
   r.solid_noise_sigma = d.noise_sigma;
-  if (d.graded && d.bright <= t.value)
+  if (opt.grey_evidence && t.method != ThresholdMethod::local && !d.graded)
     r.notes.push_back("grey evidence off: the solid's noise (sigma " + std::to_string(long(d.noise_sigma)) +
                       " grey levels) leaves no dim band between the threshold and " +
                       std::to_string(int(opt.bright_sigmas)) + " sigmas below the solid's peak");

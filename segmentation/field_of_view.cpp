@@ -165,27 +165,7 @@ FieldOfView find_field_of_view(const Volume<uint16_t>& grey, const FovOptions& o
 }
 
 std::vector<int64_t> histogram_in_fov(const Volume<uint16_t>& grey, const FieldOfView& fov) {
-  if (!fov.active) return histogram_u16(grey);
-  const Shape s = grey.shape();
-  const int nthreads = omp_get_max_threads();
-  std::vector<std::vector<int64_t>> part(static_cast<size_t>(nthreads));
-  const int64_t rows = s.nz * s.ny;
-#pragma omp parallel num_threads(nthreads)
-  {
-    auto& h = part[size_t(omp_get_thread_num())];
-    h.assign(65536, 0);
-#pragma omp for schedule(static)
-    for (int64_t r = 0; r < rows; ++r) {
-      const int64_t j = r % s.ny;
-      const uint16_t* row = grey.data() + r * s.nx;
-      for (int64_t i = fov.x0[size_t(j)]; i < fov.x1[size_t(j)]; ++i) ++h[row[i]];
-    }
-  }
-  std::vector<int64_t> hist(65536, 0);
-  for (const auto& h : part)
-    if (!h.empty())
-      for (size_t b = 0; b < 65536; ++b) hist[b] += h[b];
-  return hist;
+  return fov.active ? histogram_u16(grey, &fov.x0, &fov.x1) : histogram_u16(grey);
 }
 
 void clear_outside(Volume<uint8_t>& mask, const FieldOfView& fov) {

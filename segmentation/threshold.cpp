@@ -60,17 +60,25 @@ ThresholdMethod parse_threshold_method(const std::string& s) {
   throw UsageError("threshold method '" + s + "': expected moments, otsu, manual or local");
 }
 
-std::vector<int64_t> histogram_u16(const Volume<uint16_t>& v) {
+std::vector<int64_t> histogram_u16(const Volume<uint16_t>& v, const std::vector<int64_t>* x0,
+                                   const std::vector<int64_t>* x1) {
+  const Shape s = v.shape();
+  if ((x0 == nullptr) != (x1 == nullptr) || (x0 && (int64_t(x0->size()) != s.ny || int64_t(x1->size()) != s.ny)))
+    throw UsageError("histogram: row spans need x0 and x1, one entry per row");
   const int nthreads = omp_get_max_threads();
   std::vector<std::vector<int64_t>> part(static_cast<size_t>(nthreads));
-  const uint16_t* x = v.data();
-  const int64_t n = v.size();
+  const int64_t rows = s.nz * s.ny;
 #pragma omp parallel num_threads(nthreads)
   {
     auto& h = part[size_t(omp_get_thread_num())];
     h.assign(65536, 0);
 #pragma omp for schedule(static)
-    for (int64_t i = 0; i < n; ++i) ++h[x[i]];
+    for (int64_t r = 0; r < rows; ++r) {
+      const int64_t j = r % s.ny;
+      const uint16_t* row = v.data() + r * s.nx;
+      const int64_t a = x0 ? (*x0)[size_t(j)] : 0, e = x1 ? (*x1)[size_t(j)] : s.nx;
+      for (int64_t i = a; i < e; ++i) ++h[row[i]];
+    }
   }
   std::vector<int64_t> hist(65536, 0);
   for (const auto& h : part)
@@ -169,19 +177,10 @@ double separability(const std::vector<int64_t>& hist, uint16_t t) {
   return (n0 / n) * (n1 / n) * d * d / var;
 }
 
-Volume<uint8_t> binarise(const Volume<uint16_t>& v, uint16_t t) {
-  Volume<uint8_t> m(v.shape(), v.geometry());
-  const uint16_t* x = v.data();
-  uint8_t* y = m.data();
-  const int64_t n = v.size();
-#pragma omp parallel for schedule(static)
-  for (int64_t i = 0; i < n; ++i) y[i] = x[i] > t ? 1 : 0;
-  return m;
-}
+// The plain mask is the graded one without a bright band (no grey is > 65535).
+Volume<uint8_t> binarise(const Volume<uint16_t>& v, uint16_t t) { return binarise_graded(v, t, 65535); }
 
-Volume<uint8_t> binarise(Volume<uint16_t>&& v, uint16_t t) {
-  return std::move(v).convert_in_place<uint8_t>([t](uint16_t x) -> uint8_t { return x > t ? 1 : 0; });
-}
+Volume<uint8_t> binarise(Volume<uint16_t>&& v, uint16_t t) { return binarise_graded(std::move(v), t, 65535); }
 
 Volume<uint8_t> binarise_graded(const Volume<uint16_t>& v, uint16_t t, uint16_t tb) {
   Volume<uint8_t> m(v.shape(), v.geometry());

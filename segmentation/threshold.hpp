@@ -56,8 +56,11 @@ struct ThresholdResult {
   double separability = 0;
 };
 
-// 65536-bin histogram of a 16-bit volume.
-std::vector<int64_t> histogram_u16(const Volume<uint16_t>& v);
+// 65536-bin histogram of a 16-bit volume; with row spans (x0, x1 of one
+// entry per y, as field_of_view.hpp's inside), only voxels x in
+// [x0[y], x1[y]) of each row.
+std::vector<int64_t> histogram_u16(const Volume<uint16_t>& v, const std::vector<int64_t>* x0 = nullptr,
+                                   const std::vector<int64_t>* x1 = nullptr);
 
 // Tsai moment-preserving threshold of a histogram (any size, typically 65536).
 ThresholdResult moments_threshold(const std::vector<int64_t>& hist);

@@ -127,7 +127,7 @@ tg::app::Registrar reg_psd{{"psd", 45,
       "  tomograin psd p.csv -o psd.csv --sieves-mm 0.2,0.4,0.8,1.6 --fr-bins 0.5,0.7,0.9",
       [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<tg::app::PsdJob>();
-  sub->add_option("tables", o->in, "Particle tables, initial stage first")->required()->check(CLI::ExistingFile);
+  sub->add_option("tables", o->in, "Particle tables, initial stage first")->required();  // a missing file: read_particles says which (and "f.h5:/particles" is no file name)
   sub->add_option("-o,--output", o->out, "Grading table (.csv)")->required();
   sub->add_option("--summary", o->summary, "Per-stage summary (.csv; default OUT_summary.csv)");
   sub->add_option("--sieves-mm", o->sieves,

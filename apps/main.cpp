@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "apps/command.hpp"
+#include "apps/config_args.hpp"
 #include "core/errors.hpp"
 
 namespace tg::app {
@@ -65,12 +66,27 @@ int main(int argc, char** argv) {
   auto cmds = registry();
   std::sort(cmds.begin(), cmds.end(), [](const Command& a, const Command& b) { return a.order < b.order; });
   std::vector<std::pair<CLI::App*, Runner>> runners;
+  std::string config_file;  // read by expand_config before parsing; the option is here for --help
   for (const auto& c : cmds) {
     CLI::App* sub = app.add_subcommand(c.name, c.description);
     runners.emplace_back(sub, c.setup(sub));
+    if (sub->get_subcommands([](CLI::App*) { return true; }).empty() && c.name != "run")
+      sub->add_option("--config", config_file,
+                      "TOML file of options: keys are the long option names (with _ or -), e.g.\n"
+                      "threshold = \"local\" or no_merge = true; options on the command line win")
+          ->check(CLI::ExistingFile);
   }
+  app.name(argv[0]);  // as parse(argc, argv) would: --help shows the program as it was called
+  std::vector<std::string> args(argv + 1, argv + argc);
   try {
-    app.parse(argc, argv);
+    args = expand_config(std::move(args), app);
+  } catch (const tg::InputError& e) {
+    std::fprintf(stderr, "tomograin: %s\n", e.what());
+    return 2;
+  }
+  std::reverse(args.begin(), args.end());  // CLI11 takes a vector in reverse order
+  try {
+    app.parse(args);
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {

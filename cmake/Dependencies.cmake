@@ -20,3 +20,6 @@ endif()
 if(TOMOGRAIN_BENCH)
   find_package(benchmark REQUIRED)
 endif()
+# xxHash: content hashes of a study's inputs (study/records.cpp), seconds for a 3.6 GB scan.
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(XXHASH REQUIRED IMPORTED_TARGET libxxhash)

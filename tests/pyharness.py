@@ -72,12 +72,14 @@ def drop(obj, dotted):
     obj.pop(keys[-1], None)
 
 
-def h5_diffs(a, b, json_ignored=lambda name, attr: None):
+def h5_diffs(a, b, json_ignored=lambda name, attr: None, timing_keys=()):
     """Differences between two HDF5 files: the set of objects, every attribute
     (dtype, shape, bytes) and every dataset (dtype, shape, bytes). Not the
     file bytes: HDF5 stores object times. An attribute for which
     json_ignored(object name, attribute name) gives a list of dotted keys
-    holds JSON text, compared parsed without those keys. [] when identical."""
+    holds JSON text, compared parsed without those keys; with timing_keys,
+    every attribute holding a JSON object is compared parsed, without those
+    keys at any depth. [] when identical."""
     out = []
     with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
         na, nb = [], []
@@ -91,11 +93,15 @@ def h5_diffs(a, b, json_ignored=lambda name, attr: None):
                 out.append(f"{name}: attribute names differ")
             for k in oa.attrs:
                 ignored = json_ignored(name, k)
+                text = oa.attrs[k].decode() if isinstance(oa.attrs[k], bytes) else oa.attrs[k]
+                if ignored is None and timing_keys and isinstance(text, str) and text.startswith("{"):
+                    ignored = []
                 if ignored is not None:
                     ja, jb = json.loads(oa.attrs[k]), json.loads(ob.attrs[k])
                     for key in ignored:
                         drop(ja, key)
                         drop(jb, key)
+                    ja, jb = json_without(ja, timing_keys), json_without(jb, timing_keys)
                     if ja != jb:
                         out.append(f"{name}@{k}: JSON differs")
                     continue
@@ -115,6 +121,53 @@ def h5_diffs(a, b, json_ignored=lambda name, attr: None):
                     else:
                         out.append(f"{name}: contents differ")
     return out
+
+
+def json_without(obj, keys):
+    """A parsed JSON object with every key named in `keys` removed at any depth
+    (timings such as "seconds" sit at many levels of a report)."""
+    if isinstance(obj, dict):
+        return {k: json_without(v, keys) for k, v in obj.items() if k not in keys}
+    if isinstance(obj, list):
+        return [json_without(v, keys) for v in obj]
+    return obj
+
+
+def tree_diffs(a, b, ignored=None, ignored_h5_json=None, skip=lambda rel: False, timing_keys=()):
+    """Differences between two output trees, file by file: {relative path: [what differs]}.
+    .h5 by object (h5_diffs), .json parsed without the dotted keys ignored[rel]
+    and without any key in timing_keys at any depth (also inside JSON held by
+    the HDF5 attributes named in ignored_h5_json[(rel, object, attribute)]),
+    anything else byte for byte. Files only one tree has are reported under
+    "(file set)". Files for which skip(rel) is true are not compared."""
+    ignored, ignored_h5_json = ignored or {}, ignored_h5_json or {}
+
+    def files(d):
+        out = set()
+        for root, _, fs in os.walk(d):
+            out |= {os.path.relpath(os.path.join(root, f), d) for f in fs}
+        return {r for r in out if not skip(r)}
+
+    fa, fb = files(a), files(b)
+    diffs = {}
+    if fa != fb:
+        diffs["(file set)"] = [f"only in one tree: {sorted(fa ^ fb)}"]
+    for rel in sorted(fa & fb):
+        x, y = os.path.join(a, rel), os.path.join(b, rel)
+        if rel.endswith(".h5"):
+            d = h5_diffs(x, y, lambda name, attr, rel=rel: ignored_h5_json.get((rel, name, attr)), timing_keys)
+        elif rel.endswith(".json"):
+            ja, jb = json.load(open(x)), json.load(open(y))
+            for k in ignored.get(rel, []):
+                drop(ja, k)
+                drop(jb, k)
+            ja, jb = json_without(ja, timing_keys), json_without(jb, timing_keys)
+            d = [] if ja == jb else [f"JSON differs: {json.dumps(ja)[:200]} vs {json.dumps(jb)[:200]}"]
+        else:
+            d = [] if same_bytes(x, y) else ["bytes differ"]
+        if d:
+            diffs[rel] = d
+    return diffs, sorted(fa & fb)
 
 
 DEMO_TOML = os.path.join(TESTS, "..", "dem", "examples", "demo.toml")

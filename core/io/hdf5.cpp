@@ -389,6 +389,20 @@ AnyVolume H5Reader::read_volume(const std::string& dataset, bool progress) const
   return out;
 }
 
+Shape H5Reader::shape(const std::string& dataset) const {
+  const std::string ds = norm(dataset);
+  const std::string where = impl_->path + ":" + ds;
+  if (!has(ds)) throw InputError(where + ": no such dataset");
+  Handle d = dset_h(H5Dopen2(impl_->file.get(), ds.c_str(), H5P_DEFAULT));
+  if (!d.ok()) throw InputError(where + ": not a dataset");
+  Handle sp = space_h(H5Dget_space(d.get()));
+  const int rank = H5Sget_simple_extent_ndims(sp.get());
+  if (rank != 3 && rank != 2) throw InputError(where + ": dataset has rank " + std::to_string(rank) + ", expected 3 (z, y, x)");
+  hsize_t dims[3] = {1, 1, 1};
+  H5Sget_simple_extent_dims(sp.get(), rank == 3 ? dims : dims + 1, nullptr);
+  return Shape{static_cast<int64_t>(dims[0]), static_cast<int64_t>(dims[1]), static_cast<int64_t>(dims[2])};
+}
+
 Table H5Reader::read_table(const std::string& group) const {
   const std::string g = norm(group);
   const std::string where = impl_->path + ":" + g;

@@ -40,6 +40,8 @@ class H5Reader {
   bool has(const std::string& dataset) const;
   std::vector<std::string> datasets() const;  // all dataset paths, for messages and `info`
   AnyVolume read_volume(const std::string& dataset, bool progress = false) const;
+  // The dataset's shape (z, y, x) without reading it; a 2-D dataset is one slice.
+  Shape shape(const std::string& dataset) const;
   Table read_table(const std::string& group) const;
   std::string read_attribute(const std::string& name) const;  // "" if absent
 

@@ -98,35 +98,17 @@ def main():
         print(f"{'ok  ' if broken >= 1 else 'FAIL'} the DEM run splits grains ({broken:.0f})")
         failures += broken < 1
         print("seconds (1 thread / 2 threads): " + ", ".join(f"{k} {t1[k]:.1f}/{t2[k]:.1f}" for k in t1))
-        files1, files2 = set(), set()
-        for root, _, fs in os.walk(os.path.join(w, "t1")):
-            files1 |= {os.path.relpath(os.path.join(root, f), os.path.join(w, "t1")) for f in fs}
-        for root, _, fs in os.walk(os.path.join(w, "t2")):
-            files2 |= {os.path.relpath(os.path.join(root, f), os.path.join(w, "t2")) for f in fs}
-        if files1 != files2:
-            print(f"FAIL file sets differ: {sorted(files1 ^ files2)}")
-            failures += 1
-        for rel in sorted(files1 & files2):
-            if rel in IGNORED_FILES or rel in ("pack.csv", "oed.toml"):  # inputs
-                continue
-            a, b = os.path.join(w, "t1", rel), os.path.join(w, "t2", rel)
-            if rel.endswith(".h5"):
-                d = H.h5_diffs(a, b, lambda name, attr: IGNORED_H5_JSON.get((rel, name, attr)))
-            elif rel.endswith(".json"):
-                ja, jb = json.load(open(a)), json.load(open(b))
-                for k in IGNORED.get(rel, []):
-                    H.drop(ja, k)
-                    H.drop(jb, k)
-                d = [] if ja == jb else [f"JSON differs: {json.dumps(ja)[:200]} vs {json.dumps(jb)[:200]}"]
-            else:
-                d = [] if open(a, "rb").read() == open(b, "rb").read() else ["bytes differ"]
+        inputs = ("pack.csv", "oed.toml")
+        diffs, compared = H.tree_diffs(os.path.join(w, "t1"), os.path.join(w, "t2"), IGNORED, IGNORED_H5_JSON,
+                                       skip=lambda rel: rel in IGNORED_FILES or rel in inputs)
+        for rel in compared:
             ign = IGNORED.get(rel, []) + [f"{o}@{k}: {v}" for (f, o, k), v in IGNORED_H5_JSON.items() if f == rel]
             note = f" (ignoring {ign})" if ign else ""
-            if d:
-                failures += 1
-                print(f"FAIL {rel}: " + "; ".join(d[:5]))
-            else:
+            if rel not in diffs:
                 print(f"ok   {rel}{note}")
+        for rel, d in diffs.items():
+            failures += 1
+            print(f"FAIL {rel}: " + "; ".join(d[:5]))
     print(f"{'FAILED' if failures else 'passed'}: {failures} file(s) differ between 1 and 2 threads")
     sys.exit(1 if failures else 0)
 

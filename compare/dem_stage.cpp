@@ -44,13 +44,23 @@ DemInputs load_dem_inputs(const CompareInputs& in) {
   return d;
 }
 
-ParticleScale particle_scale(const SphereTable& s) {
+namespace {
+// Equal-volume sphere radius of each particle id: cbrt of the sum of its
+// spheres' r^3 (fragment spheres are tangent, not overlapping).
+std::map<int64_t, double> equal_volume_radius(const SphereTable& s) {
   std::map<int64_t, double> vol;
   for (size_t q = 0; q < s.size(); ++q) vol[s.particle[q]] += std::pow(s.r_m[q], 3);
+  for (auto& [id, v] : vol) v = std::cbrt(v);
+  return vol;
+}
+}  // namespace
+
+ParticleScale particle_scale(const SphereTable& s) {
+  const std::map<int64_t, double> req = equal_volume_radius(s);
   std::vector<double> r;
-  for (const auto& [id, v] : vol) r.push_back(std::cbrt(v));  // equal-volume sphere radius
+  for (const auto& [id, v] : req) r.push_back(v);
   std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2), r.end());
-  return {r[r.size() / 2], static_cast<int64_t>(vol.size())};
+  return {r[r.size() / 2], static_cast<int64_t>(req.size())};
 }
 
 std::vector<SphereContact> sphere_contacts(const SphereTable& s, double gap_tolerance) {
@@ -98,13 +108,6 @@ std::map<int64_t, int> particle_coordination(const SphereTable& s, const std::ve
 }
 }  // namespace
 
-double sphere_coordination(const SphereTable& s, double gap_tolerance) {
-  const auto z = particle_coordination(s, sphere_contacts(s, gap_tolerance));
-  double sum = 0;
-  for (const auto& [id, n] : z) sum += n;
-  return z.empty() ? 0.0 : sum / static_cast<double>(z.size());
-}
-
 ContactSeries exact_contact_series(const SphereTable& s, double gap_tolerance) {
   const std::vector<SphereContact> contacts = sphere_contacts(s, gap_tolerance);
   std::vector<std::pair<int64_t, int64_t>> pairs;
@@ -114,11 +117,10 @@ ContactSeries exact_contact_series(const SphereTable& s, double gap_tolerance) {
     normals.push_back(c.normal);
   }
   ContactSeries out = contact_series(pairs, normals);
-  std::map<int64_t, double> volume;  // sum of r^3 per particle
-  for (size_t q = 0; q < s.size(); ++q) volume[s.particle[q]] += std::pow(s.r_m[q], 3);
+  const std::map<int64_t, double> req = equal_volume_radius(s);
   std::vector<double> d_eq_mm, coord;
   for (const auto& [id, n] : particle_coordination(s, contacts)) {
-    d_eq_mm.push_back(2e3 * std::cbrt(volume[id]));
+    d_eq_mm.push_back(2e3 * req.at(id));
     coord.push_back(n);
   }
   out.by_size = measure::coordination_by_size(d_eq_mm, coord);
@@ -135,8 +137,8 @@ DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth
   const SphereTable spheres = read_spheres(snapshot);
   Voxelised v = voxelise(spheres, vo);
   DemStage d;
-  d.exact_coordination = sphere_coordination(spheres);
   d.exact = exact_contact_series(spheres);
+  d.exact_coordination = mean_coordination(d.exact.by_size);
   d.particles = static_cast<int64_t>(v.particle_of_label.size()) - 1;
   measure_series(v.labels, opt.measure, d.ideal);
   write_mid_slices(v.labels, slices, stem + "_dem_ideal_labels");

@@ -42,20 +42,18 @@ struct SphereContact {
 };
 std::vector<SphereContact> sphere_contacts(const SphereTable& s, double gap_tolerance = 1e-3);
 
-// Mean coordination of a snapshot's particles from sphere_contacts: two
-// particles touching through several sphere pairs count once.
-double sphere_coordination(const SphereTable& s, double gap_tolerance = 1e-3);
-
 // The exact series of compare/fabric.hpp: the fabric of every sphere contact,
-// the coordination (distinct touching particles) by quartile of the
-// particles' equal-volume diameter (from the sphere volumes, in mm; tangent
-// fragment spheres do not overlap, so the sum of their volumes is exact).
+// the coordination (distinct touching particles: two particles touching
+// through several sphere pairs count once) by quartile of the particles'
+// equal-volume diameter (from the sphere volumes, in mm; tangent fragment
+// spheres do not overlap, so the sum of their volumes is exact). Its mean
+// coordination: mean_coordination(by_size).
 ContactSeries exact_contact_series(const SphereTable& s, double gap_tolerance = 1e-3);
 
 struct DemStage {
   Series ideal, imaged;  // imaged empty when the imaged path is off
   int64_t particles = 0; // particles voxelised
-  double exact_coordination = 0;  // sphere_coordination of the snapshot
+  double exact_coordination = 0;  // mean coordination of the snapshot's particles (exact.by_size)
   ContactSeries exact;            // the snapshot's own contacts (exact_contact_series)
 };
 // Voxelises `snapshot` at voxel_m with `imaging` (grey levels and noise),

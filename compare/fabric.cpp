@@ -29,6 +29,13 @@ ContactSeries contact_series(std::span<const std::pair<int64_t, int64_t>> pairs,
   return c;
 }
 
+double mean_coordination(std::span<const measure::SizeClass> by_size) {
+  double sum = 0;
+  int64_t n = 0;
+  for (const auto& c : by_size) sum += c.mean_coordination * static_cast<double>(c.particles), n += c.particles;
+  return n ? sum / static_cast<double>(n) : std::nan("");
+}
+
 std::vector<measure::SizeClass> coordination_by_size(const Table& t) {
   if (!t.has("d_eq_mm") || !t.has("coordination") || !t.has("touches_border")) return {};
   const auto &d = t.num("d_eq_mm"), &z = t.num("coordination"), &b = t.num("touches_border");

@@ -37,6 +37,9 @@ struct ContactSeries {
 ContactSeries contact_series(std::span<const std::pair<int64_t, int64_t>> pairs,
                              std::span<const Eigen::Vector3d> normals);
 
+// Mean coordination of the particles the size classes cover (they partition them).
+double mean_coordination(std::span<const measure::SizeClass> by_size);
+
 // Coordination by d_eq quartile of a particle table's interior particles
 // (columns d_eq_mm, coordination, touches_border; empty without them).
 std::vector<measure::SizeClass> coordination_by_size(const Table& particles);

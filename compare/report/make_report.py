@@ -320,7 +320,9 @@ def main():
                  "<code>tomograin contacts</code>), share of normals within 30° of z (isotropic: 0.134), tilt "
                  "of N's major axis from z. Contacts from the labels for the experiment and the two DEM paths; "
                  "<i>DEM exact</i> lists the DEM's own sphere–sphere contacts (normal = centre to centre), "
-                 "against which the image method's bias reads.</p>")
+                 "against which the image method's bias reads: the labels also count surfaces closer than about "
+                 "one voxel as touching, so they list more contacts and a flatter fabric than the DEM "
+                 "(measured in docs/compare.md); compare the experiment with <i>DEM imaged</i>.</p>")
     parts.append(table(["stage", "series", "contacts", "N_zz", "N_yy", "N_xx", "N_zy", "N_zx", "N_yx",
                         "anisotropy a", "within 30° of z", "major axis tilt (°)"],
                        [[r["stage"], r["series"], r["n_contacts"], fmt(r["N_zz"]), fmt(r["N_yy"]), fmt(r["N_xx"]),

@@ -83,7 +83,7 @@ TEST(Fabric, SimpleCubicLattice) {
     EXPECT_NEAR(exact.by_size[q].mean_coordination, want[q], 1e-12);
     EXPECT_NEAR(exact.by_size[q].size_from, 2 * kR * 1e3, 1e-12);
   }
-  EXPECT_NEAR(compare::sphere_coordination(s), 4.5, 1e-12);
+  EXPECT_NEAR(compare::mean_coordination(exact.by_size), 4.5, 1e-12);
 
   // The image method at R = 8.3 voxels: every contact found, none added; N
   // within 2e-3 of I/3 (measured: ideal exact to 1e-15 by the lattice's

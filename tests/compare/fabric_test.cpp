@@ -120,6 +120,22 @@ TEST(Fabric, ContactsOnlyAlongZ) {
   }
 }
 
+// A two-sphere fragment resting on a grain with both spheres: two exact
+// contacts (the DEM's sphere pairs, normals along x and y), one touching
+// particle each.
+TEST(Fabric, ExactContactsAreSpherePairs) {
+  SphereTable s;
+  s.push_back(0, 0, 0, 2e-3, 7);        // the grain, id 7
+  s.push_back(3e-3, 0, 0, 1e-3, 3);     // fragment id 3, touching along x
+  s.push_back(0, 3e-3, 0, 1e-3, 3);     // and along y
+  const compare::ContactSeries c = compare::exact_contact_series(s);
+  ASSERT_EQ(c.fabric.contacts, 2);
+  EXPECT_EQ(c.contacts.num("a"), (std::vector<double>{3, 3}));  // from the smaller id to the larger
+  EXPECT_NEAR(c.fabric.N(2, 2), 0.5, 1e-15);  // (z, y, x): x and y share the two normals
+  EXPECT_NEAR(c.fabric.N(1, 1), 0.5, 1e-15);
+  EXPECT_NEAR(compare::mean_coordination(c.by_size), 1.0, 1e-15);
+}
+
 // Isotropic normals (a Fibonacci sphere): density 1 in every band of equal
 // solid angle, 1 - cos 30 deg of them within 30 deg of z.
 TEST(Fabric, IsotropicNormalsReadOne) {

@@ -60,6 +60,7 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
   if (opt.track && in.xct.size() >= 2) tracker.emplace(opt.tracking);
   std::vector<XctStage> xs;
   std::vector<Series> ideal(in.xct.size()), imaged(in.xct.size());
+  std::vector<ContactSeries> exact(in.xct.size());  // the DEM's own contacts (from its spheres)
   for (size_t n = 0; n < in.xct.size(); ++n) {
     const auto t0 = std::chrono::steady_clock::now();
     const std::string stem = "stage" + std::to_string(n);
@@ -88,6 +89,7 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
     const BrokenEstimate b = dem_broken_fraction(dem.history, dem.strains[m], d.particles, scale0.particles);
     ideal[n] = std::move(d.ideal);
     imaged[n] = std::move(d.imaged);
+    exact[n] = std::move(d.exact);
     ideal[n].broken_fraction = imaged[n].broken_fraction = b.fraction;
     ideal[n].broken_method = imaged[n].broken_method = b.method;
 
@@ -150,6 +152,7 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
   for (size_t n = 0; n < xs.size(); ++n) {
     data.series.push_back({&xs[n].s, &ideal[n], opt.imaged_path ? &imaged[n] : nullptr});
     data.grey.push_back(xs[n].grey ? &*xs[n].grey : nullptr);
+    data.exact.push_back(&exact[n]);
   }
   data.history = dem.history;
   data.experiment_curve = expc;

@@ -14,6 +14,8 @@
 //                they are, no segmentation
 //   dem_imaged   segment() the voxelised grey scan and measure it, with the
 //                same SegmentOptions and ParticleOptions as the experiment
+//   dem_exact    the snapshot's own contacts (sphere pairs), for the contact
+//                fabric only (compare/fabric.hpp)
 //   distances    KS and W1 of PSD (Dmed by mass), FR, AR for
 //                experiment–dem_imaged, experiment–dem_ideal and
 //                dem_ideal–dem_imaged (= the segmentation bias)
@@ -30,6 +32,13 @@
 //   distances.csv       stage, pair, psd_ks, psd_w1_mm, fr_ks, fr_w1, ar_ks, ar_w1
 //   stress_strain.csv   series, strain, stress_mpa
 //   broken.csv          series, strain, broken_fraction
+//   fabric.csv          stage, series, n_contacts, N_zz, N_yy, N_xx, N_zy, N_zx, N_yx, anisotropy,
+//                       near_axis_share, major_axis_tilt_deg (compare/fabric.hpp); series adds
+//                       dem_exact: the DEM's own sphere contacts
+//   normals.csv         stage, series, band, theta_from_deg, theta_to_deg, contacts, density
+//   coordination_by_size.csv  stage, series, size_class, d_eq_from_mm, d_eq_to_mm, particles,
+//                       coordination_mean
+//   contacts/           one contact list (a, b, normal_z/y/x) per stage and series
 //   particles/          one particle table per stage and series
 //   slices/             orthogonal mid-slices (grey u16, labels u32) as .npy
 //   *.png, index.html   made by compare/report/make_report.py (matplotlib),

@@ -44,16 +44,26 @@ DemInputs load_dem_inputs(const CompareInputs& in) {
   return d;
 }
 
-ParticleScale particle_scale(const SphereTable& s) {
+namespace {
+// Equal-volume sphere radius of each particle id: cbrt of the sum of its
+// spheres' r^3 (fragment spheres are tangent, not overlapping).
+std::map<int64_t, double> equal_volume_radius(const SphereTable& s) {
   std::map<int64_t, double> vol;
   for (size_t q = 0; q < s.size(); ++q) vol[s.particle[q]] += std::pow(s.r_m[q], 3);
+  for (auto& [id, v] : vol) v = std::cbrt(v);
+  return vol;
+}
+}  // namespace
+
+ParticleScale particle_scale(const SphereTable& s) {
+  const std::map<int64_t, double> req = equal_volume_radius(s);
   std::vector<double> r;
-  for (const auto& [id, v] : vol) r.push_back(std::cbrt(v));  // equal-volume sphere radius
+  for (const auto& [id, v] : req) r.push_back(v);
   std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2), r.end());
-  return {r[r.size() / 2], static_cast<int64_t>(vol.size())};
+  return {r[r.size() / 2], static_cast<int64_t>(req.size())};
 }
 
-double sphere_coordination(const SphereTable& s, double gap_tolerance) {
+std::vector<SphereContact> sphere_contacts(const SphereTable& s, double gap_tolerance) {
   double rmax = 0;
   for (double r : s.r_m) rmax = std::max(rmax, r);
   const double cell = 2 * rmax * (1 + gap_tolerance);
@@ -61,7 +71,7 @@ double sphere_coordination(const SphereTable& s, double gap_tolerance) {
   auto idx = [&](double v) { return static_cast<int64_t>(std::floor(v / cell)); };
   std::unordered_map<int64_t, std::vector<size_t>> grid;
   for (size_t q = 0; q < s.size(); ++q) grid[key(idx(s.z_m[q]), idx(s.y_m[q]), idx(s.x_m[q]))].push_back(q);
-  std::set<std::pair<int64_t, int64_t>> pairs;  // particle ids, ordered: each contact once
+  std::vector<std::pair<size_t, size_t>> found;  // sphere indices q < p
   for (size_t q = 0; q < s.size(); ++q) {
     const int64_t cz = idx(s.z_m[q]), cy = idx(s.y_m[q]), cx = idx(s.x_m[q]);
     for (int64_t dz = -1; dz <= 1; ++dz)
@@ -72,13 +82,49 @@ double sphere_coordination(const SphereTable& s, double gap_tolerance) {
           for (size_t p : it->second) {
             if (p <= q || s.particle[p] == s.particle[q]) continue;
             const double d = std::hypot(s.z_m[p] - s.z_m[q], s.y_m[p] - s.y_m[q], s.x_m[p] - s.x_m[q]);
-            if (d <= s.r_m[p] + s.r_m[q] + gap_tolerance * std::min(s.r_m[p], s.r_m[q]))
-              pairs.insert(std::minmax(s.particle[p], s.particle[q]));
+            if (d <= s.r_m[p] + s.r_m[q] + gap_tolerance * std::min(s.r_m[p], s.r_m[q])) found.emplace_back(q, p);
           }
         }
   }
-  const int64_t n = particle_count(s);
-  return n ? 2.0 * static_cast<double>(pairs.size()) / static_cast<double>(n) : 0.0;
+  std::sort(found.begin(), found.end());  // the grid's visiting order is not the index order
+  std::vector<SphereContact> out;
+  for (auto [q, p] : found) {
+    if (s.particle[q] > s.particle[p]) std::swap(q, p);  // from the smaller particle id to the larger
+    const Eigen::Vector3d d(s.z_m[p] - s.z_m[q], s.y_m[p] - s.y_m[q], s.x_m[p] - s.x_m[q]);
+    out.push_back({s.particle[q], s.particle[p], d.normalized()});
+  }
+  return out;
+}
+
+namespace {
+// Number of distinct particles each particle touches (every particle of the table, zeros included).
+std::map<int64_t, int> particle_coordination(const SphereTable& s, const std::vector<SphereContact>& contacts) {
+  std::map<int64_t, int> z;
+  for (int64_t id : s.particle) z[id] = 0;
+  std::set<std::pair<int64_t, int64_t>> pairs;
+  for (const auto& c : contacts)
+    if (pairs.emplace(c.a, c.b).second) ++z[c.a], ++z[c.b];
+  return z;
+}
+}  // namespace
+
+ContactSeries exact_contact_series(const SphereTable& s, double gap_tolerance) {
+  const std::vector<SphereContact> contacts = sphere_contacts(s, gap_tolerance);
+  std::vector<std::pair<int64_t, int64_t>> pairs;
+  std::vector<Eigen::Vector3d> normals;
+  for (const auto& c : contacts) {
+    pairs.emplace_back(c.a, c.b);
+    normals.push_back(c.normal);
+  }
+  ContactSeries out = contact_series(pairs, normals);
+  const std::map<int64_t, double> req = equal_volume_radius(s);
+  std::vector<double> d_eq_mm, coord;
+  for (const auto& [id, n] : particle_coordination(s, contacts)) {
+    d_eq_mm.push_back(2e3 * req.at(id));
+    coord.push_back(n);
+  }
+  out.by_size = measure::coordination_by_size(d_eq_mm, coord);
+  return out;
 }
 
 DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth::ImagingOptions& imaging,
@@ -91,20 +137,17 @@ DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth
   const SphereTable spheres = read_spheres(snapshot);
   Voxelised v = voxelise(spheres, vo);
   DemStage d;
-  d.exact_coordination = sphere_coordination(spheres);
+  d.exact = exact_contact_series(spheres);
+  d.exact_coordination = mean_coordination(d.exact.by_size);
   d.particles = static_cast<int64_t>(v.particle_of_label.size()) - 1;
-  d.ideal.particles = measure_labels(v.labels, opt.measure);
-  d.ideal.sample = measure::grading_sample(d.ideal.particles);
-  d.ideal.coordination = mean_interior_coordination(d.ideal.particles);
+  measure_series(v.labels, opt.measure, d.ideal);
   write_mid_slices(v.labels, slices, stem + "_dem_ideal_labels");
   if (opt.imaged_path) {
     write_mid_slices(v.grey, slices, stem + "_dem_grey");
     SegmentResult r = segment(std::move(v.grey), so);
     d.imaged.info["segment"] = json::parse(summary_json(r, so), nullptr, false);
     write_mid_slices(r.labels, slices, stem + "_dem_imaged_labels");
-    d.imaged.particles = measure_labels(r.labels, opt.measure);
-    d.imaged.sample = measure::grading_sample(d.imaged.particles);
-    d.imaged.coordination = mean_interior_coordination(d.imaged.particles);
+    measure_series(r.labels, opt.measure, d.imaged);
   }
   d.ideal.info["voxelise"] = voxelise_json(snapshot, vo, v, imaging_from);
   d.ideal.info["voxelise"]["render_s"] = v.render_s;

@@ -30,17 +30,31 @@ struct ParticleScale {
 };
 ParticleScale particle_scale(const SphereTable& s);
 
-// Mean coordination of a snapshot's particles counted from the spheres
-// themselves (the DEM's exact contacts): two particles touch when a sphere of
-// one and a sphere of the other are closer than the sum of their radii plus
-// `gap_tolerance` × the smaller radius; contacts with walls do not count
-// (walls are not particles). A cell grid of the largest diameter: O(n).
-double sphere_coordination(const SphereTable& s, double gap_tolerance = 1e-3);
+// The DEM's exact contacts, from the spheres themselves: every pair of
+// spheres of different particles closer than the sum of their radii plus
+// `gap_tolerance` × the smaller radius (the sphere–sphere contacts the DEM
+// itself resolves; walls are not particles). Normal (z, y, x): unit vector
+// from the centre of the sphere of `a` to that of `b`. A cell grid of the
+// largest diameter: O(n). Listed by sphere index, so deterministic.
+struct SphereContact {
+  int64_t a = 0, b = 0;  // particle ids, a < b
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+};
+std::vector<SphereContact> sphere_contacts(const SphereTable& s, double gap_tolerance = 1e-3);
+
+// The exact series of compare/fabric.hpp: the fabric of every sphere contact,
+// the coordination (distinct touching particles: two particles touching
+// through several sphere pairs count once) by quartile of the particles'
+// equal-volume diameter (from the sphere volumes, in mm; tangent fragment
+// spheres do not overlap, so the sum of their volumes is exact). Its mean
+// coordination: mean_coordination(by_size).
+ContactSeries exact_contact_series(const SphereTable& s, double gap_tolerance = 1e-3);
 
 struct DemStage {
   Series ideal, imaged;  // imaged empty when the imaged path is off
   int64_t particles = 0; // particles voxelised
-  double exact_coordination = 0;  // sphere_coordination of the snapshot
+  double exact_coordination = 0;  // mean coordination of the snapshot's particles (exact.by_size)
+  ContactSeries exact;            // the snapshot's own contacts (exact_contact_series)
 };
 // Voxelises `snapshot` at voxel_m with `imaging` (grey levels and noise),
 // measures the truth labels and, when opt.imaged_path, segments and measures

@@ -53,6 +53,41 @@ void write_npy(const fs::path& path, const std::vector<T>& v, int64_t rows, int6
   write_file_atomic(path, bytes);
 }
 
+// The contact series of every stage, experiment to DEM exact (compare/fabric.hpp).
+void write_contact_tables(const fs::path& out, const ReportData& d) {
+  const Report& rep = *d.report;
+  fs::create_directories(out / "contacts");
+  RowTable fab({"stage", "series", "n_contacts", "N_zz", "N_yy", "N_xx", "N_zy", "N_zx", "N_yx", "anisotropy",
+                "near_axis_share", "major_axis_tilt_deg"});
+  RowTable nor({"stage", "series", "band", "theta_from_deg", "theta_to_deg", "contacts", "density"});
+  RowTable size({"stage", "series", "size_class", "d_eq_from_mm", "d_eq_to_mm", "particles", "coordination_mean"});
+  for (size_t n = 0; n < rep.stages.size(); ++n) {
+    const std::string& st = rep.stages[n].name;
+    for (int k = 0; k < 4; ++k) {
+      const ContactSeries* c = k < 3 ? (d.series[n][static_cast<size_t>(k)] ? &d.series[n][static_cast<size_t>(k)]->contacts
+                                                                              : nullptr)
+                                     : d.exact[n];
+      if (!c) continue;
+      const char* series = k < 3 ? kSeriesNames[k] : kExactSeriesName;
+      for (size_t q = 0; q < c->by_size.size(); ++q) {
+        const measure::SizeClass& b = c->by_size[q];
+        size.row({st, series, q + 1, b.size_from, b.size_to, b.particles, b.mean_coordination});
+      }
+      if (!c->measured) continue;  // a particle-table input: no contacts
+      const measure::Fabric& f = c->fabric;
+      fab.row({st, series, f.contacts, f.N(0, 0), f.N(1, 1), f.N(2, 2), f.N(0, 1), f.N(0, 2), f.N(1, 2), f.anisotropy,
+               c->near_axis_share, measure::polar_angle_deg(f.major_axis)});
+      const measure::PolarHistogram& h = c->polar;
+      for (size_t q = 0; q < h.count.size(); ++q)
+        nor.row({st, series, q + 1, h.edges_deg[q], h.edges_deg[q + 1], h.count[q], h.density[q]});
+      write_csv(c->contacts, out / "contacts" / ("stage" + std::to_string(n) + "_" + series + ".csv"));
+    }
+  }
+  write_csv(fab.table(), out / "fabric.csv");
+  write_csv(nor.table(), out / "normals.csv");
+  write_csv(size.table(), out / "coordination_by_size.csv");
+}
+
 }  // namespace
 
 template <class T>
@@ -125,6 +160,7 @@ void write_report_tables(const fs::path& out, const ReportData& d) {
     ss.row({"experiment", d.experiment_curve.strain[q], d.experiment_curve.stress_mpa[q]});
   write_csv(ss.table(), out / "stress_strain.csv");
   write_csv(broken.table(), out / "broken.csv");
+  write_contact_tables(out, d);
 }
 
 void write_report_json(const fs::path& out, const ReportData& d, json meta) {

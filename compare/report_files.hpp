@@ -19,19 +19,24 @@ namespace tg::compare {
 
 // Series names in the tables, in this order.
 inline constexpr const char* kSeriesNames[3] = {"experiment", "dem_ideal", "dem_imaged"};
+// The DEM's exact contacts (from its spheres) in the contact tables.
+inline constexpr const char* kExactSeriesName = "dem_exact";
 
 // Everything the files are made from. Per stage: the three series
-// (dem_imaged nullptr when that path is off) and the grey-level estimate of
-// the experiment's scan (nullptr for particle-table inputs).
+// (dem_imaged nullptr when that path is off), the DEM's exact contacts and
+// the grey-level estimate of the experiment's scan (nullptr for particle-table inputs).
 struct ReportData {
   const Report* report = nullptr;
   std::vector<std::array<const Series*, 3>> series;
+  std::vector<const ContactSeries*> exact;
   std::vector<const GreyEstimate*> grey;
   Curve history, experiment_curve;
   int64_t initial_dem_particles = 0;
 };
 
-// summary.csv, psd.csv, shape_classes.csv, distances.csv, stress_strain.csv, broken.csv.
+// summary.csv, psd.csv, shape_classes.csv, distances.csv, stress_strain.csv, broken.csv,
+// and the contact tables: fabric.csv, normals.csv, coordination_by_size.csv,
+// contacts/STAGE_SERIES.csv (compare/fabric.hpp).
 void write_report_tables(const std::filesystem::path& dir, const ReportData& d);
 // report.json: `meta` (inputs and options, filled by the caller) plus the stages.
 void write_report_json(const std::filesystem::path& dir, const ReportData& d, nlohmann::json meta);

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "compare/fabric.hpp"
 #include "core/table.hpp"
 #include "core/volume.hpp"
 #include "measure/grading.hpp"
@@ -20,13 +21,9 @@ struct Series {
   double broken_fraction = std::numeric_limits<double>::quiet_NaN();
   std::string broken_method;        // how broken_fraction was obtained, shown in the report
   double coordination = std::numeric_limits<double>::quiet_NaN();  // mean over interior particles
+  ContactSeries contacts;           // fabric, normals, coordination by size (compare/fabric.hpp)
   nlohmann::json info = nlohmann::json::object();  // provenance for report.json
 };
-
-// The particle table of a label volume (measure/particles.hpp).
-inline Table measure_labels(const Volume<uint32_t>& labels, const measure::ParticleOptions& po) {
-  return measure::particle_table(measure::measure_particles(labels.view(), po));
-}
 
 // Mean coordination (measure/contacts.hpp, from the labels) of the particles
 // that do not touch the volume's border (their neighbours outside are
@@ -40,5 +37,11 @@ inline double mean_interior_coordination(const Table& t) {
     if (b[q] == 0 && z[q] >= 0) sum += z[q], ++n;
   return n ? sum / static_cast<double>(n) : std::numeric_limits<double>::quiet_NaN();
 }
+
+// Measures a label volume into `s`: the particle table (measure/particles.hpp),
+// its grading sample, the mean interior coordination and, when po.contacts,
+// the contact series. The contacts are searched once: measure_particles runs
+// without them and its coordination column is filled from this search.
+void measure_series(const Volume<uint32_t>& labels, const measure::ParticleOptions& po, Series& s);
 
 }  // namespace tg::compare

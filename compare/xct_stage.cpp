@@ -40,6 +40,9 @@ XctStage load_xct_stage(const std::string& path, const CompareOptions& opt, doub
   if (fs::path(path).extension() == ".csv") {
     x.s.particles = read_csv(path, {"d_med_mm", "volume_mm3", "fr", "ar"});
     x.s.info["input"] = "particle table";
+    x.s.sample = measure::grading_sample(x.s.particles);  // no contacts: only the table's own columns
+    x.s.coordination = mean_interior_coordination(x.s.particles);
+    x.s.contacts.by_size = coordination_by_size(x.s.particles);
   } else {
     const auto [file, ds] = split_dataset_spec(path);
     ReadOptions ro;
@@ -83,12 +86,10 @@ XctStage load_xct_stage(const std::string& path, const CompareOptions& opt, doub
       x.s.info["input"] = "label volume";
     }
     write_mid_slices(labels, slices, stem + "_experiment_labels");
-    x.s.particles = measure_labels(labels, opt.measure);
+    measure_series(labels, opt.measure, x.s);
     x.labels = std::move(labels);
   }
   x.s.particles.source = path;
-  x.s.sample = measure::grading_sample(x.s.particles);
-  x.s.coordination = mean_interior_coordination(x.s.particles);
   return x;
 }
 

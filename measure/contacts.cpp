@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <numeric>
 #include <unordered_map>
 
@@ -273,6 +274,57 @@ Fabric fabric(std::span<const Eigen::Vector3d> normals) {
   f.eigenvalues = es.eigenvalues().reverse();
   f.major_axis = es.eigenvectors().col(2);
   return f;
+}
+
+double polar_angle_deg(const Eigen::Vector3d& n) {
+  return std::acos(std::min(1.0, std::abs(n[0]))) * 180 / std::numbers::pi;
+}
+
+PolarHistogram polar_histogram(std::span<const Eigen::Vector3d> normals, std::vector<double> edges_deg) {
+  PolarHistogram h;
+  h.edges_deg = std::move(edges_deg);
+  const size_t bands = h.edges_deg.size() - 1;
+  h.count.assign(bands, 0);
+  for (const auto& n : normals) {
+    const double t = polar_angle_deg(n);
+    const auto it = std::upper_bound(h.edges_deg.begin(), h.edges_deg.end(), t);  // first edge above t
+    const auto k = std::clamp<std::ptrdiff_t>(it - h.edges_deg.begin() - 1, 0, static_cast<std::ptrdiff_t>(bands) - 1);
+    ++h.count[static_cast<size_t>(k)];
+  }
+  const double deg = std::numbers::pi / 180;
+  for (size_t k = 0; k < bands; ++k) {
+    const double iso = std::cos(h.edges_deg[k] * deg) - std::cos(h.edges_deg[k + 1] * deg);
+    h.density.push_back(normals.empty() ? std::numeric_limits<double>::quiet_NaN()
+                                        : static_cast<double>(h.count[k]) / static_cast<double>(normals.size()) / iso);
+  }
+  return h;
+}
+
+std::vector<double> equal_solid_angle_edges_deg(int bands) {
+  std::vector<double> e;
+  for (int k = 0; k <= bands; ++k) e.push_back(std::acos(1.0 - static_cast<double>(k) / bands) * 180 / std::numbers::pi);
+  e.back() = 90;  // acos(0) in degrees is 90 up to rounding
+  return e;
+}
+
+std::vector<SizeClass> coordination_by_size(std::span<const double> size, std::span<const double> coordination,
+                                            int classes) {
+  std::vector<size_t> order(size.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::sort(order.begin(), order.end(), [&](size_t x, size_t y) {
+    return size[x] != size[y] ? size[x] < size[y] : coordination[x] < coordination[y];
+  });
+  std::vector<SizeClass> out;
+  for (int q = 0; q < classes; ++q) {
+    const size_t a = order.size() * static_cast<size_t>(q) / static_cast<size_t>(classes);
+    const size_t b = order.size() * static_cast<size_t>(q + 1) / static_cast<size_t>(classes);
+    if (a == b) continue;
+    SizeClass c{size[order[a]], size[order[b - 1]], static_cast<int64_t>(b - a), 0};
+    for (size_t k = a; k < b; ++k) c.mean_coordination += coordination[order[k]];
+    c.mean_coordination /= static_cast<double>(b - a);
+    out.push_back(c);
+  }
+  return out;
 }
 
 }  // namespace tg::measure

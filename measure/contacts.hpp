@@ -118,4 +118,33 @@ struct Fabric {
 // Fabric of unit normals (NaN entries when `normals` is empty).
 Fabric fabric(std::span<const Eigen::Vector3d> normals);
 
+// Angle between a normal and the z axis (the loading axis), sign-free:
+// acos |n_z| in degrees, 0..90.
+double polar_angle_deg(const Eigen::Vector3d& n);
+
+// Distribution of the polar angle over bands [edges[k], edges[k+1]) (the
+// last band includes 90). density[k] = (share of the normals in band k) /
+// (share an isotropic set would have, cos edges[k] - cos edges[k+1]), so
+// isotropic normals read 1 in every band and E(n) = density / (4 pi).
+struct PolarHistogram {
+  std::vector<double> edges_deg;  // ascending, 0 .. 90
+  std::vector<int64_t> count;
+  std::vector<double> density;   // NaN when there is no normal
+};
+PolarHistogram polar_histogram(std::span<const Eigen::Vector3d> normals, std::vector<double> edges_deg);
+// Edges of `bands` bands of equal solid angle: acos(1 - k / bands) in degrees
+// (each holds 1/bands of isotropic normals: equal counting noise per band).
+std::vector<double> equal_solid_angle_edges_deg(int bands);
+
+// Mean coordination by size class: the particles sorted by size (ties by
+// coordination) and cut into `classes` groups of equal count (quartiles for
+// 4); `size` and `coordination` are per particle, same order.
+struct SizeClass {
+  double size_from = 0, size_to = 0;  // smallest and largest size in the class
+  int64_t particles = 0;
+  double mean_coordination = 0;
+};
+std::vector<SizeClass> coordination_by_size(std::span<const double> size, std::span<const double> coordination,
+                                            int classes = 4);
+
 }  // namespace tg::measure

@@ -5,7 +5,8 @@ Usage: /usr/bin/python3 make_report.py REPORT_DIR
 
 Reads what `tomograin compare` (compare/comparison.cpp) wrote into REPORT_DIR
 (report.json, summary.csv, psd.csv, shape_classes.csv, distances.csv,
-stress_strain.csv, broken.csv, slices/*.npy) and writes one PNG per plot plus
+stress_strain.csv, broken.csv, fabric.csv, normals.csv, coordination_by_size.csv,
+slices/*.npy) and writes one PNG per plot plus
 index.html, which embeds every PNG as base64 so it opens offline on its own.
 Needs Debian's python3-numpy and python3-matplotlib (Agg backend, no display).
 """
@@ -27,6 +28,9 @@ SERIES_STYLE = {
     "dem_ideal": dict(color="tab:blue", ls="--", marker="s", label="DEM ideal (truth labels)"),
     "dem_imaged": dict(color="tab:red", ls="-.", marker="^", label="DEM imaged (segmented)"),
 }
+# The contact tables add the DEM's own contacts, from its spheres.
+CONTACT_STYLE = dict(SERIES_STYLE, dem_exact=dict(color="tab:green", ls=":", marker="d",
+                                                 label="DEM exact (its sphere contacts)"))
 
 
 def read_csv(path):
@@ -160,6 +164,31 @@ def plot_distances(out, stages, dist):
     return save(fig, out, "distances.png")
 
 
+def plot_normals(out, stages, nor):
+    """One panel per stage: density of the contact normals' polar angle (from z), the series as lines."""
+    n = len(stages)
+    cols = min(n, 3)
+    rows = (n + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.4 * rows), squeeze=False)
+    for ax, st in zip(axes.flat, stages):
+        for series, style in CONTACT_STYLE.items():
+            r = [x for x in nor if x["stage"] == st["name"] and x["series"] == series]
+            if r:
+                mid = [(fnum(x["theta_from_deg"]) + fnum(x["theta_to_deg"])) / 2 for x in r]
+                ax.plot(mid, [fnum(x["density"]) for x in r], ms=3, **style)
+        ax.axhline(1.0, color="gray", lw=0.8, alpha=0.6)
+        ax.set_title(st["name"], fontsize=9)
+        ax.set_xlabel("angle of the contact normal from z (deg)")
+        ax.set_ylabel("density (1 = isotropic)")
+        ax.set_xlim(0, 90)
+        ax.grid(True, alpha=0.3)
+    for ax in list(axes.flat)[n:]:
+        ax.axis("off")
+    axes.flat[0].legend(fontsize=7)
+    fig.suptitle("Contact normals: angle from the loading axis (bands of equal solid angle)")
+    return save(fig, out, "normals.png")
+
+
 def overlay(ax, grey, labels, title):
     if grey is not None:
         ax.imshow(grey, cmap="gray", interpolation="nearest")
@@ -222,6 +251,9 @@ def main():
     dist = read_csv(os.path.join(out, "distances.csv"))
     ss = read_csv(os.path.join(out, "stress_strain.csv"))
     br = read_csv(os.path.join(out, "broken.csv"))
+    fab = read_csv(os.path.join(out, "fabric.csv"))
+    nor = read_csv(os.path.join(out, "normals.csv"))
+    bysize = read_csv(os.path.join(out, "coordination_by_size.csv"))
 
     figs = [
         (plot_psd(out, stages, psd), "PSD by mass on Dmed, per stage"),
@@ -232,6 +264,7 @@ def main():
         (plot_stress(out, ss), "Axial stress vs axial strain"),
         (plot_broken(out, br), "Fraction of grains broken vs axial strain"),
         (plot_distances(out, stages, dist), "KS distances per stage"),
+        (plot_normals(out, stages, nor), "Distribution of the contact normals' angle from the loading axis"),
     ]
     slice_figs = [(plot_slices(out, st), f"Orthogonal slices, {st['name']}: experiment and simulation")
                   for st in stages]
@@ -281,6 +314,27 @@ def main():
                      "events and this table in <a href='tracking/'>tracking/</a>.</p>")
     elif isinstance(meta.get("tracking"), str) and meta["tracking"]:
         parts.append(f"<p>No tracking: {html.escape(meta['tracking'])}</p>")
+    parts.append("<h2>Contact fabric</h2>")
+    parts.append("<p>Fabric tensor N = ⟨n⊗n⟩ of the contact normals (z = loading axis), anisotropy a = "
+                 "sqrt(3/2 F:F) with F = 15/2 (N − I/3) (0 = isotropic, 7.5 = all along one axis; as "
+                 "<code>tomograin contacts</code>), share of normals within 30° of z (isotropic: 0.134), tilt "
+                 "of N's major axis from z. Contacts from the labels for the experiment and the two DEM paths; "
+                 "<i>DEM exact</i> lists the DEM's own sphere–sphere contacts (normal = centre to centre), "
+                 "against which the image method's bias reads: the labels also count surfaces closer than about "
+                 "one voxel as touching, so they list more contacts and a flatter fabric than the DEM "
+                 "(measured in docs/compare.md); compare the experiment with <i>DEM imaged</i>.</p>")
+    parts.append(table(["stage", "series", "contacts", "N_zz", "N_yy", "N_xx", "N_zy", "N_zx", "N_yx",
+                        "anisotropy a", "within 30° of z", "major axis tilt (°)"],
+                       [[r["stage"], r["series"], r["n_contacts"], fmt(r["N_zz"]), fmt(r["N_yy"]), fmt(r["N_xx"]),
+                         fmt(r["N_zy"], 2), fmt(r["N_zx"], 2), fmt(r["N_yx"], 2), fmt(r["anisotropy"]),
+                         fmt(r["near_axis_share"]), fmt(r["major_axis_tilt_deg"], 2)] for r in fab]))
+    parts.append("<h3>Coordination by size quartile</h3><p>Particles sorted by equal-volume diameter d_eq and "
+                 "cut into four classes of equal count (each series its own quartiles); interior particles only "
+                 "for the labels, every particle for DEM exact (d_eq from its spheres).</p>")
+    parts.append(table(["stage", "series", "quartile", "d_eq from (mm)", "d_eq to (mm)", "particles",
+                        "mean coordination"],
+                       [[r["stage"], r["series"], r["size_class"], fmt(r["d_eq_from_mm"]), fmt(r["d_eq_to_mm"]),
+                         r["particles"], fmt(r["coordination_mean"])] for r in bysize]))
     parts.append("<h2>Distances (Kolmogorov–Smirnov, Wasserstein-1)</h2>")
     parts.append(table(["stage", "pair", "PSD KS", "PSD W1 (mm)", "FR KS", "FR W1", "AR KS", "AR W1"],
                        [[r["stage"], r["pair"], fmt(r["psd_ks"]), fmt(r["psd_w1_mm"]), fmt(r["fr_ks"]),
@@ -303,7 +357,8 @@ def main():
     parts.append("<h2>Data files</h2><p>Every number behind every plot: "
                  + ", ".join(f"<a href='{f}'>{f}</a>" for f in
                              ["report.json", "summary.csv", "psd.csv", "shape_classes.csv", "distances.csv",
-                              "stress_strain.csv", "broken.csv", "particles/", "slices/"])
+                              "stress_strain.csv", "broken.csv", "fabric.csv", "normals.csv",
+                              "coordination_by_size.csv", "contacts/", "particles/", "slices/"])
                  + ".</p></body></html>")
     tmp = os.path.join(out, "index.html.tmp")
     with open(tmp, "w", encoding="utf-8") as f:

@@ -28,7 +28,8 @@ $PY "$SRC/make_dem_run.py" "$W/xct_stage0_truth.csv" "$W/dem_run" "$W/exp_curve.
 "$BIN" compare --xct "$W/xct_stage0.h5" "$W/xct_stage1.h5" --dem "$W/dem_run" --curve "$W/exp_curve.csv" \
   -o "$W/report" --notes "report test: synthetic stages, stand-in DEM run" | tee "$W/compare.log"
 test -s "$W/report/index.html"
-for f in report.json summary.csv psd.csv shape_classes.csv distances.csv stress_strain.csv broken.csv; do
+for f in report.json summary.csv psd.csv shape_classes.csv distances.csv stress_strain.csv broken.csv \
+         fabric.csv normals.csv coordination_by_size.csv; do
   test -s "$W/report/$f" || { echo "missing $f"; exit 1; }
 done
 
@@ -54,8 +55,8 @@ $CHROME --user-data-dir="$PROFILE" --virtual-time-budget=10000 --dump-dom "file:
 grep -o 'IMGCHECK total=[0-9]* bad=[0-9]*' "$W/dom.html" | tee "$W/imgcheck.txt"
 total=$(sed -n 's/.*total=\([0-9]*\).*/\1/p' "$W/imgcheck.txt")
 bad=$(sed -n 's/.*bad=\([0-9]*\).*/\1/p' "$W/imgcheck.txt")
-# 6 plots + one slice figure per stage.
-[ "$total" -ge 8 ] || { echo "expected >= 8 images, found $total"; exit 1; }
+# 7 plots + one slice figure per stage.
+[ "$total" -ge 9 ] || { echo "expected >= 9 images, found $total"; exit 1; }
 [ "$bad" -eq 0 ] || { echo "$bad images did not load"; exit 1; }
 $PY - "$W/report/report.json" "$W/dom.html" <<'PYC'
 import html, json, sys
@@ -121,6 +122,81 @@ for n, name in enumerate(names):
     assert abs(got - ref) <= 1e-12, (name, got, ref)
 print("report numbers: stress-strain = history, broken fraction = truth, D-values and PSD KS = numpy")
 PYN
+# The contact fabric (issue 22): fabric.csv, normals.csv and coordination_by_size.csv against numpy,
+# from the per-series contact tables and particle tables, and for dem_exact from the snapshot's spheres
+# themselves (brute-force sphere pairs, not the report's contact list).
+$PY - "$W" <<'PYF'
+import csv, json, os, sys
+import h5py
+import numpy as np
+R = os.path.join(sys.argv[1], "report")
+rows = lambda p: list(csv.DictReader(open(p)))
+meta = json.load(open(os.path.join(R, "report.json")))
+fab = {(r["stage"], r["series"]): r for r in rows(os.path.join(R, "fabric.csv"))}
+nor = rows(os.path.join(R, "normals.csv"))
+bys = rows(os.path.join(R, "coordination_by_size.csv"))
+edges = np.degrees(np.arccos(1 - np.arange(10) / 9))  # 9 bands of equal solid angle
+
+def check(stage, series, n):
+    """fabric.csv and normals.csv rows of one series against numpy on the normals n (k x 3, z y x)."""
+    f = fab[(stage, series)]
+    assert int(f["n_contacts"]) == len(n), (stage, series, f["n_contacts"], len(n))
+    N = n.T @ n / len(n)
+    for key, (a, b) in {"N_zz": (0, 0), "N_yy": (1, 1), "N_xx": (2, 2), "N_zy": (0, 1), "N_zx": (0, 2), "N_yx": (1, 2)}.items():
+        assert abs(float(f[key]) - N[a, b]) < 1e-12, (stage, series, key, f[key], N[a, b])
+    F = 7.5 * (N - np.eye(3) / 3)
+    assert abs(float(f["anisotropy"]) - np.sqrt(1.5 * (F * F).sum())) < 1e-12, (stage, series)
+    theta = np.degrees(np.arccos(np.minimum(1, np.abs(n[:, 0]))))
+    assert abs(float(f["near_axis_share"]) - np.mean(theta <= 30)) < 1e-12, (stage, series)
+    count, _ = np.histogram(theta, bins=edges)
+    dens = count / len(n) * 9
+    got = [r for r in nor if r["stage"] == stage and r["series"] == series]
+    assert [int(r["contacts"]) for r in got] == list(count), (stage, series, [r["contacts"] for r in got], count)
+    assert np.allclose([float(r["density"]) for r in got], dens, rtol=0, atol=1e-12), (stage, series)
+    assert np.allclose([float(r["theta_to_deg"]) for r in got], edges[1:], atol=1e-9)
+
+def check_by_size(stage, series, d, z):
+    """coordination_by_size.csv rows against numpy quartiles (sorted by size, then coordination)."""
+    o = np.lexsort((z, d))
+    got = [r for r in bys if r["stage"] == stage and r["series"] == series]
+    assert len(got) == 4, (stage, series, len(got))
+    for q, r in enumerate(got):
+        k = o[len(o) * q // 4: len(o) * (q + 1) // 4]
+        assert int(r["particles"]) == len(k)
+        assert abs(float(r["coordination_mean"]) - z[k].mean()) < 1e-12, (stage, series, q)
+        assert abs(float(r["d_eq_from_mm"]) - d[k].min()) < 1e-12 and abs(float(r["d_eq_to_mm"]) - d[k].max()) < 1e-12
+
+def spheres(path):
+    if path.endswith(".h5"):
+        g = h5py.File(path, "r")["spheres"]
+        return np.stack([g["z_m"][:], g["y_m"][:], g["x_m"][:]], 1), g["r_m"][:], g["particle"][:]
+    t = rows(path)
+    return (np.array([[float(r["z_m"]), float(r["y_m"]), float(r["x_m"])] for r in t]),
+            np.array([float(r["r_m"]) for r in t]), np.array([float(r["particle"]) for r in t]))
+
+for n, st in enumerate(meta["stages"]):
+    name = st["name"]
+    for series in ("experiment", "dem_ideal", "dem_imaged"):
+        c = rows(os.path.join(R, "contacts", f"stage{n}_{series}.csv"))
+        check(name, series, np.array([[float(r["normal_z"]), float(r["normal_y"]), float(r["normal_x"])] for r in c]))
+        p = [r for r in rows(os.path.join(R, "particles", f"stage{n}_{series}.csv")) if r["touches_border"] == "0"]
+        check_by_size(name, series, np.array([float(r["d_eq_mm"]) for r in p]), np.array([float(r["coordination"]) for r in p]))
+    # DEM exact: every pair of spheres of different particles within 1e-3 of the smaller radius.
+    x, r, pid = spheres(st["dem"]["snapshot"])
+    d = np.linalg.norm(x[:, None, :] - x[None, :, :], axis=2)
+    touch = (d <= r[:, None] + r[None, :] + 1e-3 * np.minimum(r[:, None], r[None, :])) & (pid[:, None] != pid[None, :])
+    i, j = np.nonzero(np.triu(touch, 1))
+    check(name, "dem_exact", (x[j] - x[i]) / d[i, j][:, None])
+    ids = np.unique(pid)
+    partners = {p: set() for p in ids}
+    for a, b in zip(pid[i], pid[j]):
+        partners[a].add(b), partners[b].add(a)
+    vol = np.array([(r[pid == p] ** 3).sum() for p in ids])
+    check_by_size(name, "dem_exact", 2e3 * np.cbrt(vol), np.array([len(partners[p]) for p in ids], float))
+    print(name, {s: (fab[(name, s)]["n_contacts"], round(float(fab[(name, s)]["anisotropy"]), 3))
+                 for s in ("experiment", "dem_ideal", "dem_imaged", "dem_exact")})
+print("fabric.csv, normals.csv, coordination_by_size.csv = numpy (contacts, particle tables, spheres)")
+PYF
 $CHROME --user-data-dir="$PROFILE" --virtual-time-budget=10000 --window-size=1280,2000 \
   --screenshot="$W/report_screenshot.png" "file://$W/report/index.html" 2>> "$W/chromium.log"
 test -s "$W/report_screenshot.png"

@@ -78,8 +78,11 @@ TEST(Seams, SphereCoordinationCountsParticleContactsOnce) {
   s.push_back(0, 0, 3.5e-3, 0.5e-3, 2);  // same fragment: no contact with itself
   s.push_back(0, 0, 5e-3, 1e-3, 3);      // overlaps particle 2's second sphere
   s.push_back(0, 0, 7.01e-3, 1e-3, 4);   // 10 um gap: not a contact
-  EXPECT_DOUBLE_EQ(compare::sphere_coordination(s), 2.0 * 2 / 4);
-  EXPECT_DOUBLE_EQ(compare::sphere_coordination(s, 0.02), 2.0 * 3 / 4);  // within 2 % of a radius
+  auto coordination = [&](double tol) { return compare::mean_coordination(compare::exact_contact_series(s, tol).by_size); };
+  EXPECT_DOUBLE_EQ(coordination(1e-3), 2.0 * 2 / 4);
+  EXPECT_DOUBLE_EQ(coordination(0.02), 2.0 * 3 / 4);  // within 2 % of a radius
+  // Contacts are sphere pairs: particle 2 touches 3 through one sphere, 1 through the other.
+  EXPECT_EQ(compare::sphere_contacts(s).size(), 2u);
 }
 
 }  // namespace

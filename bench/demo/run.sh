@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The demo study of issue 24 by CLI calls, each part timed: the synthetic XCT
-# (bench/demo/scene.toml, 30 µm), the DEM oedometer of dem/examples/demo.toml
+# (examples/demo_scene.toml, 30 µm), the DEM oedometer of dem/examples/demo.toml
 # (Ø8 mm cell, sequential breakage as in the study), and compare at the scans'
 # voxel size. Then, outside the timed demo, what the imaged DEM path keeps of
 # the ideal one: counts above the detection limit per stage (count_ratio.py)
@@ -14,7 +14,7 @@ BIN=$(realpath "${1:?path to the tomograin binary}")
 OUT=${2:-out/demo-bench}
 THREADS=${3:-2}
 HERE=$(cd "$(dirname "$0")" && pwd)
-SIZE=280    # 8.4 mm field (scene.toml) / 280 voxels
+SIZE=280    # 8.4 mm field (examples/demo_scene.toml) / 280 voxels
 VOX_UM=30   # = the scans' voxel size, which compare uses for the DEM
 # Passive OpenMP waiting: spinning barriers stall on oversubscribed cores.
 export OMP_WAIT_POLICY=passive OMP_NUM_THREADS=$THREADS TOMOGRAIN_QUIET=1
@@ -31,7 +31,7 @@ timed() {  # timed NAME COMMAND...: runs it, appends its times to $TIMES
   echo "$name ($THREADS threads): $wall s wall, $user s user, $sys s system, $peak KiB peak" | tee -a "$TIMES"
 }
 
-timed synth "$BIN" synth --preset zeolite-stages --scene "$HERE/scene.toml" --size "$SIZE" --seed 1 -o "$OUT/xct/xct.h5"
+timed synth "$BIN" synth --preset zeolite-stages --scene "$HERE/../../examples/demo_scene.toml" --size "$SIZE" --seed 1 -o "$OUT/xct/xct.h5"
 timed dem "$BIN" dem oedometer "$HERE/../../dem/examples/demo.toml" -o "$OUT/dem"
 timed compare "$BIN" compare --xct "$OUT"/xct/xct_stage{0,1,2,3,4}.h5 --dem "$OUT/dem" --synthetic \
   --title "tomograin demo study (bench/demo/run.sh)" -o "$OUT/report"

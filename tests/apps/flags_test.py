@@ -92,12 +92,19 @@ def segment_rows(base):
         (["--no-fov"], ("field_of_view", "detection", False)),
         (["--compress", "0"], "bigger"),
         (["--summary", "other.json"], "summary"),
+        # --config: the file's keys are the options (otsu.toml: threshold = "otsu",
+        # no_merge = true); an option on the command line wins over the file.
+        (["--config", "otsu.toml"], ("threshold", "method", "otsu")),
+        (["--config", "otsu.toml"], ("merge", "enabled", False)),
+        (["--config", "otsu.toml", "--threshold", "moments"], ("threshold", "method", "moments")),
     ]
 
 
 def main():
     with H.workdir("tg_flags_"):
         # ------------------------------------------------------------ synth
+        with open("otsu.toml", "w") as f:
+            f.write('threshold = "otsu"\nno_merge = true\n')
         run(["synth", "--preset", "spheres", "--size", "64", "-o", "s.h5"])
         base_grey = digest("s.h5", "/volume")
         for flags, what in [(["--seed", "2"], "differs"), (["--voxel-um", "7"], "voxel"),
@@ -168,7 +175,7 @@ def main():
                 v = j if what[1] is None else j[what[1]]
                 if isinstance(what[2], dict):  # a sub-object: these keys with these values
                     same = all(v.get(k2) == v2 for k2, v2 in what[2].items())
-                elif isinstance(what[2], (bool, list)):
+                elif isinstance(what[2], (bool, list, str)):
                     same = v == what[2]
                 else:
                     same = abs(v - what[2]) < 1e-9

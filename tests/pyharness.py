@@ -13,6 +13,7 @@ Usage of a test built on it: TEST.py TOMOGRAIN [ARGS]; TG_KEEP=1 keeps its
 scratch folder (printed) for a look after a failure.
 """
 import contextlib
+import hashlib
 import json
 import os
 import shutil
@@ -120,6 +121,19 @@ def h5_diffs(a, b, json_ignored=lambda name, attr: None, timing_keys=()):
                                    f"max |diff| {np.max(np.abs(xf - yf)):.3g}")
                     else:
                         out.append(f"{name}: contents differ")
+    return out
+
+
+def tree_state(d):
+    """Every file under d with its size, mtime and content hash: equal before
+    and after a command that must not touch the tree."""
+    out = {}
+    for root, _, files in os.walk(d):
+        for f in files:
+            p = os.path.join(root, f)
+            st = os.stat(p)
+            with open(p, "rb") as fh:
+                out[os.path.relpath(p, d)] = (st.st_size, st.st_mtime_ns, hashlib.sha256(fh.read()).hexdigest())
     return out
 
 

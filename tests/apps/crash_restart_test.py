@@ -31,7 +31,6 @@ Regenerate the packing: tomograin dem pack pack.toml -o crash_pack.csv with
 PACK_CFG as pack.toml (the test does not pour it: a packing poured and pressed
 at test time changed with the engine, and a loose one saw no split).
 """
-import hashlib
 import os
 import random
 import shutil
@@ -59,18 +58,6 @@ RUN_CFG = H.weak_grain_run_config(run="threads = 1\n", oedometer="checkpoint_eve
 def oedometer(rundir, restart, log):
     cmd = [TG, "dem", "oedometer", "cfg.toml", "-o", rundir] + (["--restart"] if restart else [])
     return subprocess.Popen(cmd, env=ENV, stdout=log, stderr=subprocess.STDOUT)
-
-
-def tree_state(d):
-    """Every file under d with its size, mtime and content hash."""
-    out = {}
-    for root, _, files in os.walk(d):
-        for f in files:
-            p = os.path.join(root, f)
-            st = os.stat(p)
-            with open(p, "rb") as fh:
-                out[os.path.relpath(p, d)] = (st.st_size, st.st_mtime_ns, hashlib.sha256(fh.read()).hexdigest())
-    return out
 
 
 # Columns allowed to differ (column -> max relative difference). Empty: the
@@ -230,13 +217,13 @@ def main():
             shutil.copytree("run", "bad")
             with open("bad/checkpoint.bin", "wb") as f:
                 f.write(data)
-            before = tree_state("bad")
+            before = H.tree_state("bad")
             r = subprocess.run([TG, "dem", "oedometer", "cfg.toml", "-o", "bad", "--restart"], env=ENV,
                                capture_output=True, text=True)
             lines = r.stderr.strip().splitlines()
             ok = r.returncode == 2 and len(lines) == 1 and "checkpoint.bin" in lines[0]
             check(ok, f"checkpoint {what}: exit {r.returncode}, {len(lines)} line(s): {r.stderr.strip()[:160]}")
-            check(tree_state("bad") == before, f"checkpoint {what}: run folder untouched")
+            check(H.tree_state("bad") == before, f"checkpoint {what}: run folder untouched")
 
 
 main()

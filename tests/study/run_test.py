@@ -71,16 +71,6 @@ def run(args, **kw):
     return subprocess.run([TG, "run"] + args, env=ENV, capture_output=True, text=True, **kw)
 
 
-def tree_state(d):
-    out = {}
-    for root, _, files in os.walk(d):
-        for f in files:
-            p = os.path.join(root, f)
-            st = os.stat(p)
-            out[os.path.relpath(p, d)] = (st.st_size, st.st_mtime_ns, open(p, "rb").read())
-    return out
-
-
 def skip(rel):
     return rel.startswith(".run/") or os.path.basename(rel) in ("splits.csv", "splits_after_restart.csv")
 
@@ -114,12 +104,12 @@ def main():
         check(broken >= 1, f"the DEM splits grains ({broken:.0f})")
 
         # 2. Again: no work, nothing touched.
-        before = tree_state("out")
+        before = H.tree_state("out")
         r = run(["study.toml", "-o", "out"])
         up = [line for line in r.stdout.splitlines() if line.endswith(": up to date")]
         check(r.returncode == 0 and len(up) == 7 and "0 step(s) run" in r.stdout,
               "a second run does no work (7 steps up to date)")
-        check(tree_state("out") == before, "and changes no file (names, sizes, bytes, mtimes)")
+        check(H.tree_state("out") == before, "and changes no file (names, sizes, bytes, mtimes)")
         os.rename("out", "ref")
 
         # 3. Killed at seeded moments, run again, compared with the reference.

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """A campaign's key figures in one table and one plot (issue 24).
 
-Reads every study's DIR/summary.csv (written by `tomograin run`'s `summary`
+Reads every study's summary.csv (written by `tomograin run`'s `summary`
 step: one row per comparison of experiment and DEM) and writes
   campaign.csv  every row of every study, a first column `study` added; the
                 columns are the union of the studies' columns, in order of
@@ -10,7 +10,7 @@ step: one row per comparison of experiment and DEM) and writes
                 distances: every numeric column whose name holds one of
                 KEY_FIGURES), one bar per row, grouped by study.
 
-Usage: campaign_summary.py -o campaign.csv [--plot campaign.png] NAME=DIR ...
+Usage: campaign_summary.py -o campaign.csv [--plot campaign.png] NAME=SUMMARY_CSV ...
 Bad input (a missing or empty summary.csv, rows longer than the header): one
 line naming the file and the problem, exit 2, nothing written.
 """
@@ -29,8 +29,7 @@ def fail(msg):
     sys.exit(2)
 
 
-def read_summary(name, d):
-    path = os.path.join(d, "summary.csv")
+def read_summary(name, path):
     try:
         with open(path, newline="") as f:
             rows = list(csv.reader(f))
@@ -103,14 +102,14 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("-o", required=True, help="campaign.csv")
     ap.add_argument("--plot", help="campaign.png")
-    ap.add_argument("studies", nargs="+", metavar="NAME=DIR")
+    ap.add_argument("studies", nargs="+", metavar="NAME=SUMMARY_CSV")
     a = ap.parse_args()
     columns, rows = ["study"], []
     for s in a.studies:
-        name, sep, d = s.partition("=")
+        name, sep, path = s.partition("=")
         if not sep or not name:
-            fail(f"'{s}': expected NAME=DIR")
-        header, r = read_summary(name, d)
+            fail(f"'{s}': expected NAME=SUMMARY_CSV")
+        header, r = read_summary(name, path)
         columns += [c for c in header if c not in columns]
         rows += r
 

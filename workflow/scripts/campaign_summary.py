@@ -6,9 +6,10 @@ step: one row per comparison of experiment and DEM) and writes
   campaign.csv  every row of every study, a first column `study` added; the
                 columns are the union of the studies' columns, in order of
                 first appearance (a study without a column leaves it empty);
-  campaign.png  one panel per key figure (D50, Cu, % broken, yield, KS
-                distances: every numeric column whose name holds one of
-                KEY_FIGURES), one bar per row, grouped by study.
+  campaign.png  one panel per key figure (every numeric column whose name
+                holds one of KEY_FIGURES: D50, Cu, % broken, yield, KS
+                distances), the experiment's and the DEM's value side by
+                side, one group of bars per row (study / variant).
 
 Usage: campaign_summary.py -o campaign.csv [--plot campaign.png] NAME=SUMMARY_CSV ...
 Bad input (a missing or empty summary.csv, rows longer than the header): one
@@ -66,33 +67,55 @@ def write_atomic(path, write):
         raise
 
 
+def panels(columns, rows):
+    """Key-figure columns grouped into panels: the experiment's and the DEM's
+    value of a quantity side by side (d50_mm_experiment, d50_mm_dem -> d50_mm),
+    the KS distances together. {title: [columns]} in column order."""
+    out = {}
+    for c in columns:
+        if c == "study" or not any(k in c.lower() for k in KEY_FIGURES):
+            continue
+        if not any(number(r.get(c)) is not None for r in rows):
+            continue
+        if c.lower().endswith("_ks"):
+            title = "KS distance, experiment vs DEM"
+        else:
+            title = c.removesuffix("_experiment").removesuffix("_dem")
+        out.setdefault(title, []).append(c)
+    return out
+
+
 def plot(columns, rows, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    figures = [c for c in columns if c != "study" and any(k in c.lower() for k in KEY_FIGURES)
-               and any(number(r.get(c)) is not None for r in rows)]
-    labels = [r["study"] + (f"\n{r[columns[1]]}" if columns[1] != "study" and number(r.get(columns[1])) is None
-                             else "") for r in rows]
-    n = max(len(figures), 1)
+    groups = panels(columns, rows)
+    labels = [r["study"] + (f" / {r['variant']}" if r.get("variant") else "") for r in rows]
+    n = max(len(groups), 1)
     ncol = min(n, 3)
     nrow = (n + ncol - 1) // ncol
-    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.2 * nrow + 0.6 * (len(rows) > 6)), squeeze=False)
-    studies = sorted({r["study"] for r in rows}, key=[r["study"] for r in rows].index)
-    colours = {s: plt.cm.tab10(i % 10) for i, s in enumerate(studies)}
-    for ax, c in zip(axes.flat, figures):
-        vals = [number(r.get(c)) for r in rows]
-        ax.bar(range(len(rows)), [v if v is not None else 0.0 for v in vals],
-               color=[colours[r["study"]] for r in rows])
-        ax.set_title(c, fontsize=9)
-        ax.set_xticks(range(len(rows)))
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.5 * ncol, 3.4 * nrow), squeeze=False)
+    x = range(len(rows))
+    for ax, (title, cols) in zip(axes.flat, groups.items()):
+        width = 0.8 / len(cols)
+        for i, c in enumerate(cols):
+            # A missing value (no DEM, no fit) is NaN: no bar.
+            vals = [number(r.get(c)) for r in rows]
+            vals = [v if v is not None else float("nan") for v in vals]
+            ax.bar([k - 0.4 + width * (i + 0.5) for k in x], vals, width,
+                   label=c.removeprefix(title).strip("_") or c)
+        ax.set_title(title, fontsize=9)
+        ax.set_xticks(list(x))
         ax.set_xticklabels(labels, rotation=90, fontsize=6)
-    for ax in list(axes.flat)[len(figures):]:
+        if len(cols) > 1:
+            ax.legend(fontsize=6)
+    for ax in list(axes.flat)[len(groups):]:
         ax.axis("off")
-    if not figures:
+    if not groups:
         axes.flat[0].text(0.5, 0.5, "no key figures in the summaries", ha="center", va="center")
-    fig.suptitle(f"campaign: {len(studies)} studies, {len(rows)} comparisons", fontsize=10)
+    studies = len({r["study"] for r in rows})
+    fig.suptitle(f"campaign: {studies} studies, {len(rows)} rows", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110, format="png")
     plt.close(fig)

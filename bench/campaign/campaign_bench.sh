@@ -34,14 +34,19 @@ TIMEFORMAT='%R %U %S'
 load() { cut -d' ' -f1 /proc/loadavg; }
 
 l0=$(load)
+# Both ways write to the same OUT (outputs name their own files, e.g.
+# psd_summary.csv's `file` column; each step's key hashes its arguments); the
+# run by hand is moved to $W/hand afterwards.
+OUT=$W/campaign/out
 { time for s in "${STUDIES[@]}"; do
-    TOMOGRAIN_QUIET=1 "$TG" run "$s" -o "$W/hand/$(basename "$s" .toml)" > /dev/null
+    TOMOGRAIN_QUIET=1 "$TG" run "$s" -o "$OUT/$(basename "$s" .toml)" > /dev/null
   done; } 2> "$W/hand.time"
+mv "$OUT" "$W/hand"
 l1=$(load)
-{ time snakemake -s "$REPO/workflow/Snakefile" --configfile "$W/campaign/campaign.yaml" --config out="$W/smk" \
+{ time snakemake -s "$REPO/workflow/Snakefile" --configfile "$W/campaign/campaign.yaml" \
     --cores $CORES -d "$W/smk_wd" > "$W/smk.log" 2>&1; } 2> "$W/smk.time"
 l2=$(load)
-{ time snakemake -s "$REPO/workflow/Snakefile" --configfile "$W/campaign/campaign.yaml" --config out="$W/smk" \
+{ time snakemake -s "$REPO/workflow/Snakefile" --configfile "$W/campaign/campaign.yaml" \
     --cores $CORES -d "$W/smk_wd" > "$W/smk_nothing.log" 2>&1; } 2> "$W/smk_nothing.time"
 grep -q "Nothing to be done" "$W/smk_nothing.log" || { echo "FAIL: a second run had work to do"; exit 1; }
 
@@ -58,10 +63,10 @@ for label, name, l in (("by hand (tomograin run x N)", "hand.time", loads[0]),
     print(f"{label:34s} wall {r:7.1f} s  user {u:7.1f} s  sys {s:5.1f} s  CPU share {(u + s) / r / cores * 100:5.1f} % of {cores} cores  (load before {l})")
 print(f"{'snakemake, nothing to do':34s} wall {t('smk_nothing.time')[0]:7.1f} s  (start, one --plan per study, DAG)")
 jobs = []
-for b in glob.glob(os.path.join(w, "smk", "benchmarks", "*", "*.tsv")):
+for b in glob.glob(os.path.join(w, "campaign", "out", "benchmarks", "*", "*.tsv")):
     study, step = b.split(os.sep)[-2], os.path.basename(b)[:-4]
     row = next(csv.DictReader(open(b), delimiter="\t"))
-    rec = json.load(open(os.path.join(w, "smk", study, ".run", step + ".json")))
+    rec = json.load(open(os.path.join(w, "campaign", "out", study, ".run", step + ".json")))
     jobs.append((study, step, float(row["s"]), float(rec["seconds"]), float(row["max_rss"])))
 # Threads per job: the plan's (capped at --cores, as Snakemake does).
 import subprocess, yaml
@@ -69,7 +74,7 @@ cfg = yaml.safe_load(open(os.path.join(w, "campaign", "campaign.yaml")))
 threads = {}
 for f in cfg["studies"]:
     key = os.path.splitext(os.path.basename(f))[0]
-    plan = json.loads(subprocess.run([cfg["tomograin"], "run", f, "-o", os.path.join(w, "smk", key), "--plan"],
+    plan = json.loads(subprocess.run([cfg["tomograin"], "run", f, "-o", os.path.join(w, "campaign", "out", key), "--plan"],
                                      capture_output=True, text=True, check=True).stdout)
     for s in plan["steps"]:
         threads[(key, s["id"])] = min(s["threads"], cores)
@@ -91,7 +96,7 @@ for kind, v in sorted(by_step.items()):
 EOF
 ok=1
 for d in "$W"/hand/*; do
-  $PY "$REPO/tests/workflow/same_outputs.py" "$d" "$W/smk/$(basename "$d")" > "$W/same_$(basename "$d").txt" || ok=0
+  $PY "$REPO/tests/workflow/same_outputs.py" "$d" "$OUT/$(basename "$d")" > "$W/same_$(basename "$d").txt" || ok=0
 done
 [[ $ok -eq 1 ]] && echo "ok   every study folder identical by hand and by snakemake" \
   || { echo "FAIL study folders differ (see $W/same_*.txt)"; exit 1; }

@@ -41,9 +41,13 @@ t=$(now)
 $PY "$REPO/workflow/scripts/make_synthetic_campaign.py" "$TG" "$W/campaign" --studies 2 --size 96 --stages 3 --dem 4
 part "inputs (synth 2 x 3 scans)" "$t"
 
+# Both runs write to the same OUT (outputs name their own files, e.g.
+# psd_summary.csv's `file` column; each step's key hashes its arguments): the
+# local run's is moved to $W/local afterwards.
 t=$(now)
-"${SNAKE[@]}" --config out="$W/local" --cores 2 -d "$W/smk_local" > "$W/local.log" 2>&1 \
+"${SNAKE[@]}" --cores 2 -d "$W/smk_local" > "$W/local.log" 2>&1 \
   || { tail -n 30 "$W/local.log"; echo "FAIL: local run (log $W/local.log)"; exit 1; }
+mv "$W/campaign/out" "$W/local"
 part "local run (snakemake --cores 2)" "$t"
 
 t=$(now)
@@ -52,14 +56,14 @@ eval "$("$REPO/bench/campaign/slurm_cluster.sh" start "$W/cluster")"   # sets SL
 part "cluster start" "$t"
 
 t=$(now)
-"${SNAKE[@]}" --config out="$W/slurm" --profile "$REPO/workflow/profiles/slurm" -d "$W/smk_slurm" \
+"${SNAKE[@]}" --profile "$REPO/workflow/profiles/slurm" -d "$W/smk_slurm" \
   > "$W/slurm.log" 2>&1 || { tail -n 30 "$W/slurm.log"; echo "FAIL: SLURM run (log $W/slurm.log)"; exit 1; }
 part "SLURM run (profile, sbatch)" "$t"
 
 t=$(now)
 fail=0
 # Every job of the plans, once, through SLURM, with its resources.
-$PY - "$TG" "$W/campaign/campaign.yaml" "$W/slurm" "$W/cluster/jobcomp.log" <<'EOF' || fail=1
+$PY - "$TG" "$W/campaign/campaign.yaml" "$W/campaign/out" "$W/cluster/jobcomp.log" <<'EOF' || fail=1
 import collections, json, os, subprocess, sys, yaml
 tg, cfg_file, out, log = sys.argv[1:]
 cfg = yaml.safe_load(open(cfg_file))
@@ -100,7 +104,7 @@ for what, v in (("missing", missing), ("not planned", extra), ("ran twice", twic
 sys.exit(0 if ok else 1)
 EOF
 # Identical to the local run.
-if $PY "$REPO/tests/workflow/same_outputs.py" "$W/local" "$W/slurm" > "$W/same_outputs.txt"; then
+if $PY "$REPO/tests/workflow/same_outputs.py" "$W/local" "$W/campaign/out" > "$W/same_outputs.txt"; then
   echo "ok   outputs identical to the local run: $(tail -n 1 "$W/same_outputs.txt")"
 else
   head -n 20 "$W/same_outputs.txt"; echo "FAIL outputs differ from the local run"; fail=1

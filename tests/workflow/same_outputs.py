@@ -5,8 +5,9 @@ Snakemake locally, on SLURM, or by `tomograin run` by hand.)
 Compares every file under two folders as tests/determinism/determinism_test.py
 does: .h5 by object, dataset and attribute (pyharness.h5_diffs; not the file
 bytes, HDF5 stores object times), .json parsed without the fields that
-depend on the run rather than the data (RUN_FIELDS, at any depth, also inside
-JSON held by an HDF5 attribute), everything else byte for byte. Left out:
+depend on the run rather than the data (is_run_field, at any depth, also
+inside JSON held by an HDF5 attribute), .html with its compute times masked,
+everything else byte for byte. Left out:
 what is about the run, not its results (SKIP: Snakemake's logs and benchmark
 files, tomograin run's hash cache, whose entries carry file times).
 
@@ -16,14 +17,30 @@ As a module: diffs(a, b) -> list of (relative path, problem). As a program:
 import fnmatch
 import json
 import os
+import re
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 import pyharness as H  # noqa: E402
 
 # JSON keys that hold timings, memory peaks or thread counts (segment's
-# summary, the run records, run.json).
-RUN_FIELDS = {"seconds", "seconds_total", "peak_rss_bytes", "peak_rss_bytes_per_voxel", "threads"}
+# summary, the run records, run.json, compare's report.json): "threads", and
+# names that start with "seconds" or "peak_rss" or end in "_s" or "_seconds".
+
+
+def is_run_field(key):
+    return (key == "threads" or key.startswith(("seconds", "peak_rss")) or key.endswith(("_s", "_seconds")))
+
+
+def html_without_times(text):
+    """compare's index.html shows the compute time twice: "Compute time: X s"
+    and the last column of the stages' table, headed "time (s)". Both masked."""
+    text = re.sub(r"Compute time: [0-9.]+ s", "Compute time: T s", text)
+    parts = text.split("<table")
+    for i, t in enumerate(parts):
+        if "time (s)</th></tr>" in t:
+            parts[i] = re.sub(r"<td>[0-9.eE+-]+</td></tr>", "<td>T</td></tr>", t)
+    return "<table".join(parts)
 # Paths (relative, fnmatch patterns) that are about the run, not its results.
 SKIP = ["logs/*", "benchmarks/*", ".snakemake/*", "*/.run/hashes.json", ".run/hashes.json",
         "*/.run/*.lock", ".run/*.lock"]
@@ -31,7 +48,7 @@ SKIP = ["logs/*", "benchmarks/*", ".snakemake/*", "*/.run/hashes.json", ".run/ha
 
 def without_run_fields(obj):
     if isinstance(obj, dict):
-        return {k: without_run_fields(v) for k, v in obj.items() if k not in RUN_FIELDS}
+        return {k: without_run_fields(v) for k, v in obj.items() if not is_run_field(k)}
     if isinstance(obj, list):
         return [without_run_fields(v) for v in obj]
     return obj
@@ -64,12 +81,12 @@ def _h5_json_attr(a, name, attr):
 
 
 def _keys_in(obj, prefix=""):
-    """Dotted paths of every RUN_FIELDS key in a parsed JSON object."""
+    """Dotted paths of every run field in a parsed JSON object."""
     out = set()
     if isinstance(obj, dict):
         for k, v in obj.items():
             p = f"{prefix}{k}"
-            if k in RUN_FIELDS:
+            if is_run_field(k):
                 out.add(p)
             else:
                 out |= _keys_in(v, p + ".")
@@ -87,6 +104,10 @@ def diffs(a, b):
             with open(pa) as x, open(pb) as y:
                 same = without_run_fields(json.load(x)) == without_run_fields(json.load(y))
             d = [] if same else ["JSON differs (run fields left out)"]
+        elif rel.endswith(".html"):
+            with open(pa) as x, open(pb) as y:
+                same = html_without_times(x.read()) == html_without_times(y.read())
+            d = [] if same else ["HTML differs (compute times masked)"]
         else:
             d = [] if H.same_bytes(pa, pb) else ["bytes differ"]
         out += [(rel, p) for p in d]

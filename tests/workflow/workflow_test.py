@@ -3,8 +3,10 @@
 
 Two synthetic studies (SIZE^3, 2 stages; the first with the tests' tiny DEM
 cell, so it has a DEM run and a comparison) are run
-  - by hand: `tomograin run` of each study into direct/;
-  - by Snakemake: `snakemake --cores 2` into smk/.
+  - by hand: `tomograin run` of each study into smk/, then moved to direct/;
+  - by Snakemake: `snakemake --cores 2` into smk/
+(the same path: outputs name their own files, e.g. psd_summary.csv's `file`
+column, and each step's key hashes its arguments).
 Checks:
   1. one job per step of each study's plan (asked of `tomograin run --plan`)
      plus the campaign summary, and the study folders identical to the ones
@@ -30,6 +32,7 @@ import os
 import re
 import subprocess
 import sys
+import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, ".."))
@@ -90,13 +93,22 @@ def main():
               f"study s01 has a DEM step: {[s['id'] for s in plan['s01']['steps']]}")
 
         # 1. By hand and by Snakemake: the same folders, one job per step.
+        t0 = time.monotonic()
+        # Both write to smk/ (outputs hold their own paths, e.g. psd_summary.csv's
+        # `file`, and each step's key hashes its arguments): the run by hand first,
+        # then moved to direct/.
         for s in studies:
             key = os.path.splitext(os.path.basename(s))[0]
-            r = subprocess.run([TG, "run", s, "-o", os.path.join(w, "direct", key)], capture_output=True, text=True,
+            r = subprocess.run([TG, "run", s, "-o", os.path.join(w, "smk", key)], capture_output=True, text=True,
                                env=H.ENV)
             check(r.returncode == 0, f"tomograin run {key}" + (f": {r.stderr.strip()}" if r.returncode else ""))
+        t_hand = time.monotonic() - t0
+        os.rename(os.path.join(w, "smk"), os.path.join(w, "direct"))
+        t0 = time.monotonic()
         r = snakemake(os.path.join(w, "wd"), "--configfile", cfg)
-        check(r.returncode == 0, "snakemake --cores 2" + (f": {r.stderr[-2000:]}" if r.returncode else ""))
+        t_smk = time.monotonic() - t0
+        check(r.returncode == 0, f"snakemake --cores 2 ({t_smk:.1f} s; by hand {t_hand:.1f} s)"
+              + (f": {r.stderr[-2000:]}" if r.returncode else ""))
         if r.returncode:
             return
         ran = jobs_run(r.stdout + r.stderr)

@@ -3,6 +3,8 @@
 # Idempotent: when everything is present it runs no apt-get at all.
 #   scripts/install_deps.sh            build + test dependencies
 #   scripts/install_deps.sh --bench    also the side-by-side peers (LIGGGHTS, Chromium)
+#   scripts/install_deps.sh --campaign also Snakemake and a one-node SLURM cluster
+#                                      (workflow/, bench/campaign/, tests/workflow/)
 set -euo pipefail
 
 pkgs=(
@@ -21,6 +23,10 @@ pkgs=(
 )
 if [[ "${1:-}" == "--bench" ]]; then
   pkgs+=(liggghts openmpi-bin hyperfine)
+elif [[ "${1:-}" == "--campaign" ]]; then
+  # Snakemake 7.21 runs campaigns (workflow/Snakefile); slurm-wlm + munge for
+  # bench/campaign/slurm_test.sh's cluster on localhost.
+  pkgs+=(snakemake slurm-wlm munge)
 fi
 
 missing=()

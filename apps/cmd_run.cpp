@@ -43,6 +43,7 @@ struct Prepared {
   std::vector<std::pair<std::string, std::vector<std::string>>> commands;
   std::string dem_text;
   tg::dem::OedometerSetup dem_setup;
+  std::vector<fs::path> inputs;  // files the step reads beyond the plan's (the DEM's packing)
 };
 
 std::vector<std::string> with(std::vector<std::string> fixed, const std::vector<std::string>& more) {
@@ -89,6 +90,7 @@ Prepared prepare(const Study& s, const Plan& p, const Step& st) {
       const std::string where = s.dem_config.string() + (v.name.empty() ? "" : " (variant '" + v.name + "')");
       tg::Config cfg = tg::Config::from_string(r.dem_text, where);
       r.dem_setup = tg::dem::read_oedometer_config(cfg, s.dem_config.parent_path());
+      if (!r.dem_setup.packing_csv.empty()) r.inputs.emplace_back(r.dem_setup.packing_csv);  // its content matters too
       break;
     }
     case StepKind::compare: {
@@ -167,23 +169,24 @@ int64_t scan_voxels(const Study& s) {
 
 int run_study(const Opts& o) {
   const Study s = read_study(o.study);
-  const Plan p = make_plan(s, o.out, scan_voxels(s));
+  Plan p = make_plan(s, o.out, scan_voxels(s));
+  if (!o.only.empty()) (void)p.step(o.only);  // an unknown id fails before anything runs
+
+  // Every step's commands first: a bad option anywhere stops the run before
+  // any step starts, and before DIR is created (and --plan with it).
+  std::map<std::string, Prepared> prepared;
+  for (Step& st : p.steps) {
+    prepared[st.id] = prepare(s, p, st);
+    st.inputs.insert(st.inputs.end(), prepared[st.id].inputs.begin(), prepared[st.id].inputs.end());
+  }
   if (o.plan) {
     fmt::print("{}", plan_json(s, p));
     return 0;
   }
-  if (!o.only.empty()) (void)p.step(o.only);  // an unknown id fails before anything runs
   if (o.threads > 0) omp_set_num_threads(o.threads);
-
-  // Every step's commands and key first: a bad option anywhere stops the run
-  // before any step starts, and before DIR is created.
   HashCache hashes(p.dir / ".run");
-  std::map<std::string, Prepared> prepared;
   std::map<std::string, std::string> keys;
-  for (const Step& st : p.steps) {
-    prepared[st.id] = prepare(s, p, st);
-    keys[st.id] = step_key(st, prepared[st.id], hashes, keys);
-  }
+  for (const Step& st : p.steps) keys[st.id] = step_key(st, prepared[st.id], hashes, keys);
   fs::create_directories(p.dir / ".run");
   hashes.save();
 

@@ -137,6 +137,13 @@ def tree_state(d):
     return out
 
 
+# JSON keys that hold timings, memory peaks or thread counts (segment's
+# summary, compare's report.json, the DEM's run.json, a study's step records):
+# what differs between two runs that must otherwise be identical.
+TIMING_KEYS = {"seconds", "seconds_total", "compute_seconds", "imaging_s", "render_s", "peak_rss_bytes",
+               "peak_rss_bytes_per_voxel", "threads"}
+
+
 def json_without(obj, keys):
     """A parsed JSON object with every key named in `keys` removed at any depth
     (timings such as "seconds" sit at many levels of a report)."""

@@ -39,8 +39,6 @@ from pyharness import TG, ENV, check  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PACKING = os.path.join(HERE, "..", "apps", "data", "crash_pack.csv")
-TIMING_KEYS = {"seconds", "seconds_total", "compute_seconds", "imaging_s", "render_s", "peak_rss_bytes",
-               "peak_rss_bytes_per_voxel"}
 
 
 def study(feret="30"):
@@ -129,7 +127,7 @@ def main():
             running = [line.split("] ")[1].split(":")[0] for line in log.splitlines() if line.endswith(": running")]
             r = run(["study.toml", "-o", "out"])
             resumed = "resumed from its checkpoint" in r.stdout
-            diffs, compared = H.tree_diffs("ref", "out", skip=skip, timing_keys=TIMING_KEYS)
+            diffs, compared = H.tree_diffs("ref", "out", skip=skip, timing_keys=H.TIMING_KEYS)
             check(r.returncode == 0 and not diffs,
                   f"seed {seed}: {killed} at {at:.1f} s (in {running[-1] if running else 'set-up'}), run again"
                   f"{' (DEM resumed from its checkpoint)' if resumed else ''}: {len(compared)} files identical to the "

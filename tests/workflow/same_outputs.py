@@ -27,10 +27,6 @@ import sys
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 import pyharness as H  # noqa: E402
 
-# JSON keys that hold timings, memory peaks or thread counts: segment's summary,
-# compare's report.json, the DEM's run.json, the step records.
-TIMING_KEYS = {"seconds", "seconds_total", "compute_seconds", "imaging_s", "render_s", "peak_rss_bytes",
-               "peak_rss_bytes_per_voxel", "threads"}
 SKIP = ["logs/*", "benchmarks/*", "*.run/hashes.json", "*.run/*.lock", "*/splits.csv", "*/splits_after_restart.csv"]
 
 
@@ -49,7 +45,7 @@ def _skipped(rel):
 
 def diffs(a, b):
     """{relative path: [what differs]} between the trees a and b; {} when identical."""
-    found, _ = H.tree_diffs(a, b, skip=lambda rel: _skipped(rel) or rel.endswith(".html"), timing_keys=TIMING_KEYS)
+    found, _ = H.tree_diffs(a, b, skip=lambda rel: _skipped(rel) or rel.endswith(".html"), timing_keys=H.TIMING_KEYS)
     for rel in sorted(html_files(a) & html_files(b)):
         with open(os.path.join(a, rel)) as x, open(os.path.join(b, rel)) as y:
             if html_without_times(x.read()) != html_without_times(y.read()):

@@ -27,6 +27,14 @@
 //   summary.csv         stage, series, strain, particles, D10/D50/D60/Cu, Br, broken fraction,
 //                       mean coordination of interior particles (contacts from the labels)
 //   tracking/           the experiment's lineage, events, summary (track/), with >= 2 volumes
+//   dem_lineage/        the DEM's exact lineage between the compared snapshots (same tables),
+//                       when the run's snapshots carry previous_particle (compare/dem_lineage.hpp)
+//   dem_imaged_tracking/ the tracker run on the imaged DEM labels (same tables)
+//   lineage.csv         stage, series (experiment | dem_exact | dem_imaged), particles,
+//                       grains_intact, grains_broken, pct_intact_broken, split, fragmentation,
+//                       chipping, chips, lost, new, breaks_band1..5, pct_broken_band1..5
+//   tracker_bias.csv    stage ("all" or a stage), quantity, value, count: the tracker's bias on
+//                       DEM data (dem_imaged scored against dem_exact by track::evaluate)
 //   psd.csv             stage, series, sieve_mm, passing_pct
 //   shape_classes.csv   stage, series, metric (fr|ar), class, percent
 //   distances.csv       stage, pair, psd_ks, psd_w1_mm, fr_ks, fr_w1, ar_ks, ar_w1
@@ -64,6 +72,7 @@
 #include "measure/grading.hpp"
 #include "measure/particles.hpp"
 #include "segmentation/segment.hpp"
+#include "track/evaluate.hpp"
 #include "track/track.hpp"
 
 namespace tg::compare {
@@ -130,6 +139,11 @@ struct Report {
   std::vector<StageReport> stages;
   std::optional<track::TrackResult> tracking;  // the experiment's lineage (REPORT/tracking/), when tracked
   std::string tracking_note;                   // why there is none, when tracking was asked for
+  // The DEM's side of the lineage (compare/dem_lineage.hpp), when its snapshots carry it:
+  std::optional<track::TrackResult> dem_exact;   // exact: previous_particle of the snapshots (REPORT/dem_lineage/)
+  std::optional<track::TrackResult> dem_imaged;  // the tracker on the imaged DEM labels (REPORT/dem_imaged_tracking/)
+  std::optional<track::Accuracy> tracker_bias;   // dem_imaged scored against dem_exact (track/evaluate.hpp)
+  std::string dem_lineage_note;                  // why a part is missing
   std::vector<double> sieves_mm;
   double seconds = 0;
 };

@@ -129,7 +129,7 @@ ContactSeries exact_contact_series(const SphereTable& s, double gap_tolerance) {
 
 DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth::ImagingOptions& imaging,
                         const std::string& imaging_from, const CompareOptions& opt, const SegmentOptions& so,
-                        const fs::path& slices, const std::string& stem) {
+                        const fs::path& slices, const std::string& stem, bool keep_labels) {
   VoxeliseOptions vo = opt.voxelise;
   vo.voxel_m = voxel_m;
   vo.grey = opt.imaged_path;
@@ -148,11 +148,16 @@ DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth
     d.imaged.info["segment"] = json::parse(summary_json(r, so), nullptr, false);
     write_mid_slices(r.labels, slices, stem + "_dem_imaged_labels");
     measure_series(r.labels, opt.measure, d.imaged);
+    if (keep_labels) d.imaged_labels = std::move(r.labels);
   }
   d.ideal.info["voxelise"] = voxelise_json(snapshot, vo, v, imaging_from);
   d.ideal.info["voxelise"]["render_s"] = v.render_s;
   d.ideal.info["voxelise"]["imaging_s"] = v.imaging_s;
   d.ideal.info["exact_coordination"] = d.exact_coordination;  // from the spheres: the image method's reference
+  if (keep_labels) {
+    d.truth_labels = std::move(v.labels);
+    d.particle_of_label = std::move(v.particle_of_label);
+  }
   return d;
 }
 

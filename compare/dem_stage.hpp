@@ -55,12 +55,17 @@ struct DemStage {
   int64_t particles = 0; // particles voxelised
   double exact_coordination = 0;  // mean coordination of the snapshot's particles (exact.by_size)
   ContactSeries exact;            // the snapshot's own contacts (exact_contact_series)
+  // Kept only when asked (keep_labels): for the DEM's lineage and the tracker
+  // run on the imaged path (compare/dem_lineage.hpp).
+  Volume<uint32_t> truth_labels, imaged_labels;
+  std::vector<int64_t> particle_of_label;  // truth label -> particle id (index 0 unused)
 };
 // Voxelises `snapshot` at voxel_m with `imaging` (grey levels and noise),
 // measures the truth labels and, when opt.imaged_path, segments and measures
-// the grey scan with `so`; writes the mid-slices (STEM_dem_*).
+// the grey scan with `so`; writes the mid-slices (STEM_dem_*). keep_labels:
+// the label volumes stay in the result.
 DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth::ImagingOptions& imaging,
                         const std::string& imaging_from, const CompareOptions& opt, const SegmentOptions& so,
-                        const std::filesystem::path& slices, const std::string& stem);
+                        const std::filesystem::path& slices, const std::string& stem, bool keep_labels = false);
 
 }  // namespace tg::compare

@@ -161,6 +161,72 @@ void write_report_tables(const fs::path& out, const ReportData& d) {
   write_csv(ss.table(), out / "stress_strain.csv");
   write_csv(broken.table(), out / "broken.csv");
   write_contact_tables(out, d);
+  write_lineage_tables(out, rep);
+}
+
+namespace {
+// The bias as (stage, quantity, value, count) rows: one place for the CSV and report.json.
+struct BiasRow {
+  std::string stage, quantity;
+  double value;
+  int64_t count;
+};
+std::vector<BiasRow> bias_rows(const Report& rep) {
+  std::vector<BiasRow> out;
+  const track::Accuracy& a = *rep.tracker_bias;
+  out.push_back({"all", "right_parent", a.parent_fraction(), a.particles});
+  out.push_back({"all", "right_grain", a.grain_fraction(), a.particles});
+  for (const auto& [type, sc] : a.events) {
+    out.push_back({"all", type + "_recall", sc.recall(), sc.truth});
+    out.push_back({"all", type + "_precision", sc.precision(), sc.tracked});
+  }
+  for (size_t n = 0; n < a.pct_broken.size() && n < rep.stages.size(); ++n) {
+    out.push_back({rep.stages[n].name, "pct_intact_broken_exact", a.pct_broken_truth[n], 0});
+    out.push_back({rep.stages[n].name, "pct_intact_broken_tracked", a.pct_broken[n], 0});
+    out.push_back({rep.stages[n].name, "pct_intact_broken_difference", a.pct_broken[n] - a.pct_broken_truth[n], 0});
+  }
+  return out;
+}
+}  // namespace
+
+void write_lineage_tables(const fs::path& out, const Report& rep) {
+  std::vector<std::string> cols{"stage", "series", "particles", "grains_intact", "grains_broken", "pct_intact_broken",
+                                "split", "fragmentation", "chipping", "chips", "lost", "new"};
+  for (int b = 1; b <= 5; ++b) cols.push_back("breaks_band" + std::to_string(b));
+  for (int b = 1; b <= 5; ++b) cols.push_back("pct_broken_band" + std::to_string(b));
+  RowTable t(cols);
+  const std::pair<const char*, const std::optional<track::TrackResult>*> series[3] = {
+      {"experiment", &rep.tracking}, {"dem_exact", &rep.dem_exact}, {"dem_imaged", &rep.dem_imaged}};
+  bool any = false;
+  for (size_t n = 0; n < rep.stages.size(); ++n)
+    for (const auto& [name, r] : series) {
+      if (!*r || n >= (**r).summary.size()) continue;
+      const track::SummaryRow& s = (**r).summary[n];
+      const auto& bb = s.breaks_band;
+      const auto& pb = s.pct_broken_band;
+      t.row({rep.stages[n].name, name, s.particles, s.grains_intact, s.grains_broken, s.pct_intact_broken, s.split,
+             s.fragmentation, s.chipping, s.chips, s.lost, s.new_particles, bb[0], bb[1], bb[2], bb[3], bb[4], pb[0], pb[1],
+             pb[2], pb[3], pb[4]});
+      any = true;
+    }
+  if (any) write_csv(t.table(), out / "lineage.csv");
+  if (!rep.tracker_bias) return;
+  RowTable b({"stage", "quantity", "value", "count"});
+  for (const BiasRow& r : bias_rows(rep)) b.row({r.stage, r.quantity, r.value, r.count});
+  write_csv(b.table(), out / "tracker_bias.csv");
+}
+
+json lineage_json(const Report& rep) {
+  json j;
+  j["dem_exact"] = rep.dem_exact ? json("dem_lineage/ (lineage.csv, events.csv, summary.csv)") : json(nullptr);
+  j["dem_imaged"] = rep.dem_imaged ? json("dem_imaged_tracking/ (lineage.csv, events.csv, summary.csv)") : json(nullptr);
+  j["note"] = rep.dem_lineage_note;
+  if (rep.tracker_bias) {
+    json b = json::array();
+    for (const BiasRow& r : bias_rows(rep)) b.push_back({{"stage", r.stage}, {"quantity", r.quantity}, {"value", r.value}, {"count", r.count}});
+    j["tracker_bias"] = b;
+  }
+  return j;
 }
 
 void write_report_json(const fs::path& out, const ReportData& d, json meta) {

@@ -38,6 +38,12 @@ struct ReportData {
 // and the contact tables: fabric.csv, normals.csv, coordination_by_size.csv,
 // contacts/STAGE_SERIES.csv (compare/fabric.hpp).
 void write_report_tables(const std::filesystem::path& dir, const ReportData& d);
+// lineage.csv (events and breakage by height per stage: experiment, dem_exact,
+// dem_imaged, whichever exist) and tracker_bias.csv (when rep.tracker_bias);
+// called by write_report_tables.
+void write_lineage_tables(const std::filesystem::path& dir, const Report& rep);
+// report.json's "dem_lineage": the folders, the note, the tracker's bias on DEM data.
+nlohmann::json lineage_json(const Report& rep);
 // report.json: `meta` (inputs and options, filled by the caller) plus the stages.
 void write_report_json(const std::filesystem::path& dir, const ReportData& d, nlohmann::json meta);
 // The three orthogonal mid-slices of a volume as DIR/STEM_{z,y,x}.npy

@@ -12,8 +12,9 @@
 namespace tg::dem {
 
 namespace {
-// Version 2 added the checksum; version 1 files are refused by name.
-constexpr char kMagic[8] = {'T', 'G', 'D', 'E', 'M', 'C', 'K', '2'};
+// Version 2 added the checksum, version 3 the previous_particle field;
+// older files are refused by name.
+constexpr char kMagic[8] = {'T', 'G', 'D', 'E', 'M', 'C', 'K', '3'};
 
 // 64-bit FNV-1a over the body. Each step (xor a byte, multiply by an odd
 // constant) is a bijection of the state, so any change confined to one byte

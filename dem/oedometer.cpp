@@ -316,6 +316,8 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
     std::snprintf(name, sizeof name, "strain_%05.2fpct.h5", 100 * target);
     const json attr = {{"requested_strain", target}, {"strain", strain()}, {"time_s", e.time()}, {"step", e.step_count()}};
     write_snapshot(e.particles(), rundir / "snapshots" / name, attr.dump());
+    // The next snapshot's lineage starts here (every sphere's particle now).
+    e.particles().previous_particle = e.particles().particle;
     SnapshotEntry entry{std::string("snapshots/") + name, e.step_count(), e.time(), strain(), target, ""};
     if (brk) {
       std::string bn = name;

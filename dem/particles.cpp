@@ -16,6 +16,7 @@ int64_t Particles::append_sphere(double px, double py, double pz, double radius,
   m[k] = density * 4.0 / 3.0 * std::numbers::pi * radius * radius * radius;
   inertia[k] = 0.4 * m[k] * radius * radius;  // solid sphere: 2/5 m r^2
   particle[k] = grain_id;
+  previous_particle[k] = grain_id;
   material[k] = mat;
   flags[k] = fl;
   return i;

@@ -10,7 +10,11 @@
 // Extension points for breakage (issue 7):
 //  * `particle` is the id of the grain a sphere belongs to. Intact grains are
 //    one sphere; a fragment made of a 17-sphere bonded cluster gives all its
-//    spheres the same id. `material` selects a material (only 0 exists today)
+//    spheres the same id. `previous_particle` is the particle id the sphere
+//    (or the sphere it was split from: copy_sphere inherits it) had at the
+//    last snapshot (at the start before the first): the DEM's exact lineage
+//    between snapshots (compare/dem_lineage.hpp); the oedometer resets it to
+//    `particle` after writing each snapshot. `material` selects a material (only 0 exists today)
 //    and `flags` carries bits (kFlagBreakable, kFlagClusterElement, ...).
 //  * Replacing a sphere by fragments: copy_sphere()/append_sphere() + the
 //    engine's request_rebuild(); the neighbour list and contact histories are
@@ -46,6 +50,7 @@ struct Particles {
   std::vector<double> m;        // mass, kg (after any mass scaling)
   std::vector<double> inertia;  // moment of inertia 2/5 m r², kg·m²
   std::vector<int64_t> particle;  // grain id (clusters share one)
+  std::vector<int64_t> previous_particle;  // particle id at the last snapshot (lineage, see above)
   std::vector<int32_t> material;  // material index
   std::vector<uint32_t> flags;    // ParticleFlags bits
   // Tangential displacement history of the sphere's contact with each wall
@@ -64,7 +69,7 @@ struct Particles {
     f("fx_N", fx); f("fy_N", fy); f("fz_N", fz);
     f("tx_Nm", tx); f("ty_Nm", ty); f("tz_Nm", tz);
     f("r_m", r); f("m_kg", m); f("inertia_kg_m2", inertia);
-    f("particle", particle); f("material", material); f("flags", flags);
+    f("particle", particle); f("previous_particle", previous_particle); f("material", material); f("flags", flags);
     f("hist_bottom_x_m", hbx); f("hist_bottom_y_m", hby); f("hist_bottom_z_m", hbz);
     f("hist_top_x_m", htx); f("hist_top_y_m", hty); f("hist_top_z_m", htz);
     f("hist_cyl_x_m", hcx); f("hist_cyl_y_m", hcy); f("hist_cyl_z_m", hcz);

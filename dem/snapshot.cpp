@@ -14,6 +14,7 @@ void write_snapshot(const Particles& p, const std::filesystem::path& path, const
   const std::vector<double>* cols[] = {&p.x, &p.y, &p.z, &p.r, &p.vx, &p.vy, &p.vz, &p.wx, &p.wy, &p.wz};
   for (int c = 0; c < 10; ++c) t.add(names[c], *cols[c]);
   t.add("particle", std::vector<double>(p.particle.begin(), p.particle.end()));
+  t.add("previous_particle", std::vector<double>(p.previous_particle.begin(), p.previous_particle.end()));
   {
     H5Writer w(path.string());
     w.write_table("spheres", t);

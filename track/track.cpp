@@ -164,6 +164,48 @@ Event event_from_name(const std::string& name) {
   throw InputError("unknown event '" + name + "' (intact, split, fragmentation, chipping, chip, new, lost)");
 }
 
+void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& rows, const std::vector<int32_t>& parent,
+                const TrackOptions& o) {
+  // Children of every A particle, largest first.
+  std::vector<std::vector<int32_t>> kids(prev.size());
+  for (size_t q = 0; q < rows.size(); ++q)
+    if (parent[q] >= 0) kids[parent[q]].push_back(static_cast<int32_t>(q));
+  for (auto& k : kids)
+    std::stable_sort(k.begin(), k.end(), [&](int32_t x, int32_t y) { return rows[x].volume_vox > rows[y].volume_vox; });
+  for (auto& r : rows) {
+    r.event = Event::new_particle;
+    r.displacement_vox = {kNaN, kNaN, kNaN};
+    r.quality = 0;
+  }
+  for (size_t a = 0; a < prev.size(); ++a) {
+    const auto& k = kids[a];
+    if (k.empty()) continue;
+    const LineageRow& pr = prev[a];
+    int64_t after = 0;
+    for (int32_t q : k) after += rows[q].volume_vox;
+    const double f1 = static_cast<double>(rows[k[0]].volume_vox) / static_cast<double>(after);
+    const double tol = std::max(o.min_volume_tolerance,
+                                3 * o.surface_tolerance_vox / std::max(1.0, r_eq(static_cast<double>(pr.volume_vox))));
+    Event first = Event::intact, rest = Event::intact;
+    if (k.size() == 1) {
+      const bool cut = pr.touches_border || rows[k[0]].touches_border;
+      const double kept = static_cast<double>(after) / static_cast<double>(pr.volume_vox);
+      if (!cut && kept < 1 - tol) first = kept <= o.hidden_split_fraction ? Event::split : Event::chipping;
+    } else if (f1 >= o.chip_body_fraction) {
+      first = Event::chipping, rest = Event::chip;
+    } else {
+      first = rest = k.size() == 2 ? Event::split : Event::fragmentation;
+    }
+    for (size_t n = 0; n < k.size(); ++n) {
+      LineageRow& r = rows[k[n]];
+      r.parent_label = pr.label;
+      r.grain = pr.grain;
+      r.event = n == 0 ? first : rest;
+      for (int ax = 0; ax < 3; ++ax) r.displacement_vox[ax] = r.centroid_vox[ax] - pr.centroid_vox[ax];
+    }
+  }
+}
+
 Tracker::Tracker(TrackOptions o) : o_(std::move(o)) {}
 
 void Tracker::add_stage(Volume<uint32_t> labels, const std::string& name) {
@@ -246,45 +288,9 @@ void Tracker::add_stage(Volume<uint32_t> labels, const std::string& name) {
       }
     }
 
-    // Children of every A particle, largest first.
-    std::vector<std::vector<int32_t>> kids(prev_rows_.size());
+    link_stage(prev_rows_, rows, parent, o_);
     for (size_t q = 0; q < rows.size(); ++q)
-      if (parent[q] >= 0) kids[parent[q]].push_back(static_cast<int32_t>(q));
-    for (auto& k : kids)
-      std::stable_sort(k.begin(), k.end(), [&](int32_t x, int32_t y) { return rows[x].volume_vox > rows[y].volume_vox; });
-    for (auto& r : rows) {
-      r.event = Event::new_particle;
-      r.displacement_vox = {kNaN, kNaN, kNaN};
-      r.quality = 0;
-    }
-    for (size_t a = 0; a < prev_rows_.size(); ++a) {
-      const auto& k = kids[a];
-      if (k.empty()) continue;
-      const LineageRow& pr = prev_rows_[a];
-      int64_t after = 0;
-      for (int32_t q : k) after += rows[q].volume_vox;
-      const double f1 = static_cast<double>(rows[k[0]].volume_vox) / static_cast<double>(after);
-      const double tol = std::max(o_.min_volume_tolerance,
-                                  3 * o_.surface_tolerance_vox / std::max(1.0, r_eq(static_cast<double>(pr.volume_vox))));
-      Event first = Event::intact, rest = Event::intact;
-      if (k.size() == 1) {
-        const bool cut = pr.touches_border || rows[k[0]].touches_border;
-        const double kept = static_cast<double>(after) / static_cast<double>(pr.volume_vox);
-        if (!cut && kept < 1 - tol) first = kept <= o_.hidden_split_fraction ? Event::split : Event::chipping;
-      } else if (f1 >= o_.chip_body_fraction) {
-        first = Event::chipping, rest = Event::chip;
-      } else {
-        first = rest = k.size() == 2 ? Event::split : Event::fragmentation;
-      }
-      for (size_t n = 0; n < k.size(); ++n) {
-        LineageRow& r = rows[k[n]];
-        r.parent_label = pr.label;
-        r.grain = pr.grain;
-        r.event = n == 0 ? first : rest;
-        for (int ax = 0; ax < 3; ++ax) r.displacement_vox[ax] = r.centroid_vox[ax] - pr.centroid_vox[ax];
-        r.quality = static_cast<double>(covered[k[n]]) / static_cast<double>(r.volume_vox);
-      }
-    }
+      rows[q].quality = parent[q] < 0 ? 0.0 : static_cast<double>(covered[q]) / static_cast<double>(rows[q].volume_vox);
   }
   lineage_.insert(lineage_.end(), rows.begin(), rows.end());
   prev_rows_ = std::move(rows);

@@ -139,6 +139,15 @@ struct TrackResult {
   std::vector<double> seconds;  // per stage
 };
 
+// Step 5 for one pair of stages: given each B particle's parent (index into
+// prev, -1 for none), sets parent_label, grain, event and displacement of
+// `rows` (quality is left to the caller) by the classification above
+// (volumes, border flags and the tolerances of `o`). Shared by the tracker and
+// by exact lineages built outside it (compare/dem_lineage.hpp), so an event
+// means the same everywhere.
+void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& rows, const std::vector<int32_t>& parent,
+                const TrackOptions& o);
+
 // Events and summary from a lineage (the tracker's or a truth lineage in the
 // same columns): events group each stage's rows by parent; a parent of the
 // previous stage without children is lost.

@@ -301,19 +301,37 @@ def main():
                        [[r["stage"], r["series"], fmt(r["axial_strain"]), r["particles"], fmt(r["d10_mm"]),
                          fmt(r["d50_mm"]), fmt(r["cu"]), fmt(r["hardin_br"]), fmt(r["broken_fraction"]),
                          r["broken_method"], fmt(r.get("coordination_interior", ""))] for r in summary]))
-    track_csv = os.path.join(out, "tracking", "summary.csv")
-    if os.path.exists(track_csv):  # the experiment's lineage (track/): events by type, breakage by height fifth
-        trk = read_csv(track_csv)
-        parts.append("<h2>Tracking of the experiment's grains (events by type, breakage by height)</h2>")
-        parts.append(table(["stage", "particles", "intact grains broken (%)", "split", "fragmentation", "chipping",
-                            "chips", "lost", "new"] + [f"broken, fifth {b} (%)" for b in range(1, 6)],
-                           [[r["stage"], r["particles"], fmt(r["pct_intact_broken"]), r["split"], r["fragmentation"],
-                             r["chipping"], r["chips"], r["lost"], r["new"]]
-                            + [fmt(r[f"pct_broken_band{b}"]) for b in range(1, 6)] for r in trk]))
-        parts.append("<p>Fifths of the specimen's height, 1 = bottom platen, 5 = top (moving) platen; lineage, "
-                     "events and this table in <a href='tracking/'>tracking/</a>.</p>")
-    elif isinstance(meta.get("tracking"), str) and meta["tracking"]:
-        parts.append(f"<p>No tracking: {html.escape(meta['tracking'])}</p>")
+    lineage_csv = os.path.join(out, "lineage.csv")
+    if os.path.exists(lineage_csv):  # lineages (track/): events by type, breakage by height fifth, per series
+        lin = read_csv(lineage_csv)
+        parts.append("<h2>Breakage events by type and by height: experiment beside DEM</h2>")
+        parts.append(table(["stage", "series", "particles", "intact grains broken (%)", "split", "fragmentation",
+                            "chipping", "chips", "lost", "new"] + [f"broken, fifth {b} (%)" for b in range(1, 6)],
+                           [[r["stage"], r["series"], r["particles"], fmt(r["pct_intact_broken"]), r["split"],
+                             r["fragmentation"], r["chipping"], r["chips"], r["lost"], r["new"]]
+                            + [fmt(r[f"pct_broken_band{b}"]) for b in range(1, 6)] for r in lin]))
+        parts.append("<p><i>experiment</i>: the XCT stages tracked (<a href='tracking/'>tracking/</a>); "
+                     "<i>dem_exact</i>: the DEM's own lineage, mother to fragments, from its snapshots "
+                     "(<a href='dem_lineage/'>dem_lineage/</a>); <i>dem_imaged</i>: the same tracker run on the "
+                     "segmented DEM scans (<a href='dem_imaged_tracking/'>dem_imaged_tracking/</a>). Same event "
+                     "definitions for all three. Fifths of the specimen's height, 1 = bottom platen, 5 = top "
+                     "(moving) platen.</p>")
+    if isinstance(meta.get("tracking"), str) and meta["tracking"] and not meta["tracking"].startswith("tracking/"):
+        parts.append(f"<p>No tracking of the experiment: {html.escape(meta['tracking'])}</p>")
+    dl = meta.get("dem_lineage") or {}
+    if dl.get("note"):
+        parts.append(f"<p>DEM lineage: {html.escape(dl['note'])}</p>")
+    bias_csv = os.path.join(out, "tracker_bias.csv")
+    if os.path.exists(bias_csv):
+        bias = read_csv(bias_csv)
+        parts.append("<h3>The tracker's bias on DEM data</h3>")
+        parts.append("<p>The tracker on the imaged DEM path scored against the DEM's exact lineage "
+                     "(track/evaluate): share of tracked particles given the right parent and the right stage-0 "
+                     "grain, recall and precision of each event type (count = exact events for recall, tracked "
+                     "events for precision), and % of intact grains broken, tracked minus exact. Read the "
+                     "experiment's tracked numbers with this bias in mind.</p>")
+        parts.append(table(["stage", "quantity", "value", "count"],
+                           [[r["stage"], r["quantity"], fmt(r["value"]), r["count"]] for r in bias]))
     parts.append("<h2>Contact fabric</h2>")
     parts.append("<p>Fabric tensor N = ⟨n⊗n⟩ of the contact normals (z = loading axis), anisotropy a = "
                  "sqrt(3/2 F:F) with F = 15/2 (N − I/3) (0 = isotropic, 7.5 = all along one axis; as "

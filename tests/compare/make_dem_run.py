@@ -14,7 +14,10 @@ and for measuring the segmentation bias on fragment clusters.
                                     ring A of 8 spheres ra = 0.26330 on the plane,
                                     a central sphere rc = 0.44948, ring B of 8
                                     spheres rb = 0.16097 at 45 degrees), splitting
-                                    plane normal drawn at random; column strain
+                                    plane normal drawn at random; column strain;
+                                    column previous_particle (dem/particles.hpp): a
+                                    grain's particle, or the same-side fragment of a
+                                    grain already split, at the previous snapshot
   RUN/snapshots.csv                 the snapshot index (dem/run_folder.hpp: file, step,
                                     time_s, axial_strain, requested_strain, bonds)
   RUN/history.csv                   strain, top_stress_Pa, grains_broken (invented curve; DEM column names)
@@ -68,7 +71,8 @@ def write_h5(path, strain):
             g[name] = c[:, k]
         g["r_m"] = rad
         g["particle"] = np.arange(len(rad), dtype=np.float64)
-        g.attrs["columns"] = np.bytes_("x_m,y_m,z_m,r_m,particle")  # core/io/hdf5's table convention
+        g["previous_particle"] = np.arange(len(rad), dtype=np.float64)  # the run's start: the same grains
+        g.attrs["columns"] = np.bytes_("x_m,y_m,z_m,r_m,particle,previous_particle")  # core/io/hdf5's table convention
         f.attrs["snapshot"] = np.bytes_(json.dumps({"strain": strain, "requested_strain": strain}))
 
 
@@ -76,6 +80,7 @@ index = []  # rows of RUN/snapshots.csv
 rng = np.random.default_rng(11)
 order = rng.permutation(len(rad))  # grains break in this order as the strain grows
 n_broken = []
+prev_ids = {q: [q] for q in range(len(rad))}  # grain -> its particle ids (one, or one per fragment side) at the last snapshot
 for s, (strain, frac) in enumerate(zip(strains, broken)):
     nb = int(round(frac * len(rad)))
     n_broken.append(nb)
@@ -84,27 +89,31 @@ for s, (strain, frac) in enumerate(zip(strains, broken)):
         index.append(("snapshots/strain_00.00pct.h5", strain))
         continue
     split = set(order[:nb].tolist())
-    out, pid = [], 0
+    out, pid, ids = [], 0, {}
     for q in range(len(rad)):
         x, y, z = c[q]
         centre = np.array([x, y, z * (1 - strain)])
         r = rad[q]
         if q in split:
             e1, e2, n = frame(rng.normal(size=3))
-            for side in (1.0, -1.0):  # two mirrored fragments
+            for k, side in enumerate((1.0, -1.0)):  # two mirrored fragments
+                prev = prev_ids[q][k if len(prev_ids[q]) == 2 else 0]
                 for (tx, ty, tz), tr in TEMPLATE:
                     p = centre + r * (tx * e1 + ty * e2 + side * tz * n)
-                    out.append((p[0], p[1], p[2], r * tr, pid))
+                    out.append((p[0], p[1], p[2], r * tr, pid, prev))
+                ids.setdefault(q, []).append(pid)
                 pid += 1
         else:
-            out.append((centre[0], centre[1], centre[2], r, pid))
+            out.append((centre[0], centre[1], centre[2], r, pid, prev_ids[q][0]))
+            ids[q] = [pid]
             pid += 1
+    prev_ids = ids
     name = "strain_%05.2fpct.csv" % (100 * strain)
     with open(os.path.join(run, "snapshots", name), "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["x_m", "y_m", "z_m", "r_m", "particle", "strain"])
+        w.writerow(["x_m", "y_m", "z_m", "r_m", "particle", "previous_particle", "strain"])
         for row in out:
-            w.writerow([repr(float(v)) for v in row[:4]] + [row[4], strain])
+            w.writerow([repr(float(v)) for v in row[:4]] + [row[4], row[5], strain])
     index.append(("snapshots/" + name, strain))
 
 with open(os.path.join(run, "snapshots.csv"), "w", newline="") as f:

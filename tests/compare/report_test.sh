@@ -29,7 +29,7 @@ $PY "$SRC/make_dem_run.py" "$W/xct_stage0_truth.csv" "$W/dem_run" "$W/exp_curve.
   -o "$W/report" --notes "report test: synthetic stages, stand-in DEM run" | tee "$W/compare.log"
 test -s "$W/report/index.html"
 for f in report.json summary.csv psd.csv shape_classes.csv distances.csv stress_strain.csv broken.csv \
-         fabric.csv normals.csv coordination_by_size.csv; do
+         fabric.csv normals.csv coordination_by_size.csv lineage.csv tracker_bias.csv; do
   test -s "$W/report/$f" || { echo "missing $f"; exit 1; }
 done
 
@@ -197,6 +197,39 @@ for n, st in enumerate(meta["stages"]):
                  for s in ("experiment", "dem_ideal", "dem_imaged", "dem_exact")})
 print("fabric.csv, normals.csv, coordination_by_size.csv = numpy (contacts, particle tables, spheres)")
 PYF
+# The lineages (issue 20): lineage.csv's dem_exact rows against the snapshots' own previous_particle
+# column (counted here from the CSV: a previous particle with two pieces = one split), the DEM's broken
+# fraction from it, and tracker_bias.csv's % difference against lineage.csv's dem_imaged - dem_exact.
+$PY - "$W" <<'PYL'
+import csv, json, os, sys
+from collections import Counter
+W = sys.argv[1]
+R = os.path.join(W, "report")
+rows = lambda p: list(csv.DictReader(open(p)))
+meta = json.load(open(os.path.join(R, "report.json")))
+names = [s["name"] for s in meta["stages"]]
+lin = {(r["stage"], r["series"]): r for r in rows(os.path.join(R, "lineage.csv"))}
+assert {s for _, s in lin} == {"experiment", "dem_exact", "dem_imaged"}, sorted(lin)
+snap = rows(meta["stages"][1]["dem"]["snapshot"])  # the stand-in run: CSV after stage 0
+n0 = len(rows(os.path.join(W, "xct_stage0_truth.csv")))  # the grains of snapshot 0 (one sphere each)
+pieces = Counter()
+for prev, pid in {(r["previous_particle"], r["particle"]) for r in snap}:
+    pieces[prev] += 1
+splits = sum(1 for k in pieces.values() if k == 2)
+assert all(k in (1, 2) for k in pieces.values()) and len(pieces) == n0, (len(pieces), n0)
+e = lin[(names[1], "dem_exact")]
+assert int(e["split"]) == splits and int(e["fragmentation"]) == 0 and int(e["chipping"]) == 0, (e, splits)
+assert abs(float(e["pct_intact_broken"]) - 100 * splits / n0) < 1e-9, (e["pct_intact_broken"], splits, n0)
+summ = {(r["stage"], r["series"]): r for r in rows(os.path.join(R, "summary.csv"))}
+assert abs(float(summ[(names[1], "dem_ideal")]["broken_fraction"]) - splits / n0) < 1e-12
+bias = {(r["stage"], r["quantity"]): float(r["value"]) for r in rows(os.path.join(R, "tracker_bias.csv"))}
+for name in names:
+    want = float(lin[(name, "dem_imaged")]["pct_intact_broken"]) - float(lin[(name, "dem_exact")]["pct_intact_broken"])
+    assert abs(bias[(name, "pct_intact_broken_difference")] - want) < 1e-9, (name, want)
+assert 0 <= bias[("all", "right_grain")] <= 1 and meta["dem_lineage"]["tracker_bias"], meta["dem_lineage"]
+print("lineage.csv dem_exact = snapshot previous_particle counts:", splits, "splits of", n0,
+      "; tracker bias:", {k[1]: round(v, 3) for k, v in bias.items() if k[0] == "all"})
+PYL
 $CHROME --user-data-dir="$PROFILE" --virtual-time-budget=10000 --window-size=1280,2000 \
   --screenshot="$W/report_screenshot.png" "file://$W/report/index.html" 2>> "$W/chromium.log"
 test -s "$W/report_screenshot.png"

@@ -307,7 +307,7 @@ TEST(Engine, SameResultWithOneAndTwoThreads) {
         }
     });
   });
-  EXPECT_EQ(fields, 30);
+  EXPECT_EQ(fields, 31);
   EXPECT_EQ(wa.top_z, wb.top_z);
   EXPECT_EQ(wa.cylinder_radial, wb.cylinder_radial);
   EXPECT_GT(la, 0.0);  // spheres hit the walls...
@@ -373,7 +373,7 @@ void expect_same_spheres(const Particles& a, const Particles& b, const std::stri
       }
     });
   });
-  EXPECT_EQ(fields, 30);
+  EXPECT_EQ(fields, 31);
 }
 
 // Engine::run() fuses each step's gather with the next step's opening half

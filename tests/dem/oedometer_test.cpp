@@ -70,7 +70,7 @@ TEST(Oedometer, RestartContinuesBitForBit) {
         }
     });
   });
-  EXPECT_EQ(fields, 30);
+  EXPECT_EQ(fields, 31);
   EXPECT_EQ(a.top_stress_Pa, c.top_stress_Pa);
   // The histories agree too (the restarted one was stitched from the checkpoint).
   const Table ha = read_csv(d / "a" / "history.csv"), hc = read_csv(d / "b" / "history.csv");

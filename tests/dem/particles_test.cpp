@@ -17,7 +17,7 @@ TEST(Particles, FieldListCoversEveryVectorOnce) {
     names.insert(std::string(n));
     bytes += sizeof(v);
   });
-  EXPECT_EQ(names.size(), 30u);
+  EXPECT_EQ(names.size(), 31u);
   // Every member of Particles is a std::vector listed in for_each_field:
   // a field added to the struct but not to the list changes the size.
   EXPECT_EQ(bytes, sizeof(Particles));
@@ -33,6 +33,7 @@ TEST(Particles, AppendCopyResize) {
   p.vx[0] = 3;
   p.copy_sphere(0, 1);
   EXPECT_EQ(p.particle[1], 7);
+  EXPECT_EQ(p.previous_particle[1], 7);  // a split's spheres inherit their mother's lineage
   EXPECT_EQ(p.vx[1], 3);
   EXPECT_EQ(p.r[1], 0.5e-3);
   p.resize(1);

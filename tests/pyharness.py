@@ -206,10 +206,10 @@ def demo_cell_pack_config(extra=""):
     return text.replace("[pluviation]\n", "[pluviation]\npress_to_target_height = true\n", 1) + extra
 
 
-def weak_grain_run_config(run, oedometer="", breakage=""):
+def weak_grain_run_config(run, oedometer="", breakage="", strain=0.04):
     """A short oedometer run of a demo-cell packing (pack.csv in the working
-    folder, e.g. the committed tests/apps/data/crash_pack.csv) to 4 % strain,
-    snapshots at 0, 2 and 4 %, a history row every 200 steps. Weak grains
+    folder, e.g. the committed tests/apps/data/crash_pack.csv) to `strain`
+    (4 %), snapshots at 0, half of it and all of it, a history row every 200 steps. Weak grains
     (sigma_t0 3 MPa instead of 12) so the first split comes at ~1-2 % strain,
     well before the end; fragments (d < 0.7 mm) do not split again, which
     keeps the time step (and the test) short. `run`, `oedometer`, `breakage`:
@@ -217,7 +217,8 @@ def weak_grain_run_config(run, oedometer="", breakage=""):
     return ("[walls]\ncylinder_radius_m = 4.0e-3\n"
             "[specimen]\npacking_csv = \"pack.csv\"\n"
             f"[run]\n{run}"
-            "[oedometer]\ntarget_strain = 0.04\nsnapshot_strains = [0.0, 0.02, 0.04]\nhistory_every_steps = 200\n"
+            f"[oedometer]\ntarget_strain = {strain}\nsnapshot_strains = [0.0, {strain / 2}, {strain}]\n"
+            "history_every_steps = 200\n"
             f"{oedometer}"
             "[breakage]\nenabled = true\nsigma_t0_Pa = 3.0e6\nmin_split_diameter_m = 7.0e-4\n"
             f"{breakage}")

@@ -59,11 +59,15 @@ def save(fig, out, name):
     return name
 
 
+def stage_panels(stages):
+    """One panel per stage, three to a row."""
+    cols = min(len(stages), 3)
+    rows = (len(stages) + cols - 1) // cols
+    return plt.subplots(rows, cols, figsize=(4.2 * cols, 3.4 * rows), squeeze=False)
+
+
 def plot_psd(out, stages, psd):
-    n = len(stages)
-    cols = min(n, 3)
-    rows = (n + cols - 1) // cols
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.4 * rows), squeeze=False)
+    fig, axes = stage_panels(stages)
     for ax, st in zip(axes.flat, stages):
         for series, style in SERIES_STYLE.items():
             pts = [(fnum(r["sieve_mm"]), fnum(r["passing_pct"])) for r in psd
@@ -76,7 +80,7 @@ def plot_psd(out, stages, psd):
         ax.set_ylabel("passing by mass (%)")
         ax.grid(True, which="both", alpha=0.3)
         ax.set_ylim(-2, 102)
-    for ax in list(axes.flat)[n:]:
+    for ax in list(axes.flat)[len(stages):]:
         ax.axis("off")
     axes.flat[0].legend(fontsize=7)
     fig.suptitle("Particle size distribution by mass (Dmed)")
@@ -166,10 +170,7 @@ def plot_distances(out, stages, dist):
 
 def plot_normals(out, stages, nor):
     """One panel per stage: density of the contact normals' polar angle (from z), the series as lines."""
-    n = len(stages)
-    cols = min(n, 3)
-    rows = (n + cols - 1) // cols
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.4 * rows), squeeze=False)
+    fig, axes = stage_panels(stages)
     for ax, st in zip(axes.flat, stages):
         for series, style in CONTACT_STYLE.items():
             r = [x for x in nor if x["stage"] == st["name"] and x["series"] == series]
@@ -182,7 +183,7 @@ def plot_normals(out, stages, nor):
         ax.set_ylabel("density (1 = isotropic)")
         ax.set_xlim(0, 90)
         ax.grid(True, alpha=0.3)
-    for ax in list(axes.flat)[n:]:
+    for ax in list(axes.flat)[len(stages):]:
         ax.axis("off")
     axes.flat[0].legend(fontsize=7)
     fig.suptitle("Contact normals: angle from the loading axis (bands of equal solid angle)")

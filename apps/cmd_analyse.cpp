@@ -8,7 +8,7 @@
 #include "apps/jobs.hpp"
 #include "core/atomic_file.hpp"
 
-namespace {
+namespace cmd_analyse {
 namespace fs = std::filesystem;
 
 struct Opts {
@@ -52,8 +52,9 @@ int run_analyse(const Opts& o) {
   return 0;
 }
 
-}  // namespace
+}  // namespace cmd_analyse
 
+namespace cmd_analyse {
 static tg::app::Registrar reg{{"analyse", 50,
       "Segment a scan, measure every particle and compute its grading, in one go:\n"
       "the jobs of `segment`, `measure` and `psd` with their defaults (run those for every option).\n"
@@ -74,3 +75,4 @@ static tg::app::Registrar reg{{"analyse", 50,
   sub->add_flag("--box", o->box, "Also compute CGAL's oriented box (obb_* columns; slow on large scans)");
   return [o] { return run_analyse(*o); };
 }}};
+}  // namespace cmd_analyse

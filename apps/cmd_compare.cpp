@@ -15,7 +15,7 @@
 #include "core/io/hdf5.hpp"
 #include "core/io/volume_io.hpp"
 
-namespace {
+namespace cmd_compare {
 
 using namespace tg;
 
@@ -122,8 +122,9 @@ int run_compare(const CmpOpts& o) {
   return 0;
 }
 
-}  // namespace
+}  // namespace cmd_compare
 
+namespace cmd_compare {
 static tg::app::Registrar reg_vox{{"voxelise", 70,
       "Turn a DEM snapshot or packing into a CT-like scan with exact truth labels.\n\n"
       "Input: CSV or HDF5 table (file.h5[:/group]) of spheres, columns x_m,y_m,z_m,r_m (metres; cylinder axis z,\n"
@@ -213,3 +214,4 @@ static tg::app::Registrar reg_cmp{{"compare", 80,
                 "experiment's broken fraction comes from that lineage when the scans carry no truth)");
   return [o] { return run_compare(*o); };
 }}};
+}  // namespace cmd_compare

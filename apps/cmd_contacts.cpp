@@ -17,7 +17,7 @@
 #include "measure/contacts.hpp"
 #include "measure/label_stats.hpp"
 
-namespace {
+namespace cmd_contacts {
 
 namespace fs = std::filesystem;
 using namespace tg;
@@ -162,8 +162,9 @@ int run_contacts(const Opts& o) {
   return 0;
 }
 
-}  // namespace
+}  // namespace cmd_contacts
 
+namespace cmd_contacts {
 static tg::app::Registrar reg{{"contacts", 42,
       "Touching particles of a label volume: contact area, normal and point, coordination, fabric.\n\n"
       "Two labels touch when they share faces or are separated by at most one watershed line (the\n"
@@ -190,3 +191,4 @@ static tg::app::Registrar reg{{"contacts", 42,
   tg::app::add_voxel_option(sub, o->voxel_um);
   return [o] { return run_contacts(*o); };
 }}};
+}  // namespace cmd_contacts

@@ -8,7 +8,7 @@
 #include "core/io/volume_io.hpp"
 #include "segmentation/normalise.hpp"
 
-namespace {
+namespace cmd_convert {
 
 struct Opts {
   std::string in, out, to, range = "auto";
@@ -88,8 +88,9 @@ int run_convert(const Opts& o) {
   return 0;
 }
 
-}  // namespace
+}  // namespace cmd_convert
 
+namespace cmd_convert {
 static tg::app::Registrar reg{{"convert", 20,
       "Convert a volume between formats (TIFF file, TIFF slice folder, raw+JSON, HDF5) and,\n"
       "with --to, between element types. Float reconstructions become 16-bit by the study's\n"
@@ -115,3 +116,4 @@ static tg::app::Registrar reg{{"convert", 20,
   tg::app::add_voxel_option(sub, o->voxel_um);
   return [o] { return run_convert(*o); };
 }}};
+}  // namespace cmd_convert

@@ -13,7 +13,7 @@
 #include "dem/packing_io.hpp"
 #include "dem/pluviation.hpp"
 
-namespace {
+namespace cmd_dem {
 struct Opts {
   std::string config, out;
   bool restart = false;
@@ -25,8 +25,9 @@ tg::dem::OedometerSetup load(const std::string& path) {
   tg::Config cfg = tg::Config::from_file(path);
   return tg::dem::read_oedometer_config(cfg, std::filesystem::path(path).parent_path());
 }
-}  // namespace
+}  // namespace cmd_dem
 
+namespace cmd_dem {
 static tg::app::Registrar reg{{"dem", 60,
       "DEM of the oedometer test: specimen preparation and compression.\n\n"
       "Subcommands:\n"
@@ -165,3 +166,4 @@ static tg::app::Registrar reg{{"dem", 60,
     return 0;
   };
 }}};
+}  // namespace cmd_dem

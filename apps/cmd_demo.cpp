@@ -26,7 +26,7 @@
 #include "core/table.hpp"
 #include "data_synth/scene.hpp"
 
-namespace {
+namespace cmd_demo {
 namespace fs = std::filesystem;
 using clk = std::chrono::steady_clock;
 
@@ -135,8 +135,9 @@ int run_demo(const Opts& o) {
   return 0;
 }
 
-}  // namespace
+}  // namespace cmd_demo
 
+namespace cmd_demo {
 static tg::app::Registrar reg{{"demo", 100,
       "Run the whole chain on a small embedded default and print where the report is:\n"
       "synthetic XCT loading stages (zeolite-stages preset, standing in for scans), then the demo\n"
@@ -154,3 +155,4 @@ static tg::app::Registrar reg{{"demo", 100,
       ->capture_default_str();
   return [o] { return run_demo(*o); };
 }}};
+}  // namespace cmd_demo

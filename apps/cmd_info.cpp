@@ -9,7 +9,7 @@
 #include "core/io/volume_io.hpp"
 #include "core/stats.hpp"
 
-namespace {
+namespace cmd_info {
 
 struct Opts {
   std::string in;
@@ -92,8 +92,9 @@ int run_info(const Opts& o) {
   return 0;
 }
 
-}  // namespace
+}  // namespace cmd_info
 
+namespace cmd_info {
 static tg::app::Registrar reg{{"info", 10,
       "Describe a volume: shape, element type, voxel size, value range, percentiles,\n"
       "16-bit saturation, NaN/Inf count, label count, HDF5 datasets.\n\n"
@@ -109,3 +110,4 @@ static tg::app::Registrar reg{{"info", 10,
   sub->add_flag("--json", o->json, "Print the description as JSON");
   return [o] { return run_info(*o); };
 }}};
+}  // namespace cmd_info

@@ -15,12 +15,12 @@
 #include "core/table.hpp"
 #include "measure/particles.hpp"
 
-namespace {
+namespace cmd_measure {
 
 namespace fs = std::filesystem;
 using namespace tg;
 
-}  // namespace
+}  // namespace cmd_measure
 
 namespace tg::app {
 
@@ -61,7 +61,7 @@ int run_measure(const MeasureJob& o) {
   po.threads = o.threads;
   po.obb.random_seed = o.seed;
   for (const auto& out : o.out) {
-    const auto e = fs::path(out).extension().string();
+    const auto e = std::filesystem::path(out).extension().string();
     if (e != ".csv" && !is_hdf5(out)) throw UsageError("-o " + out + ": expected a .csv or .h5 file");
   }
 
@@ -81,7 +81,7 @@ int run_measure(const MeasureJob& o) {
     // The table beside the labels; writing into the input file keeps its
     // /volume but refuses to drop anything else.
     std::vector<std::pair<std::string, AnyVolume>> keep;
-    if (fs::exists(out) && fs::exists(path) && fs::equivalent(out, path)) {
+    if (std::filesystem::exists(out) && std::filesystem::exists(path) && std::filesystem::equivalent(out, path)) {
       H5Reader r(path);
       for (const auto& d : r.datasets()) {
         if (d == "/labels" || d.rfind("/particles/", 0) == 0) continue;
@@ -111,7 +111,7 @@ int run_measure(const MeasureJob& o) {
 
 }  // namespace tg::app
 
-namespace {
+namespace cmd_measure {
 
 tg::app::Registrar reg_measure{{"measure", 40,
       "Per-particle volume, centroid, size and shape from a label volume.\n\n"
@@ -175,4 +175,4 @@ tg::app::Registrar reg_measure{{"measure", 40,
   return [o] { return tg::app::run_measure(*o); };
 }}};
 
-}  // namespace
+}  // namespace cmd_measure

@@ -12,7 +12,7 @@
 #include "core/table.hpp"
 #include "measure/grading.hpp"
 
-namespace {
+namespace cmd_psd {
 
 using namespace tg;
 
@@ -26,7 +26,7 @@ Table read_particles(const std::string& file) {
   return t;
 }
 
-}  // namespace
+}  // namespace cmd_psd
 
 namespace tg::app {
 
@@ -37,7 +37,7 @@ int run_psd(PsdJob o) {
   rules.exclude_border = o.exclude_border;
   std::vector<measure::GradingSample> stages;
   for (const auto& f : o.in) {
-    stages.push_back(measure::grading_sample(read_particles(f), rules));
+    stages.push_back(measure::grading_sample(cmd_psd::read_particles(f), rules));
     if (stages.back().size_mm.empty()) throw InputError(f + ": no particles left to grade");
   }
   std::vector<const measure::GradingSample*> all;
@@ -108,7 +108,7 @@ int run_psd(PsdJob o) {
 
 }  // namespace tg::app
 
-namespace {
+namespace cmd_psd {
 
 tg::app::Registrar reg_psd{{"psd", 45,
       "Grading (PSD by mass), D10/D50/D60/Cu, FR/AR classes and breakage of one or more stages.\n\n"
@@ -150,4 +150,4 @@ tg::app::Registrar reg_psd{{"psd", 45,
   return [o] { return tg::app::run_psd(*o); };
 }}};
 
-}  // namespace
+}  // namespace cmd_psd

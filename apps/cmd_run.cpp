@@ -24,7 +24,7 @@
 #include "study/study.hpp"
 #include "study/summary.hpp"
 
-namespace {
+namespace cmd_run {
 namespace fs = std::filesystem;
 using namespace tg::study;
 
@@ -231,8 +231,9 @@ int run_study(const Opts& o) {
   return 0;
 }
 
-}  // namespace
+}  // namespace cmd_run
 
+namespace cmd_run {
 static tg::app::Registrar reg{{"run", 90,
       "Run a whole study on this machine: analyse every stage (segment, measure, psd), track the grains\n"
       "through the stages, run the DEM twin (one run, or one per [[dem.variant]] of a sweep), compare,\n"
@@ -259,3 +260,4 @@ static tg::app::Registrar reg{{"run", 90,
   tg::app::add_threads_option(sub, o->threads);
   return [o] { return run_study(*o); };
 }}};
+}  // namespace cmd_run

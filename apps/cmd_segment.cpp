@@ -12,7 +12,7 @@
 #include "segmentation/normalise.hpp"
 #include "segmentation/segment.hpp"
 
-namespace {
+namespace cmd_segment {
 
 
 // Any input type as u16: float32 is normalised (auto range, printed), u8
@@ -34,7 +34,7 @@ tg::Volume<uint16_t> to_grey(tg::AnyVolume&& v, const std::string& name, int& to
   throw tg::InputError(name + ": holds uint32 (labels?); segment expects a grey scan (uint16, float32 or uint8)");
 }
 
-}  // namespace
+}  // namespace cmd_segment
 
 namespace tg::app {
 
@@ -42,7 +42,7 @@ int run_segment(SegmentJob& o) {
   tg::ReadOptions ro;
   ro.voxel_um = o.voxel_um;
   int top = 65535;
-  tg::Volume<uint16_t> grey = to_grey(tg::read_volume(o.in, ro), o.in, top);
+  tg::Volume<uint16_t> grey = cmd_segment::to_grey(tg::read_volume(o.in, ro), o.in, top);
   const tg::Geometry geom = grey.geometry();
 
   tg::SegmentOptions s = o.seg;
@@ -125,6 +125,7 @@ int run_segment(SegmentJob& o) {
 
 }  // namespace tg::app
 
+namespace cmd_segment {
 static tg::app::Registrar reg{{"segment", 30,
     "Segment a grey scan into one label per grain or fragment (reference study section 2.2):\n"
     "moment-preserving threshold (Tsai 1985, as Fiji 'Moments'; voxels above it are solid),\n"
@@ -226,3 +227,4 @@ static tg::app::Registrar reg{{"segment", 30,
   sub->add_option("--compress", o->compression, "HDF5 deflate level 0-9")->check(CLI::Range(0, 9))->capture_default_str();
   return [o] { return tg::app::run_segment(*o); };
 }}};
+}  // namespace cmd_segment

@@ -8,15 +8,16 @@
 #include "core/errors.hpp"
 #include "data_synth/scene.hpp"
 
-namespace {
+namespace cmd_synth {
 struct Opts {
   std::string preset = "spheres", out, scene_file;
   int64_t seed = -1, size = 0;
   double voxel_um = 0;
   bool write_float = false;
 };
-}  // namespace
+}  // namespace cmd_synth
 
+namespace cmd_synth {
 static tg::app::Registrar reg{{"synth", 25,
       "Make a synthetic 16-bit XCT scan of a granular specimen whose every grain, fragment and pore is known.\n\n"
       "Writes an HDF5 file with /volume (u16 grey), /labels (u32 truth: the particle covering the largest\n"
@@ -66,3 +67,4 @@ static tg::app::Registrar reg{{"synth", 25,
     return tg::synth::run_synth(std::move(scene), o->out, o->write_float);
   };
 }}};
+}  // namespace cmd_synth

@@ -10,7 +10,7 @@
 #include "core/errors.hpp"
 #include "track/track.hpp"
 
-namespace {
+namespace cmd_track {
 struct Opts {
   std::vector<std::string> in;
   std::string out;
@@ -18,8 +18,9 @@ struct Opts {
   double min_overlap = 0.2, chip_body = 0.7, surface_tol = 1.0, fallback_strain = 0;
   int threads = 0;
 };
-}  // namespace
+}  // namespace cmd_track
 
+namespace cmd_track {
 static tg::app::Registrar reg{{"track", 47,
       "Follow every grain and fragment through the label volumes of loading stages, and classify each\n"
       "breakage event.\n\n"
@@ -89,3 +90,4 @@ static tg::app::Registrar reg{{"track", 47,
     return 0;
   };
 }}};
+}  // namespace cmd_track

@@ -3,14 +3,33 @@ function(tomograin_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic)
 endfunction()
 
-# A module library: tomograin_module(NAME SOURCES... DEPS ...)
+# A module library: tomograin_module(NAME [UNITY] SOURCES... DEPS ...)
+# UNITY compiles the module's sources as one translation unit per 8 files
+# (CMake's unity build): for modules whose files each instantiate the same
+# heavy header code (nlohmann::json, CLI11, Eigen, OpenCV), that code is
+# parsed and generated once per batch instead of once per file. Names in a
+# file's anonymous namespace must then be unique within the module.
 function(tomograin_module name)
-  cmake_parse_arguments(M "" "" "SOURCES;DEPS" ${ARGN})
+  cmake_parse_arguments(M "UNITY" "" "SOURCES;DEPS" ${ARGN})
   add_library(tg_${name} STATIC ${M_SOURCES})
   add_library(tomograin::${name} ALIAS tg_${name})
   target_include_directories(tg_${name} PUBLIC ${PROJECT_SOURCE_DIR})
   target_link_libraries(tg_${name} PUBLIC ${M_DEPS})
   tomograin_warnings(tg_${name})
+  if(M_UNITY)
+    set_target_properties(tg_${name} PROPERTIES UNITY_BUILD ON)
+  endif()
+endfunction()
+
+# Code that only wires the libraries together (the command line, the test
+# suites): in the sanitizer build it is compiled at -O0, because the tests'
+# time is spent in the libraries (still -O1) while these files' generated
+# code (GoogleTest, CLI11, json) is what made the sanitizer build the longest
+# stage of `make test`.
+function(tomograin_glue target)
+  if(TOMOGRAIN_SANITIZE)
+    target_compile_options(${target} PRIVATE -O0)
+  endif()
 endfunction()
 
 # A GoogleTest suite: tomograin_test(NAME SOURCES... DEPS ... [SLOW filter]),
@@ -24,6 +43,7 @@ function(tomograin_test name)
   add_executable(${name} ${T_SOURCES})
   target_link_libraries(${name} PRIVATE ${T_DEPS} GTest::gtest GTest::gtest_main)
   tomograin_warnings(${name})
+  tomograin_glue(${name})
   include(GoogleTest)
   set(env "TOMOGRAIN_SOURCE_DIR=${PROJECT_SOURCE_DIR}")
   if(T_SLOW)

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "core/clock.hpp"
 #include "compare/dem_lineage.hpp"
 #include "compare/dem_stage.hpp"
 #include "compare/report_files.hpp"
@@ -20,10 +21,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 void check_inputs(const CompareInputs& in) {
   if (in.xct.empty()) throw UsageError("compare: give at least one XCT stage (--xct)");

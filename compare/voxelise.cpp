@@ -6,17 +6,11 @@
 #include <limits>
 #include <map>
 
+#include "core/clock.hpp"
 #include "core/errors.hpp"
 #include "data_synth/truth.hpp"
 
 namespace tg::compare {
-namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-}  // namespace
 
 std::pair<Shape, Geometry> voxel_grid(const SphereTable& s, const VoxeliseOptions& opt) {
   if (!(opt.voxel_m > 0) || !std::isfinite(opt.voxel_m)) throw UsageError("voxelise: voxel size must be > 0");

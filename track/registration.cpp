@@ -16,8 +16,6 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-double r_eq(double volume) { return std::cbrt(3 * volume / (4 * std::numbers::pi)); }
-
 bool similar_volume(double va, double vb, double ratio) { return vb <= va * ratio && va <= vb * ratio; }
 
 // Least-squares affine y = M x + t through pairs (a[i], b[j]); false when singular.

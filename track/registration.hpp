@@ -33,10 +33,15 @@
 #pragma once
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
+#include <numbers>
 #include <string>
 #include <vector>
 
 namespace tg::track {
+
+// Radius of the sphere of this volume (any unit cubed -> that unit).
+inline double r_eq(double volume) { return std::cbrt(3 * volume / (4 * std::numbers::pi)); }
 
 struct Point {
   std::array<double, 3> c{0, 0, 0};  // centroid, voxel coordinates (z, y, x)

@@ -78,8 +78,6 @@ struct Overlap {
   int64_t n;
 };
 
-double r_eq(double v) { return std::cbrt(3 * v / (4 * std::numbers::pi)); }
-
 // ov(a, b): voxels of A particle a that land in B label b once moved by M x + shift[a].
 std::vector<Overlap> overlaps(const Volume<uint32_t>& A, const LabelIndex& ia, const Volume<uint32_t>& B,
                               const Eigen::Matrix3d& M, const std::vector<Eigen::Vector3d>& shift, int threads) {
@@ -473,7 +471,10 @@ Table events_table(const TrackResult& r) {
               "volume_after_vox", "cz_vox", "band"});
   for (const EventRow& e : r.events) {
     std::string kids;
-    for (size_t c = 0; c < e.children.size(); ++c) kids += (c ? ";" : "") + std::to_string(e.children[c]);
+    for (size_t c = 0; c < e.children.size(); ++c) {
+      if (c) kids += ';';
+      kids += std::to_string(e.children[c]);
+    }
     t.row({e.stage, static_cast<int64_t>(e.parent_label), static_cast<int64_t>(e.grain), event_name(e.type),
            e.children.size(), kids.empty() ? "-" : kids, e.volume_before_vox, e.volume_after_vox, e.parent_z_vox,
            e.band});

@@ -22,7 +22,7 @@ using namespace tg;
 // ---------------------------------------------------------------- voxelise
 
 struct VoxOpts {
-  std::string in, out, like, field = "spheres";
+  std::string in, out, like, field = "spheres", cluster_body = "hull";
   double voxel_um = 0, margin_vox = 3, cylinder_mm = 15;
   double void_grey = -1, solid_grey = -1, noise = -1, psf = -1;
   uint64_t seed = 1;
@@ -38,6 +38,7 @@ int run_voxelise(const VoxOpts& o) {
   vo.cylinder_diameter_m = o.cylinder_mm * 1e-3;
   vo.grey = !o.no_grey;
   vo.truth = o.truth;
+  vo.cluster_body = compare::cluster_body_from_name(o.cluster_body);
   vo.imaging.seed = o.seed;
   std::string like_note = "data_synth defaults";
   if (!o.like.empty()) {
@@ -69,10 +70,11 @@ int run_voxelise(const VoxOpts& o) {
   const std::string truth_csv = tg::app::beside(o.out, "_truth.csv");
   if (o.truth) write_csv(v.truth, truth_csv);
   const Shape sh = v.labels.shape();
-  fmt::print("voxelised {} spheres as {} particles ({} clusters as separate tangent spheres, {} as exact unions) into "
+  fmt::print("voxelised {} spheres as {} particles ({} clusters as convex-hull bodies, {} as separate tangent spheres, "
+             "{} as exact unions) into "
              "{}x{}x{} voxels of {} um (solid fraction {:.3f}) in {:.2f} s render + {:.2f} s imaging\ngrey: {}\n"
              "wrote {}{}\n",
-             s.size(), v.particle_of_label.size() - 1, v.clusters_split, v.clusters_union, sh.nz, sh.ny, sh.nx,
+             s.size(), v.particle_of_label.size() - 1, v.clusters_hull, v.clusters_split, v.clusters_union, sh.nz, sh.ny, sh.nx,
              o.voxel_um, v.solid_fraction, v.render_s, v.imaging_s, vo.grey ? like_note : "skipped (--no-grey)", o.out,
              o.truth ? " (/volume, /labels, /truth) and " + truth_csv : " (/volume, /labels)");
   return 0;
@@ -83,7 +85,7 @@ int run_voxelise(const VoxOpts& o) {
 struct CmpOpts {
   std::vector<std::string> xct, names, dem_snapshots;
   std::vector<double> xct_strains, dem_strains;
-  std::string dem, out, curve, title = "tomograin: experiment vs DEM", notes;
+  std::string dem, out, curve, title = "tomograin: experiment vs DEM", notes, cluster_body = "hull";
   double voxel_um = 0, grain_radius_vox = 0;
   bool no_like = false, no_imaged = false, synthetic = false, no_plots = false, no_track = false;
   std::string feret = "60";
@@ -109,6 +111,7 @@ int run_compare(const CmpOpts& o) {
   opt.synthetic_xct = o.synthetic;
   opt.plots = !o.no_plots;
   opt.track = !o.no_track;
+  opt.voxelise.cluster_body = compare::cluster_body_from_name(o.cluster_body);
   tg::app::parse_feret_option(o.feret, opt.measure.feret_exact, opt.measure.feret_directions);
   const compare::Report r = compare::run_comparison(in, opt);
   for (const auto& st : r.stages)
@@ -137,8 +140,8 @@ static tg::app::Registrar reg_vox{{"voxelise", 70,
       "maximum of both peaks (the PSF keeps its default).\n\n"
       "Output: HDF5 with /volume (u16 grey), /labels (u32, label l = l-th particle id met in the table); with\n"
       "--truth-table also /truth (exact volume, centroid, Feret per particle, plus the input `particle` id) and\n"
-      "PATH_truth.csv (slow for clusters: ~0.1 s each). Clusters whose spheres do not overlap (DEM fragments:\n"
-      "tangent spheres) render as separate spheres relabelled to one particle (same partial volume, faster).\n"
+      "PATH_truth.csv (slow for clusters: ~0.1 s each). A cluster is imaged as the convex hull of its spheres\n"
+      "(--cluster-body hull, default: the solid body a DEM fragment stands for) or as its spheres (members).\n"
       "Field of view: the spheres' bounding box (default) or the oedometer cylinder, plus --margin voxels.\n\n"
       "Examples:\n"
       "  tomograin voxelise run/snapshots/snap_0003.csv -o scan.h5 --voxel-um 12.3\n"
@@ -162,6 +165,9 @@ static tg::app::Registrar reg_vox{{"voxelise", 70,
   sub->add_option("--seed", o->seed, "Noise seed")->capture_default_str();
   sub->add_flag("--no-grey", o->no_grey, "Labels only (skip the imaging model)");
   sub->add_flag("--truth-table", o->truth, "Also write data_synth's exact truth table (/truth and PATH_truth.csv)");
+  sub->add_option("--cluster-body", o->cluster_body, compare::kClusterBodyHelp)
+      ->check(CLI::IsMember({"hull", "members"}))
+      ->capture_default_str();
   return [o] { return run_voxelise(*o); };
 }}};
 
@@ -207,6 +213,9 @@ static tg::app::Registrar reg_cmp{{"compare", 80,
   sub->add_option("--notes", o->notes, "Free text shown at the top of the report");
   sub->add_flag("--no-like", o->no_like, "Do not estimate grey levels from the scans (data_synth defaults)");
   sub->add_flag("--no-imaged", o->no_imaged, "Skip the imaged DEM path");
+  sub->add_option("--cluster-body", o->cluster_body, compare::kClusterBodyHelp)
+      ->check(CLI::IsMember({"hull", "members"}))
+      ->capture_default_str();
   sub->add_flag("--synthetic", o->synthetic, "Mark the XCT inputs synthetic in the report");
   sub->add_flag("--no-plots", o->no_plots, "Write the CSV/JSON only (no Python)");
   sub->add_flag("--no-track", o->no_track,

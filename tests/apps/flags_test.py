@@ -253,7 +253,8 @@ def main():
             (["--field", "cylinder", "--cylinder-mm", "3"], "shape"),
             (["--void-grey", "5000"], "grey"), (["--solid-grey", "30000"], "grey"), (["--noise", "0"], "grey"),
             (["--psf", "0"], "grey"), (["--seed", "9"], "grey"), (["--field", "cylinder"], "grey"),
-            (["--like", "s.h5"], "grey"), (["--no-grey"], "nogrey")]:
+            (["--like", "s.h5"], "grey"), (["--no-grey"], "nogrey"),
+            (["--cluster-body", "members"], "grey")]:  # particle 1: two tangent spheres, not their hull
             out = "v_" + flags[0].strip("-") + ".h5"
             args = ["voxelise", "spheres.csv", "-o", out] + (["--voxel-um", "20"] if flags[0] != "--voxel-um" else []) + flags
             r = run(args, ok=False)

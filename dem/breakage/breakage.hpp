@@ -60,6 +60,11 @@ namespace tg::dem::breakage {
 enum class SublimitPolicy {
   kRemove,  // removed as fines (volume counted as lost: below the 0.2 mm XCT resolution)
   kKeep,    // stays; the engine's overlap limit may then stop the run
+  // Stays and never breaks (the study: spheres under 0.2 mm are kept,
+  // unbreakable); removed as fines only when squeezed past fines_overlap or
+  // born past it (a fragment sphere in its mother's contact), which no Hertz
+  // contact of so small a sphere can hold: kKeep's stable form.
+  kKeepUnbreakable,
 };
 
 struct BreakageOptions {
@@ -76,8 +81,14 @@ struct BreakageOptions {
   // falls below it. Default 1e-8 s: the study's smallest step. 0 = off (the
   // step follows the smallest fragment down to ~3e-9 s).
   double min_time_step_s = 1e-8;
+  // Which spheres the check may split: true, any sphere of at least
+  // min_split_diameter (cluster elements too); false, only spheres with no
+  // intact bond (grains, and fragment elements whose bonds have all broken):
+  // the study's reading, replacement for grains, bond breakage for fragments
+  // ("isolated spherical grains can always break").
+  bool split_bonded = true;
   SublimitPolicy sublimit = SublimitPolicy::kRemove;
-  // kRemove: a sub-limit sphere whose largest contact overlap exceeds this
+  // kRemove, kKeepUnbreakable: a sub-limit sphere whose largest contact overlap exceeds this
   // fraction of its radius is removed too (the engine stops at overlap_limit,
   // default 0.5, so this must be below it to act first); so is a new
   // fragment sphere (any size) born overlapping a neighbour of its mother or
@@ -132,6 +143,10 @@ class BreakageModel {
   // fines_volume, their bonds dropped, the others renumbered in order
   // (Engine::remove_spheres). Used by check(); public for tests.
   void remove_fines(const std::vector<int64_t>& spheres);
+  // A new intact bond between spheres a and b (any order, a != b), section
+  // from the options, no stored force; particle ids follow at the next check.
+  // Used by the splits; public for tests (a bond between two given spheres).
+  void add_bond(int64_t a, int64_t b);
   // Density scaling factor of sphere s (1 = nominal mass).
   double mass_factor(int64_t s) const { return mass_factor_[s]; }
 

@@ -122,7 +122,9 @@ def run_one(binary, outdir, kind, packing, name):
 
 def figures(outdir, name, kind):
     run = os.path.join(outdir, name)
-    t = json.load(open(run + ".time"))
+    # A run still going (no .time yet): its figures so far (history.csv is
+    # flushed at checkpoints and snapshots).
+    t = json.load(open(run + ".time")) if os.path.exists(run + ".time") else {"rc": 0, "wall_s": None, "cpu_s": None}
     row = {"variant": name, "wall_s": t["wall_s"], "cpu_s": t["cpu_s"]}
     if t["rc"] != 0:
         msg = [l for l in t["stderr"].splitlines() if "tomograin" in l]
@@ -173,7 +175,11 @@ def figures(outdir, name, kind):
 
 
 def table(outdir, kind):
-    names = [n for n in VARIANTS if os.path.exists(os.path.join(outdir, n + ".time"))]
+    def started(n):  # finished, stopped, or running with history rows
+        history = os.path.join(outdir, n, "history.csv")
+        return os.path.exists(os.path.join(outdir, n + ".time")) or (os.path.exists(history) and os.path.getsize(history) > 0)
+
+    names = [n for n in VARIANTS if started(n)]
     rows = [figures(outdir, n, kind) for n in names]
     fmt = lambda p: "-" if p is None else f"{p[0]} / {p[1]}"
     print("| variant | yield MPa | σ at 10 / 15.48 % MPa (max) | grains / bonds broken at yield | at 4 MPa | at end "
@@ -185,11 +191,12 @@ def table(outdir, kind):
             print(f"| {r['variant']} | stopped: {r['stopped']} | | | | | | | | | {r['wall_s']:.0f} / {r['cpu_s']:.0f} |")
             continue
         ke = (f"{r['ke_jump_median']:.2f} / {r['ke_jump_max']:.1f}" if "ke_jump_median" in r else "-")
-        end = "" if r["end_strain"] >= 0.1547 else f" (run ended at {100 * r['end_strain']:.2f} %)"
+        end = "" if r["end_strain"] >= 0.1547 else f" (at {100 * r['end_strain']:.2f} %)"
+        times = "running" if r["wall_s"] is None else f"{r['wall_s']:.0f} / {r['cpu_s']:.0f}"
         print(f"| {r['variant']} | {r['yield_MPa']:.2f} | {r['s10']:.2f} / {r['s1548']:.2f} ({r['smax']:.2f}) "
               f"| {fmt(r['at_yield'])} | {fmt(r['at_4'])} | {fmt(r['at_end'])}{end} | {r['intact_pct']:.1f} "
               f"| {', '.join(map(str, r['fifths']))} | {r['gen1plus']} / {r['fines']} / {r['spheres']} | {ke} "
-              f"| {r['wall_s']:.0f} / {r['cpu_s']:.0f} |")
+              f"| {times} |")
 
 
 def main():

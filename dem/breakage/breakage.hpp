@@ -5,14 +5,16 @@
 //
 // Per step (engine force hook, after the contact forces are gathered):
 //   every intact bond is updated (parallel_bond.hpp) from the half-step
-//   velocities, its forces and moments are added to its two spheres, and it
+//   velocities, its forces and moments (and its dashpot's force, when
+//   bond damping is on) are added to its two spheres, and it
 //   breaks (is removed) once its peak normal or shear stress exceeds the
 //   strength. The bond acts IN PARALLEL with the Hertz–Mindlin contact of the
 //   two spheres, as in Potyondy & Cundall (2004): bonded spheres are created
 //   exactly tangent, so the contact only carries compression, and after the
 //   bond breaks the plain contact is all that remains.
 // Every `check_interval` steps (check()):
-//   for every sphere with d ≥ min_split_diameter, F_max = its largest normal
+//   for every sphere with d ≥ min_split_diameter (and, with split_bonded
+//   false, no intact bond), F_max = its largest normal
 //   contact force (sphere and wall contacts, last force evaluation);
 //   σ = F_max/d² is compared with its strength (strength.hpp). Each sphere
 //   over its strength (ascending index) is split: splitting plane from its

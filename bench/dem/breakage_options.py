@@ -193,6 +193,8 @@ def table(outdir, kind):
         ke = (f"{r['ke_jump_median']:.2f} / {r['ke_jump_max']:.1f}" if "ke_jump_median" in r else "-")
         end = "" if r["end_strain"] >= 0.1547 else f" (at {100 * r['end_strain']:.2f} %)"
         times = "running" if r["wall_s"] is None else f"{r['wall_s']:.0f} / {r['cpu_s']:.0f}"
+        if r["wall_s"] is None:  # the bilinear fit needs the whole curve
+            r["yield_MPa"], r["at_yield"] = float("nan"), None
         print(f"| {r['variant']} | {r['yield_MPa']:.2f} | {r['s10']:.2f} / {r['s1548']:.2f} ({r['smax']:.2f}) "
               f"| {fmt(r['at_yield'])} | {fmt(r['at_4'])} | {fmt(r['at_end'])}{end} | {r['intact_pct']:.1f} "
               f"| {', '.join(map(str, r['fifths']))} | {r['gen1plus']} / {r['fines']} / {r['spheres']} | {ke} "

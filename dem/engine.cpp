@@ -252,8 +252,29 @@ void Engine::compute_forces(bool kick, bool drift_next) {
   // contact statistics); a scene without one does not write them.
   keep_slots_ = static_cast<bool>(force_hook_);
   compute_pair_forces();
-  gather_forces(kick, drift_next);
+  // With a hook (bonds) and damping of the total force, the gather leaves
+  // the forces undamped and the damping follows the hook's additions.
+  const bool damp_after = force_hook_ && opt_.local_damping_total && opt_.local_damping > 0;
+  gather_forces(kick, drift_next, damp_after ? 0.0 : opt_.local_damping);
   if (force_hook_) force_hook_(*this);
+  if (damp_after) damp_total_forces();
+}
+
+void Engine::damp_total_forces() {
+  // The velocities are the half-step ones the gather's damping reads (the
+  // closing kick comes after the hook); each sphere is independent.
+  Particles& p = p_;
+  const int64_t n = p.size();
+  const double alpha = opt_.local_damping;
+#pragma omp parallel for schedule(static) if (parallel(n))
+  for (int64_t s = 0; s < n; ++s) {
+    p.fx[s] = local_damping(p.fx[s], p.vx[s], alpha);
+    p.fy[s] = local_damping(p.fy[s], p.vy[s], alpha);
+    p.fz[s] = local_damping(p.fz[s], p.vz[s], alpha);
+    p.tx[s] = local_damping(p.tx[s], p.wx[s], alpha);
+    p.ty[s] = local_damping(p.ty[s], p.wy[s], alpha);
+    p.tz[s] = local_damping(p.tz[s], p.wz[s], alpha);
+  }
 }
 
 void Engine::set_time_step(double dt) {
@@ -304,7 +325,7 @@ void Engine::compute_pair_forces() {
 // The gather's body is the lane kernel of dem/contact/kernels.hpp: per
 // block of spheres, the parts' sums, then the wall contacts W a time, then
 // damping and (kick) the closing half kick.
-void Engine::gather_forces(bool kick, bool drift_next) {
+void Engine::gather_forces(bool kick, bool drift_next, double alpha) {
   const int64_t n = p_.size();
   Particles& p = p_;
   const Walls& w = opt_.walls;
@@ -317,7 +338,7 @@ void Engine::gather_forces(bool kick, bool drift_next) {
                         p.hcx.data(), p.hcy.data(), p.hcz.data(),
                         p.flags.data(), kFlagFixed, wall_f_.data(), bad_.data(),
                         law_platen_, law_cyl_, w.bottom, w.top, w.cylinder, w.top_z, w.top_vz, w.cylinder_radius,
-                        opt_.time_step, opt_.overlap_limit, opt_.local_damping, n, kick,
+                        opt_.time_step, opt_.overlap_limit, alpha, n, kick,
                         drift_next, x0_.data(), y0_.data(), z0_.data(), n_built, 0.25 * opt_.skin * opt_.skin};
   const GatherKernel gather = kernels_.gather;
   // The kicks' blocks of spheres (kSphereBlock), so that each thread gathers

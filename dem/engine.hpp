@@ -93,6 +93,12 @@ struct EngineOptions {
   double restitution = 0.5;
   // PFC local non-viscous damping α (F -= α |F| sign v per component); 0 = off.
   double local_damping = 0.0;
+  // What local damping acts on. false: the contact, wall and gravity forces
+  // (the gather damps them before the force hook adds bond forces, so a
+  // bonded cluster is an undamped spring network); true: the total force on
+  // each sphere, bond forces included (PFC damps the unbalanced force). The
+  // same without a force hook (nothing is added after the gather).
+  bool local_damping_total = false;
   double gravity_z = -9.81;       // m/s²
   double time_step = 1e-7;        // s (the study: 1e-8 .. 1e-7)
   double skin = 2e-4;             // neighbour skin, m (LIGGGHTS peer: 0.2 mm)
@@ -198,7 +204,11 @@ class Engine {
   // Whether a loop over `items` runs on the OpenMP team (enough items, and
   // more than one thread).
   bool parallel(int64_t items) const;
-  void gather_forces(bool kick, bool drift_next);
+  // alpha: the local damping the gather applies (0 when it is applied to
+  // the total force after the hook instead).
+  void gather_forces(bool kick, bool drift_next, double alpha);
+  // Local damping of the total force and torque of every sphere (after the hook).
+  void damp_total_forces();
   [[noreturn]] void explode(const std::string& what) const;
 
   Particles p_;

@@ -49,6 +49,7 @@ void BreakageModel::add_bond_forces(Engine& e) {
   if (nb == 0) return;
   Particles& p = e.particles();
   const double dt = e.options().time_step;
+  const bool dashpots = opt_.bond.damping_ratio > 0;
   loads_.resize(nb);
   int any_broken = 0;
   // Each bond writes only its own slots: thread-independent.
@@ -61,11 +62,15 @@ void BreakageModel::add_bond_forces(Engine& e) {
     const Vec3 c = bond_point(xa, p.r[i], xb, p.r[j]);
     const Vec3 wa = spin(p, i), wb = spin(p, j);
     const Vec3 v_rel = (vel(p, j) + cross(wb, c - xb)) - (vel(p, i) + cross(wa, c - xa));
-    update_bond(section_[b], {n, v_rel, wb - wa}, dt, state_[b]);
+    const BondKinematics kin{n, v_rel, wb - wa};
+    update_bond(section_[b], kin, dt, state_[b]);
     if (bond_breaks(opt_.bond, section_[b], state_[b])) {
       broken_[b] = 1;
       any_broken = 1;
       loads_[b] = BondLoads{};
+    } else if (dashpots) {
+      const Vec3 dash = bond_dashpot_force(opt_.bond, section_[b], kin, p.m[i] * p.m[j] / (p.m[i] + p.m[j]));
+      loads_[b] = bond_loads(state_[b], n, xa, xb, c, &dash);
     } else {
       loads_[b] = bond_loads(state_[b], n, xa, xb, c);
     }
@@ -161,9 +166,17 @@ int BreakageModel::check() {
   // check, before any sphere is replaced.
   std::vector<SplitEvent> todo;
   std::vector<int64_t> fines;
-  const bool remove = opt_.sublimit == SublimitPolicy::kRemove;
+  // remove: squeezed sub-limit spheres and deep-born fragment spheres are
+  // fines; remove_over: so are sub-limit spheres over their strength.
+  const bool remove = opt_.sublimit != SublimitPolicy::kKeep;
+  const bool remove_over = opt_.sublimit == SublimitPolicy::kRemove;
   std::vector<double> overlap;
   if (remove) overlap = max_overlap_ratios();
+  std::vector<uint8_t> bonded;  // split_bonded = false: spheres with an intact bond
+  if (!opt_.split_bonded) {
+    bonded.assign(n, 0);
+    for (size_t b = 0; b < ba_.size(); ++b) bonded[ba_[b]] = bonded[bb_[b]] = 1;
+  }
   for (int64_t s = 0; s < n; ++s) {
     const double d = 2 * p.r[s];
     if (!(p.flags[s] & kFlagBreakable)) continue;
@@ -171,10 +184,10 @@ int BreakageModel::check() {
     if (d < opt_.min_split_diameter_m) {
       // Sub-limit: it would break into pieces below the resolution, or it is
       // being pushed through a neighbour its Hertz stiffness cannot resist.
-      if (remove && (over || overlap[s] > opt_.fines_overlap)) fines.push_back(s);
+      if (remove && ((remove_over && over) || overlap[s] > opt_.fines_overlap)) fines.push_back(s);
       continue;
     }
-    if (!over) continue;
+    if (!over || (!opt_.split_bonded && bonded[s])) continue;
     const double sigma = fmax[s] / (d * d);
     const std::vector<ContactLoad> c = contacts_of(s);
     const double volume = std::numbers::pi / 6 * d * d * d;
@@ -293,15 +306,7 @@ Replacement BreakageModel::split(int64_t s, const SplittingPlane& plane) {
     strength_[t] = sphere_strength(opt_.strength, key_[t], 2 * ns.r);
     mass_factor_[t] = factor_mother;
   }
-  for (auto b : rep.bonds) {
-    const int64_t i = idx[b[0]], j = idx[b[1]];
-    ba_.push_back(std::min(i, j));
-    bb_.push_back(std::max(i, j));
-    section_.push_back(bond_section(opt_.bond, p.r[i], p.r[j]));
-    state_.push_back(BondState{});
-    broken_.push_back(0);
-  }
-  bonds_changed_ = true;
+  for (auto b : rep.bonds) add_bond(idx[b[0]], idx[b[1]]);
   if (opt_.min_time_step_s > 0) {
     // Selective density scaling: each new sphere's own critical step (its
     // mass against its stiffest springs: Hertz at the reference overlap and
@@ -328,6 +333,18 @@ Replacement BreakageModel::split(int64_t s, const SplittingPlane& plane) {
     }
   }
   return rep;
+}
+
+void BreakageModel::add_bond(int64_t a, int64_t b) {
+  const Particles& p = eng_.particles();
+  if (a == b || a < 0 || b < 0 || a >= p.size() || b >= p.size())
+    throw std::logic_error("BreakageModel::add_bond: bad sphere indices");
+  ba_.push_back(std::min(a, b));
+  bb_.push_back(std::max(a, b));
+  section_.push_back(bond_section(opt_.bond, p.r[a], p.r[b]));
+  state_.push_back(BondState{});
+  broken_.push_back(0);
+  bonds_changed_ = true;
 }
 
 void BreakageModel::remove_fines(const std::vector<int64_t>& spheres) {

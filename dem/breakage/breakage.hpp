@@ -5,14 +5,16 @@
 //
 // Per step (engine force hook, after the contact forces are gathered):
 //   every intact bond is updated (parallel_bond.hpp) from the half-step
-//   velocities, its forces and moments are added to its two spheres, and it
+//   velocities, its forces and moments (and its dashpot's force, when
+//   bond damping is on) are added to its two spheres, and it
 //   breaks (is removed) once its peak normal or shear stress exceeds the
 //   strength. The bond acts IN PARALLEL with the Hertz–Mindlin contact of the
 //   two spheres, as in Potyondy & Cundall (2004): bonded spheres are created
 //   exactly tangent, so the contact only carries compression, and after the
 //   bond breaks the plain contact is all that remains.
 // Every `check_interval` steps (check()):
-//   for every sphere with d ≥ min_split_diameter, F_max = its largest normal
+//   for every sphere with d ≥ min_split_diameter (and, with split_bonded
+//   false, no intact bond), F_max = its largest normal
 //   contact force (sphere and wall contacts, last force evaluation);
 //   σ = F_max/d² is compared with its strength (strength.hpp). Each sphere
 //   over its strength (ascending index) is split: splitting plane from its
@@ -60,6 +62,11 @@ namespace tg::dem::breakage {
 enum class SublimitPolicy {
   kRemove,  // removed as fines (volume counted as lost: below the 0.2 mm XCT resolution)
   kKeep,    // stays; the engine's overlap limit may then stop the run
+  // Stays and never breaks (the study: spheres under 0.2 mm are kept,
+  // unbreakable); removed as fines only when squeezed past fines_overlap or
+  // born past it (a fragment sphere in its mother's contact), which no Hertz
+  // contact of so small a sphere can hold: kKeep's stable form.
+  kKeepUnbreakable,
 };
 
 struct BreakageOptions {
@@ -76,8 +83,14 @@ struct BreakageOptions {
   // falls below it. Default 1e-8 s: the study's smallest step. 0 = off (the
   // step follows the smallest fragment down to ~3e-9 s).
   double min_time_step_s = 1e-8;
+  // Which spheres the check may split: true, any sphere of at least
+  // min_split_diameter (cluster elements too); false, only spheres with no
+  // intact bond (grains, and fragment elements whose bonds have all broken):
+  // the study's reading, replacement for grains, bond breakage for fragments
+  // ("isolated spherical grains can always break").
+  bool split_bonded = true;
   SublimitPolicy sublimit = SublimitPolicy::kRemove;
-  // kRemove: a sub-limit sphere whose largest contact overlap exceeds this
+  // kRemove, kKeepUnbreakable: a sub-limit sphere whose largest contact overlap exceeds this
   // fraction of its radius is removed too (the engine stops at overlap_limit,
   // default 0.5, so this must be below it to act first); so is a new
   // fragment sphere (any size) born overlapping a neighbour of its mother or
@@ -132,6 +145,10 @@ class BreakageModel {
   // fines_volume, their bonds dropped, the others renumbered in order
   // (Engine::remove_spheres). Used by check(); public for tests.
   void remove_fines(const std::vector<int64_t>& spheres);
+  // A new intact bond between spheres a and b (any order, a != b), section
+  // from the options, no stored force; particle ids follow at the next check.
+  // Used by the splits; public for tests (a bond between two given spheres).
+  void add_bond(int64_t a, int64_t b);
   // Density scaling factor of sphere s (1 = nominal mass).
   double mass_factor(int64_t s) const { return mass_factor_[s]; }
 

@@ -16,6 +16,8 @@ void validate(const ParallelBondParams& p) {
   positive(p.shear_modulus_Pa, "shear modulus");
   positive(p.tensile_strength_Pa, "normal (tensile) strength");
   positive(p.shear_strength_Pa, "shear strength");
+  if (!(p.damping_ratio >= 0 && p.damping_ratio <= 1))
+    throw InputError("parallel bond: damping ratio must be in [0, 1], got " + std::to_string(p.damping_ratio));
 }
 
 }  // namespace tg::dem::breakage

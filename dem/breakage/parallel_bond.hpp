@@ -17,11 +17,12 @@
 // Parameters of the reference study (§4.2, Table 1): k̄n = E/(RA+RB),
 // k̄s = G/(RA+RB) (Pa/m; E = 2G(1+ν)); σ̄c = τ̄c = 3.3 MPa; radius multiplier
 // λ = 1.25. The study defines λ = 1 as "the radius of the cross-section is the
-// average of the radii of the two connected spheres", so here
+// average of the radii of the two connected spheres", so by default
 //   R̄ = λ (RA + RB)/2
-// (NOT the λ·min(RA, RB) of the original P&C paper and of PFC; the two agree
-// for equal spheres; for the template's 0.45/0.26 pairs the study's form gives
-// a bond ~35 % wider than λ·min).
+// (BondRadiusRule::kMin gives the λ·min(RA, RB) of the original P&C paper and
+// of PFC, which the study ran; the two agree for equal spheres; for the
+// template's 0.45/0.26 pairs the study's form gives a bond ~35 % wider).
+// Optional dashpots (bond_dashpot_force) damp the bond's relative motion.
 //
 // Sign conventions: n is the unit vector from A to B; F̄n > 0 is compression;
 // the force on B is F̄n n + F̄s (on A: the opposite); the moment on B is
@@ -29,6 +30,7 @@
 // centre, applied at the bond point (on the line of centres, midway through
 // the gap). Cost: O(1) per bond per step, no allocation.
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -36,8 +38,19 @@
 
 namespace tg::dem::breakage {
 
+// Which radius λ multiplies: the study's "average of the radii" (λ = 1:
+// R̄ = (RA + RB)/2) or P&C's and PFC's smaller radius (R̄ = λ min(RA, RB)).
+// The two agree for equal spheres.
+enum class BondRadiusRule { kMean, kMin };
+
 struct ParallelBondParams {
   double radius_multiplier = 1.25;  // λ (Table 1)
+  BondRadiusRule radius_rule = BondRadiusRule::kMean;  // the study's text
+  // Bond dashpots: critical-damping ratio β of the bond's axial (k̄n A) and
+  // shear (k̄s A) springs for the two-body oscillator (reduced mass m* =
+  // mA mB/(mA + mB)), as PFC's parallel-bond dashpots and LIGGGHTS' bond
+  // damping; 0 = none (an undamped spring network).
+  double damping_ratio = 0;
   double youngs_modulus_Pa = 5.5e9;  // E = 2G(1+ν) with G = 2.2 GPa, ν = 0.25
   double shear_modulus_Pa = 2.2e9;   // G (Table 1)
   double tensile_strength_Pa = 3.3e6;  // σ̄c (Table 1)
@@ -59,7 +72,7 @@ struct BondSection {
 inline BondSection bond_section(const ParallelBondParams& p, double ra, double rb) {
   constexpr double pi = std::numbers::pi;
   BondSection s;
-  s.radius = p.radius_multiplier * 0.5 * (ra + rb);
+  s.radius = p.radius_multiplier * (p.radius_rule == BondRadiusRule::kMin ? std::min(ra, rb) : 0.5 * (ra + rb));
   const double r2 = s.radius * s.radius;
   s.area = pi * r2;
   s.inertia = pi * r2 * r2 / 4;
@@ -126,13 +139,30 @@ inline bool bond_breaks(const ParallelBondParams& p, const BondSection& s, const
 inline double bond_axial_stiffness(const BondSection& s) { return s.kn * s.area; }
 inline double bond_bending_stiffness(const BondSection& s) { return s.kn * s.inertia; }
 
-// Forces and moments on the two spheres, given the bond point c and the centres.
+// Dashpot force on B (p.damping_ratio = β > 0): −c_n v_n n − c_s v_s with
+// c = 2β√(m* k) for k = k̄n A (normal) and k̄s A (shear), v the relative
+// velocity of the bond points (k.v_rel); m* the reduced mass. It acts at the
+// bond point in parallel with the bond and holds no state: not part of the
+// bond's force (F̄n, F̄s) or of its peak stresses (as PFC's dashpots, which
+// act beside the bond's spring forces).
+inline Vec3 bond_dashpot_force(const ParallelBondParams& p, const BondSection& s, const BondKinematics& k, double m_eff) {
+  const double vn = dot(k.v_rel, k.n);
+  const Vec3 vs = k.v_rel - vn * k.n;
+  const double cn = 2 * p.damping_ratio * std::sqrt(m_eff * s.kn * s.area);
+  const double cs = 2 * p.damping_ratio * std::sqrt(m_eff * s.ks * s.area);
+  return -(cn * vn) * k.n - cs * vs;
+}
+
+// Forces and moments on the two spheres, given the bond point c and the
+// centres; `extra`: a force on B at c besides the bond's (its dashpot;
+// none: the bond's force alone, not a sum with zero).
 struct BondLoads {
   Vec3 force_on_b;  // on A: −force_on_b
   Vec3 torque_on_a, torque_on_b;
 };
-inline BondLoads bond_loads(const BondState& b, Vec3 n, Vec3 xa, Vec3 xb, Vec3 c) {
-  const Vec3 f = b.fn * n + b.fs;
+inline BondLoads bond_loads(const BondState& b, Vec3 n, Vec3 xa, Vec3 xb, Vec3 c, const Vec3* extra = nullptr) {
+  Vec3 f = b.fn * n + b.fs;
+  if (extra) f = f + *extra;
   const Vec3 m = b.mt * n + b.mb;
   return {f, cross(c - xa, -f) - m, cross(c - xb, f) + m};
 }

@@ -93,7 +93,7 @@ struct GatherArgs {
   HertzMindlin law_platen, law_cyl;
   bool bottom, top, cylinder;
   double top_z, top_vz, cylinder_radius;
-  double dt, overlap_limit, local_damping;
+  double dt, overlap_limit, local_damping;  // 0: no damping in the gather
   int64_t n;
   bool kick;   // end each sphere with the closing half kick
   bool drift;  // then the next step's opening half kick and drift, and its skin test:
@@ -113,6 +113,15 @@ struct ContactKernels {
   PairPartKernel pairs = nullptr;
   GatherKernel gather = nullptr;
 };
+
+// PFC local non-viscous damping α of one force (or torque) component f of
+// a body whose velocity (spin) component is v: α|f| against the motion.
+// The gather's damping of the contact force and the engine's damping of the
+// total force (EngineOptions::local_damping_total) both call this one;
+// always inlined, as the kernels' other helpers (see the note above).
+[[gnu::always_inline]] inline double local_damping(double f, double v, double alpha) {
+  return v > 0 ? f - alpha * __builtin_fabs(f) : v < 0 ? f + alpha * __builtin_fabs(f) : f;
+}
 
 enum class KernelIsa { kAuto, kSse2, kAvx2, kAvx512 };
 // Whether this build has the kernels and this CPU can run them.
@@ -477,11 +486,8 @@ int gather_block(const GatherArgs& a, int64_t from, int64_t to) {
     a.wall_f[3 * s + 1] = fw[1];
     a.wall_f[3 * s + 2] = fw[2];
     if (alpha > 0) {  // PFC local damping: oppose the velocity with α|F|
-      auto damp = [alpha](double fv, double v) {
-        return v > 0 ? fv - alpha * __builtin_fabs(fv) : v < 0 ? fv + alpha * __builtin_fabs(fv) : fv;
-      };
-      f = {damp(f.x, a.vx[s]), damp(f.y, a.vy[s]), damp(f.z, a.vz[s])};
-      t = {damp(t.x, a.wx[s]), damp(t.y, a.wy[s]), damp(t.z, a.wz[s])};
+      f = {local_damping(f.x, a.vx[s], alpha), local_damping(f.y, a.vy[s], alpha), local_damping(f.z, a.vz[s], alpha)};
+      t = {local_damping(t.x, a.wx[s], alpha), local_damping(t.y, a.wy[s], alpha), local_damping(t.z, a.wz[s], alpha)};
     }
     a.fx[s] = f.x, a.fy[s] = f.y, a.fz[s] = f.z;
     a.tx[s] = t.x, a.ty[s] = t.y, a.tz[s] = t.z;

@@ -119,7 +119,9 @@ TEST(Oedometer, RunFolderHasHistoryAndSnapshots) {
     EXPECT_LE(e.axial_strain, requested[k] + 0.5 * r.time_step / r.initial_height_m + 1e-12);
     EXPECT_TRUE(fs::exists(run.snapshot_path(k))) << e.file;
     EXPECT_EQ(e.bonds.empty(), !s.breakage);  // the bonds sidecar is declared when the run breaks grains
-    if (!e.bonds.empty()) EXPECT_TRUE(fs::exists(d / "run" / e.bonds)) << e.bonds;
+    if (!e.bonds.empty()) {
+      EXPECT_TRUE(fs::exists(d / "run" / e.bonds)) << e.bonds;
+    }
   }
   EXPECT_EQ(run.history.rows(), h.rows());
   EXPECT_THROW(read_run_folder(d), InputError);  // no snapshots.csv: not a run folder

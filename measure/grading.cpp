@@ -12,7 +12,6 @@
 namespace tg::measure {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kR40 = 40;  // sizes 10^(k/40) mm
 
 double r40(int k) { return std::pow(10.0, k / kR40); }

@@ -10,8 +10,6 @@
 namespace tg::measure {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 void check_sieves(std::span<const double> s) {
   if (s.empty()) throw UsageError("PSD: no sieve sizes");
   for (size_t k = 0; k < s.size(); ++k)

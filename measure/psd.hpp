@@ -32,11 +32,15 @@
 // particles count, D-values from the sorted table, the default sieves) is
 // measure/grading.hpp.
 #pragma once
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
 
 namespace tg::measure {
+
+// A figure that is undefined (an empty distribution, a diameter outside the sieves).
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Percent passing (0..100) at each sieve (ascending, > 0). sizes and masses
 // have one entry per particle; masses >= 0 with a positive total.

@@ -68,14 +68,6 @@ bool members_disjoint(const synth::Piece* begin, const synth::Piece* end, double
   return true;
 }
 
-double dot3(const synth::Vec3& a, const synth::Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-synth::Vec3 cross3(const synth::Vec3& a, const synth::Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-synth::Vec3 unit3(const synth::Vec3& a) {
-  const double n = std::sqrt(dot3(a, a));
-  return {a[0] / n, a[1] / n, a[2] / n};
-}
 
 }  // namespace
 
@@ -104,7 +96,7 @@ synth::Particle hull_body(const synth::Particle& cluster, int directions) {
   const double tol = 1e-9 * std::max(scale, 1.0);
   auto support = [&](const synth::Vec3& u) {
     double h = std::numeric_limits<double>::lowest();
-    for (const auto& s : m) h = std::max(h, dot3(u, s.c) + s.r);
+    for (const auto& s : m) h = std::max(h, synth::dot(u, s.c) + s.r);
     return h;
   };
   std::vector<synth::Vec3> dirs;
@@ -121,17 +113,17 @@ synth::Particle hull_body(const synth::Particle& cluster, int directions) {
     for (size_t a = 0; a < n; ++a)
       for (size_t b = a + 1; b < n; ++b) {
         const synth::Vec3 w{m[a].c[0] - m[b].c[0], m[a].c[1] - m[b].c[1], m[a].c[2] - m[b].c[2]};
-        const double d = std::sqrt(dot3(w, w));
+        const double d = std::sqrt(synth::dot(w, w));
         if (!(d > std::abs(m[a].r - m[b].r))) continue;  // one inside the other: no cone
-        const synth::Vec3 e0 = unit3(w);
-        const synth::Vec3 e1 = unit3(cross3(e0, std::abs(e0[0]) < 0.9 ? synth::Vec3{1, 0, 0} : synth::Vec3{0, 1, 0}));
-        const synth::Vec3 e2 = cross3(e0, e1);
+        const synth::Vec3 e0 = synth::unit(w);
+        const synth::Vec3 e1 = synth::unit(synth::cross(e0, std::abs(e0[0]) < 0.9 ? synth::Vec3{1, 0, 0} : synth::Vec3{0, 1, 0}));
+        const synth::Vec3 e2 = synth::cross(e0, e1);
         const double ca = (m[b].r - m[a].r) / d, sa = std::sqrt(1 - ca * ca);
         for (int k = 0; k < kCircle; ++k) {
           const double t = 2 * std::numbers::pi * k / kCircle, ct = std::cos(t), st = std::sin(t);
           const synth::Vec3 u{ca * e0[0] + sa * (ct * e1[0] + st * e2[0]), ca * e0[1] + sa * (ct * e1[1] + st * e2[1]),
                               ca * e0[2] + sa * (ct * e1[2] + st * e2[2])};
-          if (support(u) <= dot3(u, m[a].c) + m[a].r + tol) dirs.push_back(u);
+          if (support(u) <= synth::dot(u, m[a].c) + m[a].r + tol) dirs.push_back(u);
         }
       }
   // (a) Facets: u·(c_a − c_b) = r_b − r_a, u·(c_a − c_c) = r_c − r_a, |u| = 1
@@ -143,17 +135,17 @@ synth::Particle hull_body(const synth::Particle& cluster, int directions) {
           const synth::Vec3 p{m[a].c[0] - m[b].c[0], m[a].c[1] - m[b].c[1], m[a].c[2] - m[b].c[2]};
           const synth::Vec3 q{m[a].c[0] - m[c].c[0], m[a].c[1] - m[c].c[1], m[a].c[2] - m[c].c[2]};
           const double bp = m[b].r - m[a].r, bq = m[c].r - m[a].r;
-          const synth::Vec3 x = cross3(p, q);
-          const double pp = dot3(p, p), qq = dot3(q, q), pq = dot3(p, q), det = pp * qq - pq * pq;
+          const synth::Vec3 x = synth::cross(p, q);
+          const double pp = synth::dot(p, p), qq = synth::dot(q, q), pq = synth::dot(p, q), det = pp * qq - pq * pq;
           if (!(det > 1e-12 * pp * qq)) continue;  // centres collinear
           const double al = (bp * qq - bq * pq) / det, be = (bq * pp - bp * pq) / det;
           const synth::Vec3 u0{al * p[0] + be * q[0], al * p[1] + be * q[1], al * p[2] + be * q[2]};
-          const double rest = 1 - dot3(u0, u0);
+          const double rest = 1 - synth::dot(u0, u0);
           if (rest < 0) continue;
-          const double t = std::sqrt(rest / dot3(x, x));
+          const double t = std::sqrt(rest / synth::dot(x, x));
           for (double sgn : {-1.0, 1.0}) {
             const synth::Vec3 u{u0[0] + sgn * t * x[0], u0[1] + sgn * t * x[1], u0[2] + sgn * t * x[2]};
-            if (support(u) <= dot3(u, m[a].c) + m[a].r + tol) dirs.push_back(u);
+            if (support(u) <= synth::dot(u, m[a].c) + m[a].r + tol) dirs.push_back(u);
           }
         }
   synth::Particle body;
@@ -166,7 +158,7 @@ synth::Particle hull_body(const synth::Particle& cluster, int directions) {
   for (const auto& s : m)
     for (int k = 0; k < 3; ++k) mid[k] += s.c[k] / static_cast<double>(n);
   double reach = 0;
-  for (const auto& s : m) reach = std::max(reach, std::sqrt(dot3({s.c[0] - mid[0], s.c[1] - mid[1], s.c[2] - mid[2]},
+  for (const auto& s : m) reach = std::max(reach, std::sqrt(synth::dot({s.c[0] - mid[0], s.c[1] - mid[1], s.c[2] - mid[2]},
                                                                  {s.c[0] - mid[0], s.c[1] - mid[1], s.c[2] - mid[2]})) + s.r);
   piece.sphere = synth::Sphere{mid, reach};
   for (const synth::Vec3& u : dirs) piece.planes.push_back(synth::HalfSpace{u, support(u)});

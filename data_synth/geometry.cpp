@@ -13,7 +13,6 @@ namespace tg::synth {
 
 namespace {
 constexpr const char* kNames[] = {"grain", "half", "multi", "chip", "chipped", "cluster"};
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 double sphere_volume(double r) { return 4.0 / 3.0 * std::numbers::pi * r * r * r; }
 }  // namespace
 

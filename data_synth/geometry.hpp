@@ -19,6 +19,7 @@
 //   auto t = tg::synth::particle_truth(ps[0]);                // exact volume, centroid, Feret
 #pragma once
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -29,6 +30,17 @@
 namespace tg::synth {
 
 using Vec3 = std::array<double, 3>;  // (z, y, x), voxel units
+
+// Vector algebra on Vec3, one set for data_synth and the code that renders with it (compare/voxelise).
+inline double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+// The unit vector along v; +z for the zero vector (a degenerate direction still gives a valid plane).
+inline Vec3 unit(const Vec3& v) {
+  const double l = std::sqrt(dot(v, v));
+  return l > 0 ? Vec3{v[0] / l, v[1] / l, v[2] / l} : Vec3{0, 0, 1};
+}
 
 struct Sphere {
   Vec3 c{0, 0, 0};

@@ -11,14 +11,6 @@ namespace tg::synth {
 
 namespace {
 
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-Vec3 unit(Vec3 v) {
-  const double l = std::sqrt(dot(v, v));
-  return {v[0] / l, v[1] / l, v[2] / l};
-}
 // Random unit vector from draws n..n+5 of the grain's stream.
 Vec3 random_direction(uint64_t seed, uint64_t key, uint64_t n) {
   Vec3 v{normal01(seed, key, n), normal01(seed, key, n + 2), normal01(seed, key, n + 4)};

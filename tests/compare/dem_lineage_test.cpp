@@ -81,8 +81,11 @@ TEST(DemLineage, ComposesOverSkippedSnapshots) {
   EXPECT_EQ(r.summary[1].fragmentation, 1);  // three pieces, the largest half of the total: < 0.7
   EXPECT_EQ(r.summary[1].split + r.summary[1].chipping, 0);
   EXPECT_DOUBLE_EQ(r.summary[1].pct_intact_broken, 50);
-  for (const auto& row : r.lineage)
-    if (row.stage == 1) EXPECT_EQ(row.parent_label, row.label == 2 ? 2u : 1u) << row.label;  // B (label 2) or A (label 1)
+  for (const auto& row : r.lineage) {
+    if (row.stage == 1) {
+      EXPECT_EQ(row.parent_label, row.label == 2 ? 2u : 1u) << row.label;  // B (label 2) or A (label 1)
+    }
+  }
 }
 
 TEST(DemLineage, SameSnapshotTwiceIsIntact) {

@@ -10,10 +10,9 @@
 #include "data_synth/partial_volume.hpp"
 
 using namespace tg::synth;
-constexpr double kPi = std::numbers::pi;
 
 namespace {
-double sphere_volume(double r) { return 4.0 / 3.0 * kPi * r * r * r; }
+double sphere_volume(double r) { return 4.0 / 3.0 * std::numbers::pi * r * r * r; }
 }
 
 TEST(Granule, FragmentsWithoutGapRebuildTheSphere) {

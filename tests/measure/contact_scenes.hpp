@@ -99,6 +99,11 @@ inline Volume<uint32_t> render_scene(const Scene& s, int64_t n, double voxel_m) 
 
 // A one-voxel 26-separating line between touching labels: a voxel gives way
 // when a smaller non-zero label is among its 26 neighbours (in the input).
+// Angle between two directions, degrees.
+inline double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180 / std::numbers::pi;
+}
+
 inline Volume<uint32_t> cut_lines(const Volume<uint32_t>& in) {
   Volume<uint32_t> out = in.clone();
   const Shape s = in.shape();

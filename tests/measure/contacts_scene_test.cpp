@@ -41,14 +41,12 @@ namespace {
 using V3 = Eigen::Vector3d;
 using test::Scene;
 using test::cut_lines;
-constexpr double kVoxel = 1e-5;
+constexpr double kSceneVoxel = 1e-5;
 
 Scene grow_scene(int64_t n, unsigned seed, int target) { return test::grow_scene(n, seed, target); }
-Volume<uint32_t> render_scene(const Scene& s, int64_t n) { return test::render_scene(s, n, kVoxel); }
+Volume<uint32_t> render_scene(const Scene& s, int64_t n) { return test::render_scene(s, n, kSceneVoxel); }
 
-double angle_deg(const V3& a, const V3& b) {
-  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180 / std::numbers::pi;
-}
+using test::angle_deg;
 
 struct Score {
   int interior = 0, right = 0;
@@ -83,14 +81,14 @@ Score score(const Scene& s, const Volume<uint32_t>& labels, int threads = 2) {
       continue;
     }
     errs.push_back(angle_deg(it->second->normal, nn));
-    const V3 pi = it->second->point_m / kVoxel;
+    const V3 pi = it->second->point_m / kSceneVoxel;
     sc.max_point_err = std::max(sc.max_point_err, (pi - point).norm());
   }
   for (const auto& c : res.contacts) {
     const bool in_truth = std::find(s.contacts.begin(), s.contacts.end(),
                                     std::pair<int, int>{static_cast<int>(c.a) - 1, static_cast<int>(c.b) - 1}) != s.contacts.end();
     sc.extra += !in_truth;
-    const V3 pm = c.point_m / kVoxel;
+    const V3 pm = c.point_m / kSceneVoxel;
     if (((pm.array() > 2) && (pm.array() < n - 2)).all()) ni.push_back(c.normal);
   }
   std::vector<uint32_t> ids(s.c.size());

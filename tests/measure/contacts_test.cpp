@@ -28,9 +28,7 @@ using test::cut_lines;
 constexpr double kVoxel = 1e-5;
 
 
-double angle_deg(const V3& a, const V3& b) {
-  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180 / std::numbers::pi;
-}
+using test::angle_deg;
 
 // Two spheres of radius 20 at centre distance 30: the interface is the
 // radical plane's disc, area pi (20^2 - 15^2) = 549.8 voxel^2; voxels inside

@@ -146,7 +146,7 @@ TEST(TrackSeries, SeriesMovesLikeAnOedometer) {
     for (const auto& r : s.lineage) {
       if (r.stage != q || !r.parent_label) continue;
       kids[r.parent_label].push_back(&r);
-      if (r.event != Event::intact || r.label != r.grain) continue;
+      if (r.event != track::Event::intact || r.label != r.grain) continue;
       const auto* p = at.at({q - 1, r.parent_label});
       if (p->volume_vox < 0.9 * r.volume_vox || r.volume_vox < 0.9 * p->volume_vox) continue;  // cut by the border
       const double h = p->centroid_vox[0] - zb, dz = r.centroid_vox[0] - p->centroid_vox[0];
@@ -159,11 +159,11 @@ TEST(TrackSeries, SeriesMovesLikeAnOedometer) {
   // Split halves of one grain drift apart: their centroids' distance grows from stage to stage.
   int64_t pairs = 0, growing = 0;
   for (const auto& r : s.lineage) {
-    if (r.event != Event::split || r.stage + 1 >= stages || r.parent_label != r.grain) continue;
+    if (r.event != track::Event::split || r.stage + 1 >= stages || r.parent_label != r.grain) continue;
     for (const auto& o : s.lineage) {
       if (o.stage != r.stage || o.parent_label != r.parent_label || o.label <= r.label) continue;
       auto a1 = at.find({r.stage + 1, r.label}), b1 = at.find({r.stage + 1, o.label});
-      if (a1 == at.end() || b1 == at.end() || a1->second->event != Event::intact || b1->second->event != Event::intact) continue;
+      if (a1 == at.end() || b1 == at.end() || a1->second->event != track::Event::intact || b1->second->event != track::Event::intact) continue;
       auto dist = [](const LineageRow& x, const LineageRow& y) {
         double d = 0;
         for (int ax = 0; ax < 3; ++ax) d += (x.centroid_vox[ax] - y.centroid_vox[ax]) * (x.centroid_vox[ax] - y.centroid_vox[ax]);
@@ -180,6 +180,6 @@ TEST(TrackSeries, SeriesMovesLikeAnOedometer) {
   for (int q = 1; q < stages; ++q) EXPECT_GE(sum[q].pct_intact_broken, sum[q - 1].pct_intact_broken);
   EXPECT_GT(sum.back().pct_intact_broken, 50.0);
   int64_t rebroken = 0;
-  for (const auto& e : ev) rebroken += e.type == Event::split && e.parent_label != e.grain;
+  for (const auto& e : ev) rebroken += e.type == track::Event::split && e.parent_label != e.grain;
   EXPECT_GT(rebroken, 0) << "fragments must break again";
 }

@@ -22,7 +22,8 @@
 namespace tg::dem::breakage {
 namespace {
 
-constexpr double kRho = 2180;
+constexpr double kDensity = 2180;  // kg/m^3, Table 1
+
 constexpr double kPi = std::numbers::pi;
 
 // Two 0.1 mm spheres bonded end to end along z, A fixed above B, in free
@@ -34,8 +35,8 @@ constexpr double kPi = std::numbers::pi;
 double step_load_overshoot(double alpha, bool total, double beta) {
   const double r = 1e-4;
   Particles p;
-  p.append_sphere(0, 0, 0, r, kRho, 0, 0, kFlagFixed);
-  p.append_sphere(0, 0, -2 * r, r, kRho, 1, 0, kFlagNone);
+  p.append_sphere(0, 0, 0, r, kDensity, 0, 0, kFlagFixed);
+  p.append_sphere(0, 0, -2 * r, r, kDensity, 1, 0, kFlagNone);
   const double m = p.m[1];
   EngineOptions o;
   o.walls.bottom = o.walls.top = o.walls.cylinder = false;
@@ -121,9 +122,9 @@ TEST(BreakageOptions, SplitBondedFalseSplitsOnlySpheresWithoutBonds) {
   const double d = 1e-3, r = d / 2, delta = 1e-6;
   for (bool split_bonded : {true, false}) {
     Particles p;
-    p.append_sphere(0, 0, r - delta, r, kRho, 0);       // A
-    p.append_sphere(d, 0, r - delta, r, kRho, 1);       // B, tangent to A
-    p.append_sphere(4 * d, 0, r - delta, r, kRho, 2);   // C, alone
+    p.append_sphere(0, 0, r - delta, r, kDensity, 0);       // A
+    p.append_sphere(d, 0, r - delta, r, kDensity, 1);       // B, tangent to A
+    p.append_sphere(4 * d, 0, r - delta, r, kDensity, 2);   // C, alone
     EngineOptions o;
     o.gravity_z = 0;
     o.walls.cylinder = false;
@@ -159,8 +160,8 @@ TEST(BreakageOptions, SplitBondedFalseSplitsOnlySpheresWithoutBonds) {
 TEST(BreakageOptions, KeepUnbreakableKeepsSubLimitSpheresUntilSqueezed) {
   const double R = 0.5e-3, r = 0.075e-3;
   Particles p;
-  p.append_sphere(0, 0, R, R, kRho, 0, 0, kFlagNone);
-  p.append_sphere(0, 0, 2 * R + r, r, kRho, 1);
+  p.append_sphere(0, 0, R, R, kDensity, 0, 0, kFlagNone);
+  p.append_sphere(0, 0, 2 * R + r, r, kDensity, 1);
   EngineOptions o;
   o.gravity_z = 0;
   o.walls.cylinder = false;

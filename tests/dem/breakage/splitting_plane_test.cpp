@@ -12,13 +12,13 @@ using namespace tg::dem;
 using namespace tg::dem::breakage;
 
 namespace {
-constexpr double kR = 5e-4;
-const double kV = 4.0 / 3.0 * std::numbers::pi * kR * kR * kR;
+constexpr double kGrainR = 5e-4;
+const double kGrainV = 4.0 / 3.0 * std::numbers::pi * kGrainR * kGrainR * kGrainR;
 
 // A pair of opposite inward forces of magnitude f on the sphere at ±R·axis.
 void push_pair(std::vector<ContactLoad>& c, Vec3 axis, double f) {
-  c.push_back({kR * axis, -f * axis});
-  c.push_back({-kR * axis, f * axis});
+  c.push_back({kGrainR * axis, -f * axis});
+  c.push_back({-kGrainR * axis, f * axis});
 }
 
 Vec3 rotate(const Eigen::Matrix3d& q, Vec3 v) {
@@ -35,16 +35,16 @@ TEST(SplittingPlane, DiametralCompressionOpensAlongLeastConfinedAxis) {
   push_pair(c, {0, 0, 1}, 10);
   push_pair(c, {1, 0, 0}, 2);
   push_pair(c, {0, 1, 0}, 5);
-  const auto p = splitting_plane({0, 0, 0}, kV, c);
+  const auto p = splitting_plane({0, 0, 0}, kGrainV, c);
   ASSERT_TRUE(p);
   EXPECT_EQ(p->rule, PlaneRule::kSigma3);
   EXPECT_EQ(p->contact, 0);
   EXPECT_DOUBLE_EQ(p->f_max, 10);
   EXPECT_NEAR(p->n_f.z, 1, 1e-15);
   // Compression positive: σ1 = σzz = 2·10·R/V, σ2 = σyy, σ3 = σxx.
-  EXPECT_NEAR(p->principal(2), 2 * 10 * kR / kV, 1e-9 * p->principal(2));
-  EXPECT_NEAR(p->principal(1), 2 * 5 * kR / kV, 1e-9 * p->principal(2));
-  EXPECT_NEAR(p->principal(0), 2 * 2 * kR / kV, 1e-9 * p->principal(2));
+  EXPECT_NEAR(p->principal(2), 2 * 10 * kGrainR / kGrainV, 1e-9 * p->principal(2));
+  EXPECT_NEAR(p->principal(1), 2 * 5 * kGrainR / kGrainV, 1e-9 * p->principal(2));
+  EXPECT_NEAR(p->principal(0), 2 * 2 * kGrainR / kGrainV, 1e-9 * p->principal(2));
   EXPECT_NEAR(p->normal.x, 1, 1e-12);
   EXPECT_NEAR(std::abs(p->normal.y) + std::abs(p->normal.z), 0, 1e-12);
 }
@@ -60,7 +60,7 @@ TEST(SplittingPlane, FollowsARotatedLoad) {
   push_pair(c, rotate(q, {1, 0, 0}), 2);
   push_pair(c, rotate(q, {0, 1, 0}), 5);
   for (auto& l : c) l.point = l.point + x0;
-  const auto p = splitting_plane(x0, kV, c);
+  const auto p = splitting_plane(x0, kGrainV, c);
   ASSERT_TRUE(p);
   const Vec3 ex = rotate(q, {1, 0, 0});
   EXPECT_NEAR(std::abs(dot(p->normal, ex)), 1, 1e-9);
@@ -76,8 +76,8 @@ TEST(SplittingPlane, LargestNormalForceNotLargestForce) {
   push_pair(c, {0, 0, 1}, 10);
   push_pair(c, {1, 0, 0}, 2);
   push_pair(c, {0, 1, 0}, 5);
-  c.push_back({{kR, 0, 0}, {-9, 0, 30}});  // 31 N in total, only 9 N normal
-  const auto p = splitting_plane({0, 0, 0}, kV, c);
+  c.push_back({{kGrainR, 0, 0}, {-9, 0, 30}});  // 31 N in total, only 9 N normal
+  const auto p = splitting_plane({0, 0, 0}, kGrainV, c);
   ASSERT_TRUE(p);
   EXPECT_EQ(p->contact, 0);
 }
@@ -91,7 +91,7 @@ TEST(SplittingPlane, Sigma3ParallelToForceUsesSigma2) {
   push_pair(c, {1, 0, 0}, 8);
   push_pair(c, {0, 1, 0}, 6);
   push_pair(c, {0, 1, 0}, 6);
-  const auto p = splitting_plane({0, 0, 0}, kV, c);
+  const auto p = splitting_plane({0, 0, 0}, kGrainV, c);
   ASSERT_TRUE(p);
   EXPECT_EQ(p->rule, PlaneRule::kSigma2);
   EXPECT_NEAR(p->normal.y, 1, 1e-12);
@@ -102,14 +102,14 @@ TEST(SplittingPlane, Sigma3ParallelToForceUsesSigma2) {
 TEST(SplittingPlane, PlatenCrushIsDegenerateAndPicksX) {
   std::vector<ContactLoad> c;
   push_pair(c, {0, 0, 1}, 10);
-  const auto p = splitting_plane({0, 0, 0}, kV, c);
+  const auto p = splitting_plane({0, 0, 0}, kGrainV, c);
   ASSERT_TRUE(p);
   EXPECT_EQ(p->rule, PlaneRule::kFixedAxis);
   EXPECT_NEAR(p->normal.x, 1, 1e-15);
   // Platens along x instead: x is ∥ n_f, so the rule takes y.
   std::vector<ContactLoad> d;
   push_pair(d, {1, 0, 0}, 10);
-  const auto q = splitting_plane({0, 0, 0}, kV, d);
+  const auto q = splitting_plane({0, 0, 0}, kGrainV, d);
   ASSERT_TRUE(q);
   EXPECT_NEAR(q->normal.y, 1, 1e-15);
 }
@@ -123,7 +123,7 @@ TEST(SplittingPlane, DoubleSigma3UsesCrossProduct) {
   push_pair(c, {1, 0, 0}, 5);
   push_pair(c, {0, 1, 0}, 5);
   for (int k = 0; k < 4; ++k) push_pair(c, {0, 0, 1}, 3);
-  const auto p = splitting_plane({0, 0, 0}, kV, c);
+  const auto p = splitting_plane({0, 0, 0}, kGrainV, c);
   ASSERT_TRUE(p);
   EXPECT_EQ(p->contact, 0);
   EXPECT_EQ(p->rule, PlaneRule::kDegenerate);
@@ -132,7 +132,7 @@ TEST(SplittingPlane, DoubleSigma3UsesCrossProduct) {
   std::vector<ContactLoad> d;
   const double a = 0.3;
   push_pair(d, {std::sin(a), 0, std::cos(a)}, 10);
-  const auto q = splitting_plane({0, 0, 0}, kV, d);
+  const auto q = splitting_plane({0, 0, 0}, kGrainV, d);
   ASSERT_TRUE(q);
   EXPECT_EQ(q->rule, PlaneRule::kFixedAxis);
   EXPECT_NEAR(dot(q->normal, q->n_f), 0, 1e-12);
@@ -145,16 +145,16 @@ TEST(SplittingPlane, IsotropicUsesFixedAxis) {
   push_pair(c, {0, 0, 1}, 10);
   push_pair(c, {1, 0, 0}, 10);
   push_pair(c, {0, 1, 0}, 10);
-  const auto p = splitting_plane({0, 0, 0}, kV, c);
+  const auto p = splitting_plane({0, 0, 0}, kGrainV, c);
   ASSERT_TRUE(p);
   EXPECT_EQ(p->rule, PlaneRule::kFixedAxis);
-  EXPECT_NEAR(p->principal(0), 2 * 10 * kR / kV, 1e-6 * p->principal(0));  // compression positive
+  EXPECT_NEAR(p->principal(0), 2 * 10 * kGrainR / kGrainV, 1e-6 * p->principal(0));  // compression positive
   EXPECT_NEAR(p->normal.x, 1, 1e-15);
 }
 
 TEST(SplittingPlane, NoCompressiveContactGivesNothing) {
   std::vector<ContactLoad> c;
-  EXPECT_FALSE(splitting_plane({0, 0, 0}, kV, c));
-  c.push_back({{kR, 0, 0}, {1, 0, 0}});  // pulls outwards (adhesion-like)
-  EXPECT_FALSE(splitting_plane({0, 0, 0}, kV, c));
+  EXPECT_FALSE(splitting_plane({0, 0, 0}, kGrainV, c));
+  c.push_back({{kGrainR, 0, 0}, {1, 0, 0}});  // pulls outwards (adhesion-like)
+  EXPECT_FALSE(splitting_plane({0, 0, 0}, kGrainV, c));
 }

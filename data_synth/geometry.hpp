@@ -26,6 +26,7 @@
 
 #include "core/sphere_table.hpp"
 #include "core/volume.hpp"
+#include "data_synth/rng.hpp"
 
 namespace tg::synth {
 
@@ -52,6 +53,16 @@ struct HalfSpace {
   Vec3 n{0, 0, 1};
   double d = 0;
 };
+
+// Keeps n·(p − c) >= offset, as a HalfSpace (−n)·p <= −offset − n·c.
+inline HalfSpace keep_above(const Vec3& n, const Vec3& c, double offset) {
+  return HalfSpace{{-n[0], -n[1], -n[2]}, -offset - dot(n, c)};
+}
+
+// Random unit vector from draws n..n+5 of stream (seed, key) (data_synth/rng.hpp).
+inline Vec3 random_direction(uint64_t seed, uint64_t key, uint64_t n) {
+  return unit({normal01(seed, key, n), normal01(seed, key, n + 2), normal01(seed, key, n + 4)});
+}
 
 // A convex piece: sphere ∩ all planes.
 struct Piece {

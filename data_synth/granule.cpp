@@ -11,16 +11,6 @@ namespace tg::synth {
 
 namespace {
 
-// Random unit vector from draws n..n+5 of the grain's stream.
-Vec3 random_direction(uint64_t seed, uint64_t key, uint64_t n) {
-  Vec3 v{normal01(seed, key, n), normal01(seed, key, n + 2), normal01(seed, key, n + 4)};
-  if (dot(v, v) < 1e-20) v = {0, 0, 1};
-  return unit(v);
-}
-// Keeps n·(p − c) >= offset, as a HalfSpace (−n)·p <= −offset − n·c.
-HalfSpace keep_above(const Vec3& n, const Vec3& c, double offset) {
-  return HalfSpace{{-n[0], -n[1], -n[2]}, -offset - dot(n, c)};
-}
 bool pore_inside(const Sphere& pore, const Piece& pc) {
   for (const HalfSpace& h : pc.planes)
     if (dot(h.n, pore.c) + pore.r > h.d) return false;

@@ -44,13 +44,6 @@ void transform(Particle& p, const Mat3& R, const Vec3& c, const Vec3& t) {
 
 const Mat3 kIdentity{Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 0, 1}};
 
-Vec3 random_direction(uint64_t seed, uint64_t key, uint64_t n) {
-  return unit({normal01(seed, key, n), normal01(seed, key, n + 2), normal01(seed, key, n + 4)});
-}
-
-// Keeps n.(x - c) >= offset.
-HalfSpace keep_above(const Vec3& n, const Vec3& c, double offset) { return HalfSpace{{-n[0], -n[1], -n[2]}, -offset - dot(n, c)}; }
-
 // The side a piece lies on: minus the sum of its planes' outward normals.
 Vec3 side_of(const Particle& p) {
   Vec3 s{0, 0, 0};

@@ -39,7 +39,7 @@
 //   shape_classes.csv   stage, series, metric (fr|ar), class, percent
 //   distances.csv       stage, pair, psd_ks, psd_w1_mm, fr_ks, fr_w1, ar_ks, ar_w1
 //   stress_strain.csv   series, strain, stress_mpa
-//   broken.csv          series, strain, broken_fraction
+//   broken.csv          series, strain, broken_fraction, grains_broken, bonds_broken (DEM history counts)
 //   fabric.csv          stage, series, n_contacts, N_zz, N_yy, N_xx, N_zy, N_zx, N_yx, anisotropy,
 //                       near_axis_share, major_axis_tilt_deg (compare/fabric.hpp); series adds
 //                       dem_exact: the DEM's own sphere contacts

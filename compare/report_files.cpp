@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 
 #include "core/atomic_file.hpp"
 #include "core/errors.hpp"
@@ -113,13 +114,15 @@ template void write_mid_slices(const Volume<uint32_t>&, const fs::path&, const s
 void write_report_tables(const fs::path& out, const ReportData& d) {
   const Report& rep = *d.report;
   const auto& sv = rep.sieves_mm;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
   const auto fr_names = measure::class_labels(measure::fr_thresholds());
   const auto ar_names = measure::class_labels(measure::ar_thresholds());
   RowTable sum({"stage", "series", "axial_strain", "particles", "d10_mm", "d50_mm", "d60_mm", "cu", "hardin_br",
                 "broken_fraction", "broken_method", "coordination_interior"});
   RowTable psd({"stage", "series", "sieve_mm", "passing_pct"});
   RowTable cls({"stage", "series", "metric", "class", "percent"});
-  RowTable broken({"series", "axial_strain", "broken_fraction"});
+  // grains_broken / bonds_broken: the DEM history's counts (the study's Fig. 10); NaN on the per-stage rows.
+  RowTable broken({"series", "axial_strain", "broken_fraction", "grains_broken", "bonds_broken"});
   for (size_t n = 0; n < rep.stages.size(); ++n)
     for (int k = 0; k < 3; ++k) {
       if (!d.series[n][static_cast<size_t>(k)]) continue;
@@ -133,7 +136,7 @@ void write_report_tables(const fs::path& out, const ReportData& d) {
       for (size_t q = 0; q < sv.size(); ++q) psd.row({st, series, sv[q], m.passing[q]});
       for (size_t q = 0; q < m.fr_classes.size(); ++q) cls.row({st, series, "fr", fr_names[q], m.fr_classes[q]});
       for (size_t q = 0; q < m.ar_classes.size(); ++q) cls.row({st, series, "ar", ar_names[q], m.ar_classes[q]});
-      if (k != 2) broken.row({k == 0 ? "experiment" : "dem", e, s.broken_fraction});  // one point per stage
+      if (k != 2) broken.row({k == 0 ? "experiment" : "dem", e, s.broken_fraction, nan, nan});  // one point per stage
     }
   write_csv(sum.table(), out / "summary.csv");
   write_csv(psd.table(), out / "psd.csv");
@@ -154,7 +157,8 @@ void write_report_tables(const fs::path& out, const ReportData& d) {
   for (size_t q = 0; q < hist.strain.size(); ++q) {
     ss.row({"dem", hist.strain[q], hist.stress_mpa[q]});
     if (!hist.broken.empty())
-      broken.row({"dem_history", hist.strain[q], hist.broken[q] / static_cast<double>(d.initial_dem_particles)});
+      broken.row({"dem_history", hist.strain[q], hist.broken[q] / static_cast<double>(d.initial_dem_particles),
+                  hist.broken[q], hist.bonds.empty() ? nan : hist.bonds[q]});
   }
   for (size_t q = 0; q < d.experiment_curve.strain.size(); ++q)
     ss.row({"experiment", d.experiment_curve.strain[q], d.experiment_curve.stress_mpa[q]});

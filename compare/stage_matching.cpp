@@ -67,6 +67,7 @@ Curve history_curve(const Table& h) {
   c.strain = h.num(dem::kHistoryStrain);
   for (double v : h.num(dem::kHistoryTopStress)) c.stress_mpa.push_back(v * 1e-6);
   if (h.has(dem::kHistoryGrainsBroken)) c.broken = h.num(dem::kHistoryGrainsBroken);
+  if (h.has(dem::kHistoryBondsBroken)) c.bonds = h.num(dem::kHistoryBondsBroken);
   return c;
 }
 

@@ -29,7 +29,8 @@ namespace tg::compare {
 size_t match_snapshot(std::span<const double> snapshot_strains, double stage_strain, size_t stage_index);
 
 struct Curve {
-  std::vector<double> strain, stress_mpa, broken;  // broken empty when absent
+  std::vector<double> strain, stress_mpa, broken;  // broken (grains broken, a count) empty when absent
+  std::vector<double> bonds;                      // bonds broken (DEM history); empty when absent
   std::string stress_column;
 };
 // An experimental stress–strain CSV: strain column axial_strain|strain|eps_zz|strain_zz,
@@ -37,7 +38,7 @@ struct Curve {
 // (else the first column whose name holds "stress", in Pa), optional
 // grains_broken|broken_grains|broken_particles|broken.
 Curve read_curve(const std::filesystem::path& path);
-// The DEM history table (strain, top_stress_Pa, optional grains_broken).
+// The DEM history table (strain, top_stress_Pa, optional grains_broken and bonds_broken).
 Curve history_curve(const Table& history);
 
 // y at x = at: linear between the bracketing rows where x ascends there,

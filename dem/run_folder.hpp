@@ -48,6 +48,7 @@ struct SnapshotEntry {
 inline constexpr const char* kHistoryStrain = "strain";
 inline constexpr const char* kHistoryTopStress = "top_stress_Pa";
 inline constexpr const char* kHistoryGrainsBroken = "grains_broken";
+inline constexpr const char* kHistoryBondsBroken = "bonds_broken";
 
 // history.csv as it grows: the base columns, plus breakage_columns() when
 // the run breaks grains. Rows are appended in memory and written whole

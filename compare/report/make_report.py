@@ -28,6 +28,16 @@ SERIES_STYLE = {
     "dem_ideal": dict(color="tab:blue", ls="--", marker="s", label="DEM ideal (truth labels)"),
     "dem_imaged": dict(color="tab:red", ls="-.", marker="^", label="DEM imaged (segmented)"),
 }
+# The reference study's published figures (shared/reference/zeolite-xct-dem-paper.md: text
+# of its Figs. 9-14), drawn as markers beside this report's numbers: yield near 2 MPa;
+# 20 grains / 300 bonds broken before yield and 280 / 10 000 when the stress reaches
+# 4 MPa (DEM); % of intact grains broken at 15.48 % strain (DEM 35, experiment ~70);
+# at the end, particles with FR 0.9-1.0 (experiment 81 %, DEM 78 %) and AR 1-2 (71 %, 80 %).
+STUDY = dict(yield_mpa=2.0, broken_at_mpa=[(2.0, 20, 300), (4.0, 280, 10000)], end_strain=0.1548,
+             pct_intact_broken_end=dict(dem=35.0, experiment=70.0),
+             fr_top_class_end=dict(experiment=81.0, dem=78.0), ar_first_class_end=dict(experiment=71.0, dem=80.0))
+STUDY_STYLE = dict(color="tab:purple", ls="none", marker="*", ms=11)
+
 # The contact tables add the DEM's own contacts, from its spheres.
 CONTACT_STYLE = dict(SERIES_STYLE, dem_exact=dict(color="tab:green", ls=":", marker="d",
                                                  label="DEM exact (its sphere contacts)"))
@@ -120,19 +130,111 @@ def save_strain_plot(fig, ax, out, ylabel, title, name):
     return save(fig, out, name)
 
 
-def plot_stress(out, ss):
-    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+def plot_stress(out, ss, yld):
+    """Linear and e–log σ (strain against log σ, as the study's Fig. 9), yield by report.json's rule."""
+    fig, (ax, lx) = plt.subplots(1, 2, figsize=(11, 3.8))
     any_ = False
     for series, style in [("dem", dict(color="tab:red", label="DEM (history.csv)")),
                           ("experiment", dict(color="black", label="experiment"))]:
         pts = [(fnum(r["axial_strain"]), fnum(r["stress_mpa"])) for r in ss if r["series"] == series]
         if pts:
             any_ = True
-            x, y = zip(*pts)
-            ax.plot(100 * np.array(x), y, **style)
+            x, y = map(np.array, zip(*pts))
+            ax.plot(100 * x, y, **style)
+            pos = y > 0
+            lx.semilogx(y[pos], 100 * x[pos], **style)
+            v = fnum(yld.get(f"{series}_mpa"))
+            if v == v:
+                lx.axvline(v, color=style["color"], ls=":", lw=1.2, label=f"{series} yield {v:.2f} MPa")
     if not any_:
         ax.text(0.5, 0.5, "no stress–strain data given", ha="center", va="center", transform=ax.transAxes)
+    lx.axvline(STUDY["yield_mpa"], color=STUDY_STYLE["color"], ls="--", lw=1, label="study: yield ≈ 2 MPa")
+    lx.invert_yaxis()
+    lx.set_xlabel("axial stress (MPa, log)")
+    lx.set_ylabel("axial strain (%) — void ratio falls downward")
+    lx.grid(True, which="both", alpha=0.3)
+    lx.legend(fontsize=7)
+    lx.set_title("e–log σ form" + (f" (yield: {yld['rule']})" if yld.get("rule") else ""), fontsize=8)
     return save_strain_plot(fig, ax, out, "axial stress (MPa)", "Stress–strain", "stress_strain.png")
+
+
+def plot_broken_counts(out, br, ss):
+    """Grains and bonds broken against the stress reached (running maximum of the DEM's σ_top),
+    so that the study's counts at yield and at 4 MPa (its Fig. 10 text) sit on the same axis."""
+    hist = [r for r in br if r["series"] == "dem_history"]
+    curve = [fnum(r["stress_mpa"]) for r in ss if r["series"] == "dem"]
+    if not hist or len(curve) != len(hist):
+        return None
+    reached = np.maximum.accumulate(np.nan_to_num(np.array(curve), nan=0.0))
+    grains = np.array([fnum(r.get("grains_broken")) for r in hist])
+    bonds = np.array([fnum(r.get("bonds_broken")) for r in hist])
+    fig, ax = plt.subplots(figsize=(5.8, 3.8))
+    pos = reached > 0
+    ax.semilogx(reached[pos], grains[pos], color="tab:red", label="DEM grains broken")
+    bx = ax.twinx()
+    if np.isfinite(bonds).any():
+        bx.semilogx(reached[pos], bonds[pos], color="tab:orange", ls="--", label="DEM bonds broken")
+    for k, (mpa, g, b) in enumerate(STUDY["broken_at_mpa"]):
+        ax.plot([mpa], [g], label="study: grains" if k == 0 else None, **STUDY_STYLE)
+        bx.plot([mpa], [b], color=STUDY_STYLE["color"], ls="none", marker="P", ms=9,
+                label="study: bonds" if k == 0 else None)
+    ax.set_xlabel("axial stress reached (MPa, log)")
+    ax.set_ylabel("grains broken")
+    bx.set_ylabel("bonds broken")
+    ax.grid(True, which="both", alpha=0.3)
+    h1, l1 = ax.get_legend_handles_labels()
+    h2, l2 = bx.get_legend_handles_labels()
+    ax.legend(h1 + h2, l1 + l2, fontsize=7, loc="upper left")
+    ax.set_title("Broken grains and bonds (study's Fig. 10: markers at yield and at 4 MPa)", fontsize=9)
+    return save(fig, out, "broken_counts.png")
+
+
+def plot_height(out, lin):
+    """Grains broken per fifth of the height at the last tracked stage, per series (study's Fig. 11)."""
+    if not lin:
+        return None
+    last = lin[-1]["stage"]  # rows in stage order
+    rows_ = [r for r in lin if r["stage"] == last]
+    fig, ax = plt.subplots(figsize=(5.8, 3.6))
+    width = 0.8 / len(rows_)
+    colors = dict(experiment="black", dem_exact="tab:green", dem_imaged="tab:red")
+    for k, r in enumerate(rows_):
+        vals = [fnum(r[f"pct_broken_band{b}"]) for b in range(1, 6)]
+        ax.bar(np.arange(1, 6) - 0.4 + width * (k + 0.5), vals, width, color=colors.get(r["series"], "grey"),
+               alpha=0.8, label=r["series"])
+    ax.set_xticks(range(1, 6))
+    ax.set_xticklabels(["1 bottom", "2", "3", "4", "5 top (moving)"], fontsize=8)
+    ax.set_xlabel("fifth of the specimen height")
+    ax.set_ylabel("intact grains broken (%)")
+    ax.legend(fontsize=7)
+    ax.set_title(f"Breakage by height, {last} (study: more near the platens)", fontsize=9)
+    return save(fig, out, "breakage_by_height.png")
+
+
+def study_table(stages, cls, br, ss, yld, fr_classes, ar_classes):
+    """This report's DEM and experiment beside the study's published figures."""
+    rows_ = [["yield stress (MPa)", fmt(yld.get("experiment_mpa")), fmt(yld.get("dem_mpa")), "≈ 2 (both)"]]
+    hist = [r for r in br if r["series"] == "dem_history"]
+    curve = [fnum(r["stress_mpa"]) for r in ss if r["series"] == "dem"]
+    if hist and len(curve) == len(hist):
+        reached = np.maximum.accumulate(np.nan_to_num(np.array(curve), nan=0.0))
+        for mpa, g, b in STUDY["broken_at_mpa"]:
+            i = int(np.argmax(reached >= mpa)) if (reached >= mpa).any() else None
+            dem = "not reached" if i is None else f"{fmt(hist[i]['grains_broken'])} / {fmt(hist[i]['bonds_broken'])}"
+            rows_.append([f"grains / bonds broken when σ first reaches {mpa:g} MPa", "–", dem, f"{g} / {b} (DEM)"])
+    end = stages[-1]["name"]
+
+    def cls_pct(series, metric, name):
+        v = [r["percent"] for r in cls if r["stage"] == end and r["series"] == series and r["metric"] == metric
+             and r["class"] == name]
+        return fmt(v[0]) if v else "–"
+    rows_.append([f"particles with FR {fr_classes[-1]} at {end} (%)", cls_pct("experiment", "fr", fr_classes[-1]),
+                  cls_pct("dem_ideal", "fr", fr_classes[-1]),
+                  f"{STUDY['fr_top_class_end']['experiment']:g} / {STUDY['fr_top_class_end']['dem']:g} (FR 0.9–1.0)"])
+    rows_.append([f"particles with AR {ar_classes[0]} at {end} (%)", cls_pct("experiment", "ar", ar_classes[0]),
+                  cls_pct("dem_ideal", "ar", ar_classes[0]),
+                  f"{STUDY['ar_first_class_end']['experiment']:g} / {STUDY['ar_first_class_end']['dem']:g} (AR 1–2)"])
+    return table(["quantity", "experiment (this report)", "DEM (this report)", "study: experiment / DEM"], rows_)
 
 
 def plot_broken(out, br):
@@ -145,6 +247,9 @@ def plot_broken(out, br):
         if pts:
             x, y = zip(*pts)
             ax.plot(100 * np.array(x), 100 * np.array(y), **style)
+    for series, mark in [("experiment", "*"), ("dem", "P")]:
+        ax.plot([100 * STUDY["end_strain"]], [STUDY["pct_intact_broken_end"][series]], color=STUDY_STYLE["color"],
+                ls="none", marker=mark, ms=10, label=f"study: {series} at 15.48 %")
     return save_strain_plot(fig, ax, out, "grains broken (%)", "Broken grains vs strain", "broken.png")
 
 
@@ -255,6 +360,9 @@ def main():
     fab = read_csv(os.path.join(out, "fabric.csv"))
     nor = read_csv(os.path.join(out, "normals.csv"))
     bysize = read_csv(os.path.join(out, "coordination_by_size.csv"))
+    lineage_csv = os.path.join(out, "lineage.csv")
+    lin = read_csv(lineage_csv) if os.path.exists(lineage_csv) else []
+    yld = meta.get("yield") or {}
 
     figs = [
         (plot_psd(out, stages, psd), "PSD by mass on Dmed, per stage"),
@@ -262,8 +370,10 @@ def main():
          "FR classes per stage"),
         (plot_classes(out, stages, cls, "ar", meta["ar_classes"], "Aspect ratio AR = Dmax/Dmin (study's classes)"),
          "AR classes per stage"),
-        (plot_stress(out, ss), "Axial stress vs axial strain"),
+        (plot_stress(out, ss, yld), "Axial stress vs axial strain, linear and e–log σ"),
         (plot_broken(out, br), "Fraction of grains broken vs axial strain"),
+        (plot_broken_counts(out, br, ss), "Grains and bonds broken vs the stress reached"),
+        (plot_height(out, lin), "Grains broken per fifth of the height"),
         (plot_distances(out, stages, dist), "KS distances per stage"),
         (plot_normals(out, stages, nor), "Distribution of the contact normals' angle from the loading axis"),
     ]
@@ -302,9 +412,11 @@ def main():
                        [[r["stage"], r["series"], fmt(r["axial_strain"]), r["particles"], fmt(r["d10_mm"]),
                          fmt(r["d50_mm"]), fmt(r["cu"]), fmt(r["hardin_br"]), fmt(r["broken_fraction"]),
                          r["broken_method"], fmt(r.get("coordination_interior", ""))] for r in summary]))
-    lineage_csv = os.path.join(out, "lineage.csv")
-    if os.path.exists(lineage_csv):  # lineages (track/): events by type, breakage by height fifth, per series
-        lin = read_csv(lineage_csv)
+    parts.append("<h2>Beside the study's published figures</h2>")
+    parts.append(study_table(stages, cls, br, ss, yld, meta["fr_classes"], meta["ar_classes"]))
+    parts.append("<p>Study: the reference paper's text (its Figs. 9–14); its DEM counts are for its 910-grain "
+                 "specimen. DEM (this report): the ideal path's classes (truth labels).</p>")
+    if lin:  # lineages (track/): events by type, breakage by height fifth, per series
         parts.append("<h2>Breakage events by type and by height: experiment beside DEM</h2>")
         parts.append(table(["stage", "series", "particles", "intact grains broken (%)", "split", "fragmentation",
                             "chipping", "chips", "lost", "new"] + [f"broken, fifth {b} (%)" for b in range(1, 6)],
@@ -360,7 +472,8 @@ def main():
                          fmt(r["fr_w1"]), fmt(r["ar_ks"]), fmt(r["ar_w1"])] for r in dist]))
     parts.append("<h2>Plots</h2>")
     for name, alt in figs:
-        parts.append(img_tag(out, name, alt))
+        if name:  # a plot without data (no bonds, no lineage) is left out
+            parts.append(img_tag(out, name, alt))
     parts.append("<h2>Slices (labels overlaid)</h2>")
     for name, alt in slice_figs:
         parts.append(img_tag(out, name, alt))

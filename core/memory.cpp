@@ -77,6 +77,13 @@ void check_allocation(int64_t bytes, const std::string& what) {
 
 int64_t peak_rss_bytes() { return meminfo_field("/proc/self/status", "VmHWM:"); }
 
+bool reset_peak_rss() {
+  std::FILE* f = std::fopen("/proc/self/clear_refs", "w");
+  if (!f) return false;
+  const bool ok = std::fputs("5", f) >= 0;
+  return std::fclose(f) == 0 && ok;
+}
+
 std::string human_bytes(double b) {
   const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
   int u = 0;

@@ -19,6 +19,12 @@ void check_allocation(int64_t bytes, const std::string& what);
 // Peak resident set size of this process so far (VmHWM), in bytes.
 int64_t peak_rss_bytes();
 
+// Starts a new peak: VmHWM drops to the current resident size (Linux >= 4.0:
+// "5" written to /proc/self/clear_refs), so that peak_rss_bytes() then reports
+// the peak of what follows, e.g. one stage of a chained command. False where
+// the kernel refuses; the peak then stays the whole process's.
+bool reset_peak_rss();
+
 std::string human_bytes(double bytes);
 
 // Storage for large arrays (volumes): aligned to 2 MiB and, from 2 MiB up,

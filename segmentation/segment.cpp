@@ -382,6 +382,7 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
   j["seconds"] = st;
   j["seconds_total"] = total;
   j["peak_rss_bytes"] = r.peak_rss_bytes;
+  j["shape"] = {r.labels.shape().nz, r.labels.shape().ny, r.labels.shape().nx};  // (z, y, x) voxels
   const int64_t nvox = r.labels.size();
   j["peak_rss_bytes_per_voxel"] = nvox ? double(r.peak_rss_bytes) / double(nvox) : 0.0;
   j["notes"] = r.notes;

@@ -76,4 +76,18 @@ assert 1.0 <= ref_seg / ref <= 1.03, "the measurement of the true labels is off 
 assert abs(got - ref) <= 0.03 * ref, "D50 off by more than 3 %"
 assert summ["file"] == "res/particles.csv", f"summary names {summ['file']!r}, not the results folder's particles.csv"
 PY
+# analyse.json: each step's time and own peak memory, per voxel of the scan.
+/usr/bin/python3 - <<'PY'
+import json, h5py
+j = json.load(open("res/analyse.json"))
+with h5py.File("s.h5", "r") as f:
+    n = f["/labels"].size
+assert j["voxels"] == n, (j["voxels"], n)
+assert [s["name"] for s in j["stages"]] == ["segment", "measure", "psd"], j["stages"]
+for s in j["stages"]:
+    assert s["seconds"] >= 0 and s["peak_rss_bytes"] > 0, s
+    assert abs(s["peak_rss_bytes_per_voxel"] * n - s["peak_rss_bytes"]) < 1, s
+assert j["peak_rss_bytes"] == max(s["peak_rss_bytes"] for s in j["stages"])
+assert abs(j["seconds_total"] - sum(s["seconds"] for s in j["stages"])) < 1e-9
+PY
 echo "1 passed, 0 failed"

@@ -2,12 +2,18 @@
 // the next and classify each breakage event (track/track.hpp has the method).
 #include <fmt/core.h>
 
+#include <algorithm>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "apps/command.hpp"
+#include "core/atomic_file.hpp"
 #include "core/errors.hpp"
+#include "core/memory.hpp"
 #include "track/track.hpp"
 
 namespace cmd_track {
@@ -18,6 +24,28 @@ struct Opts {
   double min_overlap = 0.2, chip_body = 0.7, surface_tol = 1.0, fallback_strain = 0;
   int threads = 0;
 };
+
+// DIR/track.json: each stage's wall time (reading its labels and tracking them) and peak memory.
+void write_costs(const tg::track::TrackResult& r, const std::string& dir) {
+  nlohmann::json j;
+  j["voxels_per_stage"] = r.voxels;
+  double total = 0;
+  int64_t peak = 0;
+  for (size_t s = 0; s < r.stage_seconds.size(); ++s) {
+    const double b = static_cast<double>(r.peak_rss_bytes[s]);
+    j["stages"].push_back({{"name", r.stage_names[s]},
+                           {"seconds", r.stage_seconds[s]},
+                           {"peak_rss_bytes", r.peak_rss_bytes[s]},
+                           {"peak_rss_bytes_per_voxel", r.voxels ? b / static_cast<double>(r.voxels) : 0.0},
+                           {"peak_scope", r.own_peak ? "stage" : "process"}});
+    total += r.stage_seconds[s];
+    peak = std::max(peak, r.peak_rss_bytes[s]);
+  }
+  j["seconds_total"] = total;
+  j["peak_rss_bytes"] = peak;
+  j["peak_rss_bytes_per_voxel"] = r.voxels ? static_cast<double>(peak) / static_cast<double>(r.voxels) : 0.0;
+  tg::write_file_atomic(std::filesystem::path(dir) / "track.json", j.dump(2) + "\n");
+}
 }  // namespace cmd_track
 
 namespace cmd_track {
@@ -41,7 +69,8 @@ static tg::app::Registrar reg{{"track", 47,
       "in voxels, match quality = fraction of the particle covered by its moved parent), DIR/events.csv\n"
       "(stage, parent label, grain, type, children, volume before/after, height fifth) and\n"
       "DIR/summary.csv (per stage: grains still intact, % of intact grains broken, events by type,\n"
-      "breakage by height fifth, lost and new, the map's axial scale = 1 - strain increment).\n\n"
+      "breakage by height fifth, lost and new, the map's axial scale = 1 - strain increment) and\n"
+      "DIR/track.json (per stage: wall time reading and tracking it, peak memory in bytes and per voxel).\n\n"
       "Example (a synthetic oedometer series with its truth lineage, segmented, then tracked):\n"
       "  printf '[stages]\\nmotion = \"oedometer\"\\n' > motion.toml\n"
       "  tomograin synth --preset zeolite-stages --scene motion.toml --size 256 -o run.h5\n"
@@ -80,13 +109,17 @@ static tg::app::Registrar reg{{"track", 47,
     to.progress = true;
     const auto r = tg::track::track_files(o->in, to);  // throws before anything is written
     tg::track::write_outputs(r, o->out);
+    write_costs(r, o->out);
     for (const auto& s : r.summary)
       fmt::print("stage {}: {} particles, axial scale {:.4f} ({} {}), intact grains {}, broken {:.1f} %, "
                  "split {}, fragmentation {}, chipping {}, lost {}, new {}, {:.2f} s\n",
                  s.stage, s.particles, s.axial_scale, s.map_method, s.map_matches, s.grains_intact,
                  s.pct_intact_broken, s.split, s.fragmentation, s.chipping, s.lost, s.new_particles,
                  r.seconds[static_cast<size_t>(s.stage)]);
-    fmt::print("wrote {}/lineage.csv, events.csv, summary.csv\n", o->out);
+    const int64_t peak = r.peak_rss_bytes.empty() ? 0 : *std::max_element(r.peak_rss_bytes.begin(), r.peak_rss_bytes.end());
+    fmt::print("peak memory {} ({:.2f} B/voxel of one stage)\n", tg::human_bytes(static_cast<double>(peak)),
+               r.voxels ? static_cast<double>(peak) / static_cast<double>(r.voxels) : 0.0);
+    fmt::print("wrote {}/lineage.csv, events.csv, summary.csv, track.json\n", o->out);
     return 0;
   };
 }}};

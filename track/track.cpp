@@ -11,9 +11,11 @@
 #include <numbers>
 #include <unordered_map>
 
+#include "core/clock.hpp"
 #include "core/errors.hpp"
 #include "core/io/hdf5.hpp"
 #include "core/io/volume_io.hpp"
+#include "core/memory.hpp"
 #include "core/progress.hpp"
 #include "measure/label_stats.hpp"
 
@@ -294,7 +296,7 @@ void Tracker::add_stage(Volume<uint32_t> labels, const std::string& name) {
   prev_rows_ = std::move(rows);
   prev_ = std::move(labels);
   names_.push_back(name);
-  seconds_.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  seconds_.push_back(seconds_since(t0));
 }
 
 TrackResult Tracker::result() const {
@@ -442,17 +444,32 @@ TrackResult track_files(const std::vector<std::string>& paths, const TrackOption
   Tracker tr(o);
   Progress bar("track", static_cast<double>(paths.size()), "stages");
   if (!o.progress) bar.finish();
+  std::vector<double> sec;
+  std::vector<int64_t> peak;
+  bool own_peak = true;
+  int64_t voxels = 0;
   for (size_t s = 0; s < paths.size(); ++s) {
+    own_peak = reset_peak_rss() && own_peak;
+    const auto t0 = std::chrono::steady_clock::now();
     std::string spec = paths[s];
     const auto [file, ds] = split_dataset_spec(spec);
     if (format_of(spec, false) == FileFormat::hdf5 && ds.empty() && H5Reader(file).has("/labels")) spec = file + ":/labels";
     ReadOptions ro;
     ro.progress = false;
-    tr.add_stage(read_volume_as<uint32_t>(spec, ro), paths[s]);
+    Volume<uint32_t> labels = read_volume_as<uint32_t>(spec, ro);
+    voxels = labels.size();
+    tr.add_stage(std::move(labels), paths[s]);
+    sec.push_back(seconds_since(t0));
+    peak.push_back(peak_rss_bytes());
     if (o.progress) bar.update(static_cast<double>(s + 1));
   }
   if (o.progress) bar.finish();
-  return tr.result();
+  TrackResult r = tr.result();
+  r.stage_seconds = std::move(sec);
+  r.peak_rss_bytes = std::move(peak);
+  r.own_peak = own_peak;
+  r.voxels = voxels;
+  return r;
 }
 
 Table lineage_table(const TrackResult& r) {

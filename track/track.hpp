@@ -136,7 +136,13 @@ struct TrackResult {
   std::vector<LineageRow> lineage;
   std::vector<EventRow> events;
   std::vector<SummaryRow> summary;
-  std::vector<double> seconds;  // per stage
+  std::vector<double> seconds;  // per stage: tracking only (track_files adds the reading below)
+  // Set by track_files, per stage: wall time reading the file and tracking it, and the
+  // peak resident memory of that (tg::reset_peak_rss; own_peak false: the process's peak).
+  std::vector<double> stage_seconds;
+  std::vector<int64_t> peak_rss_bytes;
+  bool own_peak = false;
+  int64_t voxels = 0;  // per stage
 };
 
 // Step 5 for one pair of stages: given each B particle's parent (index into

@@ -35,6 +35,17 @@ TOML
 [[ $(head -1 out/events.csv) == stage,parent_label,grain,type,children,* ]] || fail "events header: $(head -1 out/events.csv)"
 [[ $(head -1 out/summary.csv) == stage,particles,grains_intact,grains_broken,grains_lost,pct_intact_broken,* ]] || fail "summary header"
 [[ $(wc -l < out/summary.csv) -eq 6 ]] || fail "summary rows: $(wc -l < out/summary.csv)"
+# track.json: per stage, time and peak memory, bytes per voxel of a 48^3 stage.
+/usr/bin/python3 - <<'PY' || fail "track.json"
+import json
+j = json.load(open("out/track.json"))
+assert j["voxels_per_stage"] == 48 ** 3, j["voxels_per_stage"]
+assert [s["name"] for s in j["stages"]] == [f"run_stage{k}.h5" for k in range(5)], j["stages"]
+for s in j["stages"]:
+    assert s["seconds"] > 0 and s["peak_rss_bytes"] > 0 and s["peak_scope"] in ("stage", "process"), s
+    assert abs(s["peak_rss_bytes_per_voxel"] * 48 ** 3 - s["peak_rss_bytes"]) < 1, s
+assert j["peak_rss_bytes"] == max(s["peak_rss_bytes"] for s in j["stages"])
+PY
 # Same particles as the truth lineage, stage by stage (truth labels tracked).
 [[ $(wc -l < out/lineage.csv) -eq $(wc -l < run_lineage.csv) ]] || fail "lineage rows $(wc -l < out/lineage.csv) vs truth $(wc -l < run_lineage.csv)"
 # (stage, label, parent, grain) as in the truth for >= 99 % of the rows (grains of 5.5 voxels

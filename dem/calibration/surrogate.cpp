@@ -30,6 +30,9 @@ double sq_dist(const Point& a, const Point& b) {
 const std::vector<double> kLengthGrid{0.05, 0.08, 0.12, 0.18, 0.27, 0.4, 0.6, 0.9, 1.35, 2.0};
 const std::vector<double> kNuggetGrid{1e-6, 1e-4, 1e-3, 1e-2, 0.05, 0.2};
 
+// Smallest distance (unit box) between a proposal and any earlier point.
+constexpr double kMinSeparation = 0.01;
+
 double normal_pdf(double z) { return std::exp(-0.5 * z * z) / std::sqrt(2 * std::numbers::pi); }
 double normal_cdf(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
 
@@ -196,6 +199,7 @@ Point minimise_on_box(int d, uint64_t seed, const std::function<double(const Poi
 }
 
 SearchResult minimise(int d, const SearchOptions& o, const Evaluate& evaluate) {
+  using surrogate_detail::kMinSeparation;
   if (d < 1 || o.initial < 2 || o.evaluations < o.initial || o.batch < 1)
     throw std::invalid_argument("minimise: need d >= 1, 2 <= initial <= evaluations, batch >= 1");
   SearchResult r;
@@ -230,6 +234,11 @@ SearchResult minimise(int d, const SearchOptions& o, const Evaluate& evaluate) {
     for (int j = 0; j < q; ++j) {
       const double best = *std::min_element(y.begin(), y.end());
       const Point p = minimise_on_box(d, o.seed + 1000003ULL * (++round), [&](const Point& u) {
+        // No point within 1 % of the box of one already run or picked: with a
+        // nugget the GP keeps some EI there (seen: a batch's two runs at the
+        // same corner), and a repeated run of a deterministic DEM teaches nothing.
+        for (const Point& v : x)
+          if (surrogate_detail::sq_dist(u, v) < kMinSeparation * kMinSeparation) return 0.0;
         double mu, sd;
         gp.predict(u, mu, sd);
         return -expected_improvement(mu, sd, best);

@@ -86,8 +86,8 @@ TEST(Calibration, FindsTheMinimumOfAQuadratic) {
     return v;
   });
   ASSERT_EQ(r.values.size(), 16u);
-  EXPECT_NEAR(r.points[r.best][0], 0.3, 0.02);
-  EXPECT_NEAR(r.points[r.best][1], 0.7, 0.02);
+  EXPECT_NEAR(r.points[r.best][0], 0.3, 0.01);  // measured 0.003
+  EXPECT_NEAR(r.points[r.best][1], 0.7, 0.01);
   EXPECT_NEAR(r.predicted_optimum[0], 0.3, 0.01);
   EXPECT_NEAR(r.predicted_optimum[1], 0.7, 0.01);
 }
@@ -114,7 +114,10 @@ TEST(Calibration, FindsAGlobalMinimumOfBranin) {
       for (const auto& p : pts) v.push_back(branin(p));
       return v;
     });
-    EXPECT_LT(r.values[r.best] - 0.397887, 0.05) << "batch " << batch;
+    // Measured 0.005 (batch 1) and 0.004 (batch 3) above the minimum; the
+    // best of a 30-point Latin hypercube alone is 1.28 above it (median over
+    // 200 scipy.stats.qmc designs; 1 % of them come within 0.02).
+    EXPECT_LT(r.values[r.best] - 0.397887, 0.02) << "batch " << batch;
   }
 }
 
@@ -131,6 +134,6 @@ TEST(Calibration, FailedEvaluationsAreAvoided) {
   });
   ASSERT_GE(r.best, 0);
   EXPECT_TRUE(std::isfinite(r.values[r.best]));
-  EXPECT_NEAR(r.points[r.best][0], 0.2, 0.05);
-  EXPECT_NEAR(r.points[r.best][1], 0.5, 0.05);
+  EXPECT_NEAR(r.points[r.best][0], 0.2, 0.02);
+  EXPECT_NEAR(r.points[r.best][1], 0.5, 0.02);
 }

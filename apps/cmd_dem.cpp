@@ -21,6 +21,7 @@ struct Opts {
   tg::dem::breakage::CrushOptions crush;
   tg::dem::calibration::CalibrateOptions calib;
   std::string calib_config, calib_target;
+  bool no_plot = false;
 };
 
 tg::dem::OedometerSetup load(const std::string& path) {
@@ -130,12 +131,14 @@ static tg::app::Registrar reg{{"dem", 60,
   cal->add_option("--jobs", o->calib.jobs, "Runs at a time, as child processes (default 1)");
   cal->add_option("--threads-per-run", o->calib.threads_per_run, "OpenMP threads of each run (default 1)");
   cal->add_option("--python", o->calib.python, "Python with matplotlib for the plot (default /usr/bin/python3)");
+  cal->add_flag("--no-plot", o->no_plot, "No objective_surface.png (the data files are written all the same)");
   return [o, oed, pack, crush, cal] {
     if (cal->parsed()) {
       namespace cal_ns = tg::dem::calibration;
       o->calib.config = o->calib_config;
       o->calib.target = o->calib_target;
       o->calib.out = o->out;
+      o->calib.plot = !o->no_plot;
       std::error_code ec;
       o->calib.executable = std::filesystem::read_symlink("/proc/self/exe", ec).string();
       const cal_ns::CalibrationResult r = cal_ns::run_calibration(o->calib);

@@ -287,7 +287,7 @@ CalibrationResult run_calibration(const CalibrateOptions& o) {
   write_file_atomic(o.out / "calibration.json", j.dump(2) + "\n");
 
   const fs::path script = plot_script(o.plot_script);
-  if (params.size() == 2) {
+  if (o.plot && params.size() == 2) {
     if (!fs::exists(script))
       throw ResourceError(script.string() + ": plotting script not found (set TOMOGRAIN_CALIBRATION_SCRIPT); the data are in " +
                           o.out.string());

@@ -36,6 +36,7 @@ struct CalibrateOptions {
   std::string executable;   // the tomograin program (this one: /proc/self/exe)
   std::string python = "/usr/bin/python3";
   std::string plot_script;  // "" = TOMOGRAIN_CALIBRATION_SCRIPT or the source tree's
+  bool plot = true;         // false: no objective_surface.png (no Python needed)
   bool quiet = false;
 };
 

@@ -20,6 +20,7 @@
 #include "core/config.hpp"
 #include "core/errors.hpp"
 #include "dem/oedometer.hpp"
+#include "dem/packing_io.hpp"
 
 extern char** environ;
 
@@ -156,6 +157,8 @@ CalibrationResult run_calibration(const CalibrateOptions& o) {
     Config cfg = Config::from_string(run_config_text(o.config, params, mid), o.config.string());
     const OedometerSetup s = read_oedometer_config(cfg, o.config.parent_path());
     if (!s.breakage) throw InputError(o.config.string() + ": breakage.enabled is false; the calibrated parameters are breakage's");
+    // The packing too: a bad one would fail every run, after DIR exists.
+    if (!s.packing_csv.empty()) read_packing_csv(s.packing_csv, s.engine.material.density_kg_m3);
     // A run's own history.csv as target ends a step past its target strain: allowed.
     if (t.largest_strain() > s.target_strain * 1.001)
       throw InputError(t.source + ": target strains reach " + std::to_string(t.largest_strain()) +
@@ -220,6 +223,13 @@ CalibrationResult run_calibration(const CalibrateOptions& o) {
       }
     }
     write_runs_csv(o.out, params, runs);
+    // Nothing ran at all (the first round is the whole initial design): the
+    // setup is at fault, not the parameters; stop instead of guessing on.
+    bool any = false;
+    for (const RunRecord& r : runs) any |= std::isfinite(r.score.objective);
+    if (!any)
+      throw ResourceError(o.out.string() + ": every run of the initial design failed (" + runs.front().status +
+                          "); see runs.csv and runs/*.log");
     std::vector<double> v;
     for (size_t i = 0; i < pts.size(); ++i) v.push_back(runs[first + i].score.objective);
     return v;

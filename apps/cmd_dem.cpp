@@ -94,6 +94,8 @@ static tg::app::Registrar reg{{"dem", 60,
   crush->add_option("--d0", o->crush.breakage.strength.d0_m, "Weibull reference size d0, m (default 1e-3)");
   crush->add_option("--seed", o->crush.breakage.strength.seed, "Strength seed (default 1)");
   crush->add_option("--min-split", o->crush.breakage.min_split_diameter_m, "Smallest diameter that splits, m (default 2e-4)");
+  crush->add_option("--bond-radius-multiplier", o->crush.breakage.bond.radius_multiplier,
+                    "Bond radius multiplier lambda of the fragments (default 1.25)");
   crush->add_option("--min-dt", o->crush.breakage.min_time_step_s,
                     "Density scaling: new spheres are made heavy enough for this time step, s (default 1e-8; 0 = off)");
   crush->add_option("-o,--output", o->out, "History CSV to write")->required();

@@ -12,26 +12,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-struct Line {
-  double a = 0, b = 0, sse = 0;  // y = a + b x
-};
-
-Line fit(const std::vector<double>& x, const std::vector<double>& y, size_t i0, size_t i1) {
-  double n = static_cast<double>(i1 - i0), sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (size_t i = i0; i < i1; ++i) {
-    sx += x[i];
-    sy += y[i];
-    sxx += x[i] * x[i];
-    sxy += x[i] * y[i];
-  }
-  Line l;
-  const double d = n * sxx - sx * sx;
-  l.b = d != 0 ? (n * sxy - sx * sy) / d : 0;
-  l.a = (sy - l.b * sx) / n;
-  for (size_t i = i0; i < i1; ++i) l.sse += std::pow(y[i] - l.a - l.b * x[i], 2);
-  return l;
-}
-
 // The value of `column` in the last row whose `key` column equals `value`.
 double last_where(const Table& t, const std::string& key, const std::string& value, const std::string& column) {
   if (!t.has(key) || !t.has(column)) return kNaN;
@@ -50,29 +30,6 @@ double last(const Table& t, const std::string& column) {
 Table read_if(const fs::path& p) { return fs::exists(p) ? read_csv(p) : Table{}; }
 
 }  // namespace
-
-double yield_stress_mpa(const std::vector<double>& strain, const std::vector<double>& stress_mpa, double floor_mpa) {
-  std::vector<double> x, y;  // log10 stress, strain: the curve up to its peak (unloading and drops left out)
-  double peak = 0;
-  for (size_t i = 0; i < strain.size() && i < stress_mpa.size(); ++i) {
-    if (!(stress_mpa[i] > floor_mpa) || !(stress_mpa[i] > peak)) continue;
-    peak = stress_mpa[i];
-    x.push_back(std::log10(stress_mpa[i]));
-    y.push_back(strain[i]);
-  }
-  if (x.size() < 6) return kNaN;
-  double best = std::numeric_limits<double>::infinity(), yield = kNaN;
-  for (size_t k = 3; k + 3 <= x.size(); ++k) {
-    const Line a = fit(x, y, 0, k), b = fit(x, y, k, x.size());
-    if (!(a.sse + b.sse < best) || b.b == a.b) continue;
-    // Two lines that meet outside the fitted stresses describe no yield.
-    const double meet = (a.a - b.a) / (b.b - a.b);
-    if (meet < x.front() || meet > x.back()) continue;
-    best = a.sse + b.sse;
-    yield = std::pow(10.0, meet);
-  }
-  return yield;
-}
 
 void write_summary(const Study& s, const Plan& p, const fs::path& out_csv) {
   // The experiment: the last stage's grading, the lineage's broken share.

@@ -80,6 +80,23 @@ printf '{"shape_zyx":[4,64,64],"dtype":"uint16","voxel_size_um":10}' > sat.json
 { head -c 19660 /dev/zero | tr '\0' '\377'; head -c 13108 /dev/urandom; } > sat.raw
 expect_bad "mostly saturated scan" "sat.json: 60 % of the voxels are saturated" -- "$TG" segment sat.json -o out.h5 --grain-radius-vox 5
 
+# dem calibrate (issue 21): config, target and ranges checked before the
+# output folder exists (no run starts on a config that cannot run).
+printf '[oedometer]\ntarget_strain = 0.05\nsnapshot_strains = [0.0]\n' > cal.toml
+printf 'strain,stress_Pa\n0.01,1e5\n0.04,1e6\n' > curve.csv
+printf '[oedometer]\ntarget_strain = 0.05\nsnapshot_strains = [0.0]\n[breakage]\nsigma_t0 = 1e7\n' > cal_typo.toml
+expect_bad "calibrate: unknown config key" "cal_typo.toml: unknown key 'breakage.sigma_t0'" -- "$TG" dem calibrate cal_typo.toml --target curve.csv -o out.cal
+printf 'strain,stress_Pa\n' > empty.csv
+expect_bad "calibrate: empty target curve" "empty.csv: the stress-strain curve has no rows" -- "$TG" dem calibrate cal.toml --target empty.csv -o out.cal
+printf '[target]\nstress_strain_csv = "curve.csv"\n[parameters]\nbond_radius_multiplier = [1.5, 0.9]\n' > range.toml
+expect_bad "calibrate: bad range" "range.toml: parameters.bond_radius_multiplier must be \[min, max\]" -- "$TG" dem calibrate cal.toml --target range.toml -o out.cal
+printf '[target]\nstress_strain_csv = "curve.csv"\nyield = 2e6\n' > tkey.toml
+expect_bad "calibrate: unknown target key" "tkey.toml: unknown key 'target.yield'" -- "$TG" dem calibrate cal.toml --target tkey.toml -o out.cal
+printf '[specimen]\npacking_csv = "nope.csv"\n[oedometer]\ntarget_strain = 0.05\nsnapshot_strains = [0.0]\n' > cal_nopack.toml
+expect_bad "calibrate: missing packing" "nope.csv" -- "$TG" dem calibrate cal_nopack.toml --target curve.csv -o out.cal
+printf 'strain,stress_Pa\n0.01,1e5\n0.09,1e6\n' > far.csv
+expect_bad "calibrate: target beyond the run" "far.csv: target strains reach 0.09" -- "$TG" dem calibrate cal.toml --target far.csv -o out.cal
+
 # NaN policy: `info` reports instead of refusing.
 "$TG" info nan.json | grep -q "2 NaN/Inf voxels" && { echo "ok   info reports NaN"; passes=$((passes+1)); } || { echo "FAIL info NaN"; fails=$((fails+1)); }
 

@@ -295,7 +295,8 @@ def main():
             (["--d0", "2e-3"], lambda t: t != c0),
             (["--seed", "4"], lambda t: t != c0),
             (["--min-split", "1e-2"], lambda t: t != c0),  # nothing that small splits... nor the grain
-            (["--min-dt", "1e-9"], lambda t: t != c0)]:
+            (["--min-dt", "1e-9"], lambda t: t != c0),
+            (["--bond-radius-multiplier", "1.6"], lambda t: t != c0)]:
             out = "cr_" + flags[0].strip("-") + ".csv"
             args = ["dem", "crush", "-o", out] + (["--travel", "0.08"] if flags[0] != "--travel" else []) + flags
             run(args)

@@ -1,0 +1,92 @@
+// Few-run minimisation of an expensive function on the unit box [0,1]^d:
+// a seeded space-filling Latin hypercube, then a Gaussian-process surrogate
+// whose expected improvement picks the next points (Jones, Schonlau & Welch
+// 1998, "Efficient global optimization of expensive black-box functions",
+// doi:10.1023/A:1008306431147). Used by `tomograin dem calibrate`
+// (dem/calibration/calibrate.hpp), where one evaluation is one DEM run.
+//
+// Surrogate: zero-mean GP on the standardised objective, Matérn 5/2 kernel
+// with one length scale per dimension (ARD), a nugget for noisy runs; the
+// length scales and nugget are chosen on a grid by the profile marginal
+// likelihood (the signal variance has a closed form given the others).
+// Batches of q points (parallel runs) are picked by the "kriging believer":
+// each picked point is added with its predicted mean as if observed, and the
+// next one maximises EI on that fantasy (hyperparameters kept).
+// Everything is deterministic given the seed (no thread-dependent sums).
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include <Eigen/Dense>
+
+namespace tg::dem::calibration {
+
+using Point = std::vector<double>;  // in [0,1]^d
+
+// n points in [0,1]^d, one in each of the n strata of every axis (a Latin
+// hypercube), each placed uniformly inside its cell; of `candidates` such
+// designs drawn from `seed`, the one whose closest pair is farthest apart
+// (maximin). Deterministic given the arguments.
+std::vector<Point> latin_hypercube(int n, int d, uint64_t seed, int candidates = 64);
+
+class GaussianProcess {
+ public:
+  // Fits to (x, y), choosing hyperparameters by marginal likelihood. y finite.
+  void fit(const std::vector<Point>& x, const std::vector<double>& y);
+  // Same hyperparameters, new data (the kriging believer's fantasies).
+  void refit(const std::vector<Point>& x, const std::vector<double>& y);
+  // Posterior mean and standard deviation of the latent function at p (in y's units).
+  void predict(const Point& p, double& mean, double& sd) const;
+
+  const std::vector<double>& length_scales() const { return ell_; }
+  double nugget() const { return nugget_; }  // noise variance / signal variance
+  double signal_sd() const;                  // in y's units
+  double log_likelihood() const { return loglik_; }
+
+ private:
+  double kernel(const Point& a, const Point& b) const;  // unit amplitude
+  bool factor();  // Cholesky of K + nugget I; false when not positive definite
+
+  std::vector<Point> x_;
+  Eigen::VectorXd alpha_;  // (K + g I)^-1 z, z = standardised y
+  Eigen::LLT<Eigen::MatrixXd> llt_;
+  Eigen::VectorXd z_;
+  double y_mean_ = 0, y_sd_ = 1, signal_var_ = 1, nugget_ = 1e-6, loglik_ = 0;
+  std::vector<double> ell_;
+};
+
+// Expected improvement below `best` (minimisation) of a normal prediction.
+double expected_improvement(double mean, double sd, double best);
+
+struct SearchOptions {
+  int evaluations = 20;  // total, the initial design included
+  int initial = 8;       // Latin hypercube points evaluated first
+  int batch = 1;         // points proposed per round after the initial design
+  uint64_t seed = 1;
+};
+
+// One round of evaluations: objectives for the points (NaN = the evaluation
+// failed; it is then counted as the worst value seen, so the search avoids it).
+using Evaluate = std::function<std::vector<double>(const std::vector<Point>& points)>;
+
+struct SearchResult {
+  std::vector<Point> points;
+  std::vector<double> values;  // as returned (NaN kept)
+  int best = -1;               // index of the lowest finite value
+  GaussianProcess surrogate;   // fitted to every evaluation
+  Point predicted_optimum;     // minimum of the surrogate's mean
+  double predicted_value = 0, predicted_sd = 0;
+};
+
+// Latin hypercube (options.initial points) then EI rounds of options.batch
+// until options.evaluations. `evaluate` sees the points in order; values of
+// later rounds depend only on earlier values, so results are independent of
+// how a round is run (in parallel or not).
+SearchResult minimise(int d, const SearchOptions& options, const Evaluate& evaluate);
+
+// Minimum over [0,1]^d of f: seeded random candidates, then a compass search
+// from the best few. Used for EI (negated) and the surrogate's mean.
+Point minimise_on_box(int d, uint64_t seed, const std::function<double(const Point&)>& f);
+
+}  // namespace tg::dem::calibration

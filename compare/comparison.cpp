@@ -14,6 +14,7 @@
 #include "compare/dem_stage.hpp"
 #include "compare/report_files.hpp"
 #include "compare/xct_stage.hpp"
+#include "dem/yield_stress.hpp"
 #include "core/errors.hpp"
 
 namespace tg::compare {
@@ -236,6 +237,14 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
   meta["tracking"] = rep.tracking ? json("tracking/ (lineage.csv, events.csv, summary.csv)") : json(rep.tracking_note);
   meta["dem_lineage"] = lineage_json(rep);
   meta["segmentation_grain_radius_m"] = opt.grain_radius_vox > 0 ? json(nullptr) : json(scale0.median_radius_m);
+  // Yield of each curve by the one rule the study summary and calibration use (null: no yield found).
+  auto yield_of = [](const Curve& c) {
+    const double y = dem::yield_stress_mpa(c.strain, c.stress_mpa);
+    return std::isfinite(y) ? json(y) : json(nullptr);
+  };
+  meta["yield"] = {{"dem_mpa", yield_of(dem.history)},
+                   {"experiment_mpa", yield_of(expc)},
+                   {"rule", "bilinear strain-log10(stress) fit above 0.1 MPa (dem/yield_stress.hpp)"}};
   rep.seconds = seconds_since(t_all);
   meta["compute_seconds"] = rep.seconds;
   write_report_json(out, data, meta);

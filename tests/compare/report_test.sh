@@ -32,6 +32,19 @@ for f in report.json summary.csv psd.csv shape_classes.csv distances.csv stress_
          fabric.csv normals.csv coordination_by_size.csv lineage.csv tracker_bias.csv; do
   test -s "$W/report/$f" || { echo "missing $f"; exit 1; }
 done
+# The yield (dem/yield_stress.hpp's rule, tested in tests/study) lies inside each curve's stresses,
+# and the study's Fig. 10 columns are the DEM history's counts.
+$PY - "$W/report" <<'PY'
+import csv, json, sys
+d = sys.argv[1]
+y = json.load(open(f"{d}/report.json"))["yield"]
+ss = list(csv.DictReader(open(f"{d}/stress_strain.csv")))
+for series in ("dem", "experiment"):
+    s = [float(r["stress_mpa"]) for r in ss if r["series"] == series]
+    assert y[f"{series}_mpa"] is not None and 0.1 < y[f"{series}_mpa"] < max(s), (series, y)
+br = [r for r in csv.DictReader(open(f"{d}/broken.csv")) if r["series"] == "dem_history"]
+assert br and all(float(r["grains_broken"]) >= 0 for r in br), "broken.csv: no DEM history counts"
+PY
 
 # The page plus a script that reports, after load, how many images decoded.
 cp "$W/report/index.html" "$W/report/check.html"

@@ -11,7 +11,7 @@
 namespace tg {
 namespace {
 
-constexpr int64_t kBins = 4096;  // bins of a block's histogram
+constexpr int64_t kBlockBins = 4096;  // bins of a block's histogram
 constexpr double kMinSeparability = 0.8;
 constexpr double kMinPhase = 0.05;
 
@@ -102,7 +102,7 @@ LocalThreshold local_moments_thresholds(const Volume<uint16_t>& grey, const Fiel
     }
   if (lo < 0) throw InputError("segment: no grey level left to threshold");
   int shift = 0;
-  while (((hi - lo) >> shift) >= kBins) ++shift;
+  while (((hi - lo) >> shift) >= kBlockBins) ++shift;
   const Axis ax = axis(s.nx, lt.nbx);
   lt.t.assign(size_t(nb), 0.f);
   std::vector<uint8_t> known(size_t(nb), 0);
@@ -112,7 +112,7 @@ LocalThreshold local_moments_thresholds(const Volume<uint16_t>& grey, const Fiel
   // thread, not one per block of the volume).
 #pragma omp parallel reduction(+ : trusted)
   {
-    std::vector<int64_t> hist(size_t(lt.nbx * kBins));
+    std::vector<int64_t> hist(size_t(lt.nbx * kBlockBins));
 #pragma omp for schedule(static)
     for (int64_t q = 0; q < lt.nbz * lt.nby; ++q) {
       const int64_t bz = q / lt.nby, by = q % lt.nby;
@@ -123,12 +123,12 @@ LocalThreshold local_moments_thresholds(const Volume<uint16_t>& grey, const Fiel
           const int64_t a = fov.active ? fov.x0[size_t(j)] : 0, e = fov.active ? fov.x1[size_t(j)] : s.nx;
           for (int64_t i = a; i < e; ++i) {
             const int64_t g = row[i];
-            if (g >= lo && g <= hi) ++hist[size_t(ax.blk[size_t(i)] * kBins + ((g - lo) >> shift))];
+            if (g >= lo && g <= hi) ++hist[size_t(ax.blk[size_t(i)] * kBlockBins + ((g - lo) >> shift))];
           }
         }
       // Own thresholds of the bimodal blocks.
       for (int64_t bx = 0; bx < lt.nbx; ++bx) {
-        const std::vector<int64_t> h(hist.begin() + bx * kBins, hist.begin() + (bx + 1) * kBins);
+        const std::vector<int64_t> h(hist.begin() + bx * kBlockBins, hist.begin() + (bx + 1) * kBlockBins);
         int64_t n = 0;
         for (auto c : h) n += c;
         if (n < 64) continue;

@@ -15,7 +15,7 @@ namespace {
 
 constexpr uint32_t kDecided = 1u << 31;  // a flood from this height already settled this voxel
 constexpr uint32_t kVisited = 1u << 30;  // in the current flood
-constexpr uint32_t kLabelMask = kVisited - 1;
+constexpr uint32_t kMarkerMask = kVisited - 1;
 
 // The candidates of 26-connectivity: the solid voxels whose 3x3x3 block
 // holds nothing higher. The block's maximum of the masked distance (void
@@ -185,7 +185,7 @@ uint32_t markers_of(const Volume<float>& dist, Solid solid, Volume<uint32_t>& ma
           return true;
         });
       const uint32_t label = higher ? 0 : ++count;
-      if (count > kLabelMask) throw ResourceError("markers: more than 2^30 markers");
+      if (count > kMarkerMask) throw ResourceError("markers: more than 2^30 markers");
       for (int64_t q : queue) {
         uint32_t v = M[q] & ~kVisited;
         if (d[q] == top) v |= kDecided;  // same height, same cap: same outcome
@@ -197,7 +197,7 @@ uint32_t markers_of(const Volume<float>& dist, Solid solid, Volume<uint32_t>& ma
     }
   }
 #pragma omp parallel for schedule(static)
-  for (int64_t i = 0; i < n; ++i) M[i] &= kLabelMask;
+  for (int64_t i = 0; i < n; ++i) M[i] &= kMarkerMask;
   return count;
 }
 

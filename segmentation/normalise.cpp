@@ -12,7 +12,7 @@
 namespace tg {
 namespace {
 
-constexpr int64_t kBins = int64_t{1} << 20;
+constexpr int64_t kFloatBins = int64_t{1} << 20;
 
 struct MinMax {
   double lo = std::numeric_limits<double>::infinity();
@@ -63,7 +63,7 @@ NormaliseRange auto_range(const Volume<float>& v) {
 
   // Histogram of 2^20 bins on [min, max]; per-thread partials summed in a
   // fixed order (integer sums, so the order does not matter anyway).
-  const double width = (mm.hi - mm.lo) / double(kBins);
+  const double width = (mm.hi - mm.lo) / double(kFloatBins);
   const double inv = 1.0 / width;
   const int nthreads = omp_get_max_threads();
   std::vector<std::vector<int64_t>> part(static_cast<size_t>(nthreads));
@@ -71,19 +71,19 @@ NormaliseRange auto_range(const Volume<float>& v) {
 #pragma omp parallel num_threads(nthreads)
   {
     auto& h = part[static_cast<size_t>(omp_get_thread_num())];
-    h.assign(kBins, 0);
+    h.assign(kFloatBins, 0);
 #pragma omp for schedule(static)
     for (int64_t i = 0; i < n; ++i) {
       const float f = x[i];
       if (!std::isfinite(f)) continue;
-      const int64_t b = std::min<int64_t>(kBins - 1, static_cast<int64_t>((double(f) - mm.lo) * inv));
+      const int64_t b = std::min<int64_t>(kFloatBins - 1, static_cast<int64_t>((double(f) - mm.lo) * inv));
       ++h[static_cast<size_t>(b)];
     }
   }
-  std::vector<int64_t> hist(kBins, 0);
+  std::vector<int64_t> hist(kFloatBins, 0);
   for (const auto& h : part)
     if (!h.empty())
-      for (int64_t b = 0; b < kBins; ++b) hist[size_t(b)] += h[size_t(b)];
+      for (int64_t b = 0; b < kFloatBins; ++b) hist[size_t(b)] += h[size_t(b)];
 
   const double total = double(mm.finite);
   NormaliseRange r;

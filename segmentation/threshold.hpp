@@ -96,4 +96,16 @@ struct SolidPeak {
 };
 SolidPeak solid_peak(const std::vector<int64_t>& hist, uint16_t t);
 
+// The grey levels of pure void and pure solid (the inputs of a
+// partial-volume estimate, measure/grey_volume.hpp): the histogram without
+// its 0 bin (pre-masked voxels), split at its Tsai threshold, and each
+// side's peak mode as solid_peak finds it (the void side from its 0.1th
+// percentile up). The modes, not the means: partial-volume voxels pull a
+// phase's mean towards the other phase, not its mode.
+struct PhaseLevels {
+  uint16_t threshold = 0;
+  double void_level = 0, solid = 0;
+};
+PhaseLevels phase_levels(std::vector<int64_t> hist);
+
 }  // namespace tg

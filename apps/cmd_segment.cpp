@@ -181,7 +181,8 @@ static tg::app::Registrar reg{{"segment", 30,
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--threshold", o->threshold,
-                  "moments | otsu | manual | local (moments per block, for uneven brightness)")
+                  "moments | otsu | manual | local (moments per block, for uneven brightness) | midpoint (halfway "
+                  "between the void and solid peaks)")
       ->capture_default_str();
   sub->add_option("--local-window-vox", o->seg.local_window_vox,
                   "Block edge of --threshold local in voxels (default 4 R, at least 32); implies --threshold local")

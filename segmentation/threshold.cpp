@@ -48,6 +48,7 @@ const char* threshold_method_name(ThresholdMethod m) {
     case ThresholdMethod::otsu: return "otsu";
     case ThresholdMethod::manual: return "manual";
     case ThresholdMethod::local: return "local";
+    case ThresholdMethod::midpoint: return "midpoint";
   }
   return "?";
 }
@@ -57,7 +58,8 @@ ThresholdMethod parse_threshold_method(const std::string& s) {
   if (s == "otsu") return ThresholdMethod::otsu;
   if (s == "manual") return ThresholdMethod::manual;
   if (s == "local") return ThresholdMethod::local;
-  throw UsageError("threshold method '" + s + "': expected moments, otsu, manual or local");
+  if (s == "midpoint") return ThresholdMethod::midpoint;
+  throw UsageError("threshold method '" + s + "': expected moments, otsu, manual, local or midpoint");
 }
 
 std::vector<int64_t> histogram_u16(const Volume<uint16_t>& v, const std::vector<int64_t>* x0,

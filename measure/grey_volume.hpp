@@ -11,9 +11,9 @@
 // holds the solid fraction f = (g - void) / (solid - void) of its volume
 // (the linear two-material mixture model of partial volume, e.g. Laidlaw,
 // Fleischer & Barr 1998, IEEE Trans. Med. Imaging 17(1):74-86; on the
-// threshold-driven systematic error of voxel
-// counts, growing with surface over volume: Lin et al. 2015, Computers &
-// Geosciences 77:1-7, doi:10.1016/j.cageo.2014.12.008), and a point-spread
+// threshold-driven systematic error of voxel counts, growing with surface
+// over volume: Lin et al. 2015, Computers & Geosciences 77:1-7,
+// doi:10.1016/j.cageo.2014.12.008), and a point-spread
 // function moves grey between neighbouring voxels but keeps its sum, so
 // summing f over a band around a surface returns the solid volume inside it
 // whatever the blur, as long as the band is wider than the blur.
@@ -35,6 +35,8 @@
 // median |dV/V| 9.6 % with f everywhere, 2.6 % with interior 1; the labels
 // alone 5.7 %). Filled pores are interior: the volume is the envelope's, as
 // the label's (segmentation/pore_filter.hpp fills them on purpose).
+// (Those figures: the blind sweep's prototype on dev seed 1; the sweep's
+// own figures are in bench/segmentation/RESULTS.md.)
 // f is not clamped to [0, 1]: noise (sigma 0.08 of the contrast at CNR 13)
 // then averages out over the band instead of biasing it upwards (clamping at
 // 0 adds ~0.03 per shell voxel, +0.5 % at R 20); it is clamped to [-1, 2]

@@ -43,7 +43,7 @@
 // so that a stray saturated or zeroed voxel cannot dominate, and grey 0
 // counts as void (pre-masked voxels, docs/real_scans.md).
 // The band is one voxel on each side of the labelled surface: enough for a
-// PSF sigma up to ~1 voxel (blind sweep, PSF 1.5: 1.1 % vs 3.6 % for the
+// PSF sigma up to ~1 voxel (blind sweep, PSF 1.5: 1.11 % vs 3.38 % for the
 // labels; a wider band would need each far voxel's nearest label).
 //
 // Levels: the void and solid grey levels are the modes of the two phases'

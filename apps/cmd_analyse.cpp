@@ -92,6 +92,8 @@ int run_analyse(const Opts& o) {
   mea.in = seg.out;
   mea.out = {(d / "particles.csv").string()};
   mea.feret = o.feret;
+  mea.grey = o.in;  // volumes from the grey levels (measure/grey_volume.hpp)
+  mea.voxel_um = o.voxel_um;
   mea.box = o.box;
   costs.push_back(run_stage("measure", [&] { tg::app::run_measure(mea); }));
 
@@ -115,7 +117,8 @@ int run_analyse(const Opts& o) {
 namespace cmd_analyse {
 static tg::app::Registrar reg{{"analyse", 50,
       "Segment a scan, measure every particle and compute its grading, in one go:\n"
-      "the jobs of `segment`, `measure` and `psd` with their defaults (run those for every option).\n"
+      "the jobs of `segment`, `measure --grey SCAN` (volumes from the scan's grey levels) and `psd` with\n"
+      "their defaults (run those for every option).\n"
       "Writes DIR/labels.h5 (+ labels.segment.json), DIR/particles.csv, DIR/psd.csv and\n"
       "DIR/psd_summary.csv (D10/D50/D60/Cu, FR and AR classes) and DIR/analyse.json (each step's wall\n"
       "time and peak memory, bytes and bytes per voxel). DIR appears only when all succeed.\n\n"

@@ -14,7 +14,6 @@
 
 namespace cmd_segment {
 
-
 // Any input type as u16: float32 is normalised (auto range, printed), u8
 // widened. `top` is the input's saturation level in the u16 grey (255 for u8).
 tg::Volume<uint16_t> to_grey(tg::AnyVolume&& v, const std::string& name, int& top) {
@@ -31,18 +30,22 @@ tg::Volume<uint16_t> to_grey(tg::AnyVolume&& v, const std::string& name, int& to
     for (int64_t i = 0; i < b->size(); ++i) g[i] = (*b)[i];
     return g;
   }
-  throw tg::InputError(name + ": holds uint32 (labels?); segment expects a grey scan (uint16, float32 or uint8)");
+  throw tg::InputError(name + ": holds uint32 (labels?); expected a grey scan (uint16, float32 or uint8)");
 }
 
 }  // namespace cmd_segment
 
 namespace tg::app {
 
-int run_segment(SegmentJob& o) {
+Volume<uint16_t> read_grey(const std::string& in, double voxel_um, int& top) {
   tg::ReadOptions ro;
-  ro.voxel_um = o.voxel_um;
+  ro.voxel_um = voxel_um;
+  return cmd_segment::to_grey(tg::read_volume(in, ro), in, top);
+}
+
+int run_segment(SegmentJob& o) {
   int top = 65535;
-  tg::Volume<uint16_t> grey = cmd_segment::to_grey(tg::read_volume(o.in, ro), o.in, top);
+  tg::Volume<uint16_t> grey = read_grey(o.in, o.voxel_um, top);
   const tg::Geometry geom = grey.geometry();
 
   tg::SegmentOptions s = o.seg;
@@ -178,7 +181,8 @@ static tg::app::Registrar reg{{"segment", 30,
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--threshold", o->threshold,
-                  "moments | otsu | manual | local (moments per block, for uneven brightness)")
+                  "moments | otsu | manual | local (moments per block, for uneven brightness) | midpoint (halfway "
+                  "between the void and solid peaks)")
       ->capture_default_str();
   sub->add_option("--local-window-vox", o->seg.local_window_vox,
                   "Block edge of --threshold local in voxels (default 4 R, at least 32); implies --threshold local")

@@ -43,8 +43,16 @@ struct MeasureJob {
   int threads = 0;
   unsigned seed = 42;
   double voxel_um = 0;
+  // The grey scan the labels came from (any format segment reads): the
+  // volumes become partial-volume estimates (measure/grey_volume.hpp).
+  std::string grey;
 };
 int run_measure(const MeasureJob& job);
+
+// A grey scan as u16, as segment reads it: float32 normalised (auto range,
+// printed), u8 widened; `top` is the input's saturation level in u16 grey
+// (255 for u8). InputError for a label (u32) volume.
+Volume<uint16_t> read_grey(const std::string& in, double voxel_um, int& top);
 
 // The u32 label volume of `in` (an .h5 without a dataset name: its /labels),
 // with --voxel-um applied; InputError when it has no voxel size.

@@ -62,6 +62,14 @@ std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels
   so.collect_surface = true;
   so.threads = opt.threads;
   const LabelStatsResult ls = label_stats(labels, so);
+  std::vector<double> grey_vox;  // aligned with ls.labels; empty without a grey scan
+  if (opt.grey) {
+    GreyVolumeOptions go = opt.grey_levels;
+    go.threads = opt.threads;
+    std::vector<uint32_t> ids;
+    for (const LabelStats& st : ls.labels) ids.push_back(st.label);
+    grey_vox = grey_volumes(labels, *opt.grey, ids, go);
+  }
   const auto dirs = opt.feret_exact ? std::vector<Vec3>{} : half_sphere_directions(opt.feret_directions);
   const auto& h = labels.geometry().voxel_size_m;
   FeretExactOptions exact;
@@ -79,6 +87,13 @@ std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels
   for (int64_t p = 0; p < n; ++p) {
     Particle& P = out[static_cast<size_t>(p)];
     P.stats = ls.labels[static_cast<size_t>(p)];
+    if (!grey_vox.empty()) {
+      const auto& e = labels.geometry().voxel_size_m;
+      // Floor: a labelled voxel lies above a threshold near half contrast,
+      // so it is about half solid at least; noise in the shell of a
+      // one-voxel speck must not give it a volume of zero or less.
+      P.grey_volume_m3 = std::max(grey_vox[size_t(p)], 0.5 * double(P.stats.voxels)) * e[0] * e[1] * e[2];
+    }
     auto pts = caliper_points(ls.surface_of(static_cast<size_t>(p)), h, P.stats.box_lo, opt.face_offset);
     if (need_hull) {
       const ConvexHull hull = convex_hull(pts);
@@ -134,11 +149,13 @@ Table particle_table(const std::vector<Particle>& ps) {
   constexpr double mm = 1e3, mm3 = 1e9, mm5 = 1e15;
   col("label", [](const Particle& p) { return p.stats.label; });
   col("voxels", [](const Particle& p) { return p.stats.voxels; });
-  col("volume_mm3", [&](const Particle& p) { return p.stats.volume_m3 * mm3; });
+  // volume_mm3 and d_eq_mm: the grey-level volume where there is one (the
+  // unbiased estimate), else the label's; the label's own stays beside it.
+  col("volume_mm3", [&](const Particle& p) { return p.volume_m3() * mm3; });
   col("cx_mm", [&](const Particle& p) { return p.stats.centroid_m[2] * mm; });
   col("cy_mm", [&](const Particle& p) { return p.stats.centroid_m[1] * mm; });
   col("cz_mm", [&](const Particle& p) { return p.stats.centroid_m[0] * mm; });
-  col("d_eq_mm", [&](const Particle& p) { return p.stats.d_eq_m * mm; });
+  col("d_eq_mm", [&](const Particle& p) { return std::cbrt(6.0 * p.volume_m3() / std::numbers::pi) * mm; });
   col("d_max_mm", [&](const Particle& p) { return p.d_max_m * mm; });
   col("d_min_mm", [&](const Particle& p) { return p.d_min_m * mm; });
   col("d_med_mm", [&](const Particle& p) { return p.d_med_m * mm; });
@@ -182,6 +199,8 @@ Table particle_table(const std::vector<Particle>& ps) {
     col("sphericity", [](const Particle& p) { return p.sphericity; });
   }
   if (!ps.empty() && ps.front().coordination >= 0) col("coordination", [](const Particle& p) { return p.coordination; });
+  if (!ps.empty() && ps.front().grey_volume_m3 >= 0)
+    col("label_volume_mm3", [&](const Particle& p) { return p.stats.volume_m3 * mm3; });
   return t;
 }
 

@@ -23,6 +23,7 @@
 
 #include "core/table.hpp"
 #include "measure/contacts.hpp"
+#include "measure/grey_volume.hpp"
 #include "measure/hull.hpp"
 #include "measure/label_stats.hpp"
 #include "measure/surface.hpp"
@@ -50,6 +51,17 @@ struct ParticleOptions {
   bool surface = false;       // surface area + Wadell sphericity (measure/surface.hpp; costs ~10x the Feret step)
   SurfaceOptions surface_opt;
   bool contacts = false;      // also find contacts (measure/contacts.hpp): the coordination column
+  // The grey scan the labels were segmented from (same shape), or null.
+  // When given, each particle also gets the partial-volume estimate of
+  // measure/grey_volume.hpp (levels from `grey_levels`) as grey_volume_m3,
+  // which the table reports as volume_mm3 and d_eq_mm (label_volume_mm3
+  // keeps the label's). Dmed, FR, solidity and sphericity keep the label's
+  // own volume: its calipers, hull and surface come from the same voxels,
+  // and a segmentation that shrinks a grain shrinks both alike (the
+  // grey volume over the shrunken calipers read Dmed 7 % high on
+  // data_synth spheres of radius 8 voxels: tests/apps/analyse_test.sh).
+  const VolumeView<const uint16_t>* grey = nullptr;
+  GreyVolumeOptions grey_levels;
   ContactOptions contact;
   int threads = 0;            // 0 = OpenMP default
 };
@@ -66,6 +78,9 @@ struct Particle {
   double sphericity = -1;       // Wadell; -1 when not asked for
   double d_max_m = 0, d_med_m = 0, d_min_m = 0, fr = 0, ar = 0;  // per the chosen sizing
   bool fr_clamped = false;  // Dmin / Dmed was > 1 (non-convex particle): fr set to 1
+  double grey_volume_m3 = -1;  // ParticleOptions::grey only (measure/grey_volume.hpp); -1 otherwise
+  // The volume the table reports: the grey-level one where there is one, else the label's.
+  double volume_m3() const { return grey_volume_m3 >= 0 ? grey_volume_m3 : stats.volume_m3; }
 };
 
 std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels, const ParticleOptions& opt = {});
@@ -81,14 +96,15 @@ std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels
 // flag tells how many. d_med itself is not changed (the grading uses it).
 void fill_sizing(Particle& p, Sizing sizing);
 
-// Columns: label, voxels, volume_mm3, cx_mm, cy_mm, cz_mm, d_eq_mm, d_max_mm,
+// Columns: label, voxels, volume_mm3 (Particle::volume_m3()), cx_mm, cy_mm, cz_mm, d_eq_mm, d_max_mm,
 // d_min_mm, d_med_mm, fr, ar, fr_clamped, obb_max_mm, obb_med_mm, obb_min_mm,
 // touches_border, below_limit, then feret_dmax_mm, feret_dmin_mm,
 // feret_dmin_any_mm, hull_vertices, bbox (voxel indices) and the principal
 // moments of inertia (mm^5), the equivalent ellipsoid's full axes
 // ell_d1_mm >= ell_d2_mm >= ell_d3_mm and major axis ell_axis1_z/y/x
 // (label_stats.hpp), then convex_volume_mm3 and solidity, surface_mm2 and
-// sphericity when asked for, and `coordination` when contacts were found.
+// sphericity when asked for, `coordination` when contacts were found, and
+// label_volume_mm3 when volume_mm3 is the grey-level volume.
 //
 // Convex volume: the volume of the hull the Feret calipers use (points
 // lambda/2 = 0.15 voxel beyond the boundary voxels' centres, feret.hpp).

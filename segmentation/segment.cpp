@@ -76,6 +76,11 @@ GreyDecision choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions
   if (o.threshold == ThresholdMethod::manual) {
     d.t.method = ThresholdMethod::manual;
     d.t.value = static_cast<uint16_t>(o.manual_threshold);
+  } else if (o.threshold == ThresholdMethod::midpoint) {
+    const PhaseLevels pl = phase_levels(hist);
+    d.t = moments_threshold(hist);  // its p0, z0, z1 stay in the summary
+    d.t.method = ThresholdMethod::midpoint;
+    d.t.value = static_cast<uint16_t>(std::clamp(std::lround(0.5 * (pl.void_level + pl.solid)), 0L, 65535L));
   } else {
     d.t = o.threshold == ThresholdMethod::otsu ? otsu_threshold(hist) : moments_threshold(hist);
   }

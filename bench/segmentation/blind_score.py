@@ -11,13 +11,16 @@
   * under-segmenting: labels holding >= 2 truth particles, each >= 20 % of
     that particle inside the label; under_one_grain: those of them whose
     pieces all come from one grain (halves or a chip glued back)
-  * median |dV/V| over matched particles (V: truth voxels)
+  * median |dV/V| over matched particles (V: truth voxels), of the label's
+    voxel count; with a particle table (`tomograin measure --grey`, its
+    volume_mm3 over the voxel volume) also of the volume tomograin reports:
+    median_abs_dv_reported, on the same matched pairs
   * pore over-segmentation: INTACT grains (every one has 2-5 pores) that are
     over-segmented, the count
 Differences from accuracy.py (data_synth truth): 20 % instead of 10 % for
 the over/under pieces, and halves counted one by one instead of pairs.
 
-usage: blind_score.py PREFIX (.h5 truth) LABELS(.h5 | _labels.raw) [--json OUT]
+usage: blind_score.py PREFIX (.h5 truth) LABELS(.h5 | _labels.raw) [--particles CSV] [--json OUT]
 """
 import argparse
 import csv
@@ -53,7 +56,21 @@ def load_labels(path, shape):
         return f[name][...]
 
 
-def evaluate(truth, pred, table):
+def label_voxel_m3(labels_h5):
+    """Voxel volume (m^3) of a tomograin label file (its voxel_size_m)."""
+    path, name = labels_h5.split(":", 1) if ":" in labels_h5 else (labels_h5, "labels")
+    with h5py.File(path, "r") as f:
+        h = f[name].attrs.get("voxel_size_m", f.attrs.get("voxel_size_m"))
+    return float(np.prod(h))
+
+
+def load_reported_volumes(csv_path, voxel_m3):
+    """label -> reported volume in voxels, from a tomograin particle table."""
+    with open(csv_path) as f:
+        return {int(r["label"]): float(r["volume_mm3"]) * 1e-9 / voxel_m3 for r in csv.DictReader(f)}
+
+
+def evaluate(truth, pred, table, reported=None):
     t = truth.ravel().astype(np.int64)
     p = pred.ravel().astype(np.int64)
     st = np.bincount(t)
@@ -66,6 +83,10 @@ def evaluate(truth, pred, table):
     m = iou >= 0.5
     match = dict(zip(kt[m].tolist(), kp[m].tolist()))
     vol_err = np.abs(sp[kp[m]] - st[kt[m]]) / st[kt[m]]
+    rep_err = None
+    if reported is not None:
+        rep = np.array([reported[int(q)] for q in kp[m]], dtype=float)
+        rep_err = np.abs(rep - st[kt[m]]) / st[kt[m]]
     big = c >= PIECE * st[kt]
     pieces_t = np.bincount(kt[big], minlength=st.size)
     pieces_p = np.bincount(kp[big], minlength=sp.size)
@@ -94,6 +115,7 @@ def evaluate(truth, pred, table):
             "under_segmenting": int((pieces_p[1:] >= 2).sum()),
             "under_one_grain": same,
             "median_abs_dv": float(np.median(vol_err)) if tp else None,
+            "median_abs_dv_reported": float(np.median(rep_err)) if tp and rep_err is not None else None,
             "intact": len(intact),
             "pore_over_segmented_intact": sum(1 for i in intact if pieces_t[i] >= 2)}
 
@@ -102,10 +124,14 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("prefix", help="blind_scene.py output prefix")
     ap.add_argument("labels", help="labels: .h5[:dataset] (default /labels) or a raw little-endian uint32 file (.raw)")
+    ap.add_argument("--particles", help="tomograin particle table (measure --grey) of LABELS: also score its volumes")
     ap.add_argument("--json")
     a = ap.parse_args()
     truth, table = load_truth(a.prefix)
-    accuracy.print_result(evaluate(truth, load_labels(a.labels, truth.shape), table), a.json)
+    reported = None
+    if a.particles:
+        reported = load_reported_volumes(a.particles, label_voxel_m3(a.labels))
+    accuracy.print_result(evaluate(truth, load_labels(a.labels, truth.shape), table, reported), a.json)
 
 
 if __name__ == "__main__":

@@ -20,7 +20,9 @@ else: what a user knows) and, with --skimage, the scikit-image peer
 (/work/shared/peers/skimage/ref_pipeline.py SCENE.tif --radius R). Both are
 scored by blind_score.py (F1 at IoU >= 0.5, halves recovered, over / under
 segmented at 20 %, median |dV/V|, over-segmented intact porous grains).
-Time: tomograin's own seconds_total; the peer's threshold..relabel stages
+Then `tomograin measure LABELS --grey SCENE.h5:/scan` (what `analyse` runs):
+its volume_mm3 is scored too (median_abs_dv_reported, beside the label
+counts' median_abs_dv). Time: tomograin's own seconds_total; the peer's threshold..relabel stages
 (as compare_skimage.py); wall and CPU seconds of the whole command (GNU time)
 in the CSV. Peak memory: the command's maximum RSS (GNU time) per voxel;
 each pipeline's own report (tomograin's peak_rss_bytes_per_voxel, the
@@ -55,7 +57,7 @@ FACTORS = {"gap": [0.5, 1.0, 1.5, 2.5], "psf": [0.5, 0.7, 1.0, 1.5], "cnr": [5.0
 SHORT = {"tomograin": "tg", "skimage": "sk"}
 R_SIZES = {8: 96, 12: 128, 20: 192, 40: 320, 60: 448}
 METRICS = ["f1", "halves_recovered", "halves", "over_segmented", "under_segmenting", "under_one_grain", "median_abs_dv",
-           "pore_over_segmented_intact", "n_true", "n_pred", "segment_s", "peak_b_per_vox"]
+           "median_abs_dv_reported", "pore_over_segmented_intact", "n_true", "n_pred", "segment_s", "peak_b_per_vox"]
 
 
 def run(cmd):
@@ -93,8 +95,13 @@ def segment_tomograin(a, prefix, R, nvox, truth, table):
     wall, cpu, rss, _ = run([a.tomograin, "segment", prefix + ".h5:/scan", "-o", out, "--grain-radius-vox", f"{R:g}"]
                             + a.tomograin_args.split())
     summ = json.load(open(out[:-3] + ".segment.json"))
-    res = blind_score.evaluate(truth, blind_score.load_labels(out, truth.shape), table)
-    res.update(segment_s=summ["seconds_total"], wall_s=wall, cpu_s=cpu, peak_b_per_vox=rss / nvox,
+    # The volumes a user gets: `measure --grey` (partial volume from the scan's
+    # grey levels, measure/grey_volume.hpp), scored beside the label counts.
+    parts = out[:-3] + "_particles.csv"
+    mwall, _, _, _ = run([a.tomograin, "measure", out, "--grey", prefix + ".h5:/scan", "-o", parts, "--no-contacts"])
+    reported = blind_score.load_reported_volumes(parts, blind_score.label_voxel_m3(out))
+    res = blind_score.evaluate(truth, blind_score.load_labels(out, truth.shape), table, reported)
+    res.update(segment_s=summ["seconds_total"], measure_wall_s=mwall, wall_s=wall, cpu_s=cpu, peak_b_per_vox=rss / nvox,
                own_peak_b_per_vox=summ.get("peak_rss_bytes_per_voxel"), merges=summ.get("merge", {}).get("merges"))
     return res
 
@@ -139,7 +146,7 @@ def plan(a):
 def fmt(v, key):
     if v is None:
         return "-"
-    if key == "median_abs_dv":
+    if key in ("median_abs_dv", "median_abs_dv_reported"):
         return f"{100 * v:.2f} %"
     if key in ("f1",):
         return f"{v:.3f}"
@@ -157,7 +164,8 @@ def write_md(a, rows, header):
         groups.setdefault((r["factor"], str(r["level"])), {}).setdefault(r["pipeline"], []).append(r)
     lines = [header, ""]
     cols = [("F1", "f1"), ("halves rec.", "halves_frac"), ("over", "over_segmented"), ("under", "under_segmenting"),
-            ("med. abs dV/V", "median_abs_dv"), ("pore-over intact", "pore_over_segmented_intact"),
+            ("med. abs dV/V", "median_abs_dv"), ("med. abs dV/V reported", "median_abs_dv_reported"),
+            ("pore-over intact", "pore_over_segmented_intact"),
             ("segment s", "segment_s"), ("peak B/vox", "peak_b_per_vox")]
     head = "| factor | level | seeds | particles (true) |"
     for name, _ in cols:
@@ -179,7 +187,9 @@ def write_md(a, rows, header):
     lines += ["", "Means over seeds; halves recovered pooled over seeds. tg = tomograin, sk = scikit-image peer.",
               "over: truth particles split into >= 2 labels of >= 20 % each; under: labels holding >= 2 truth",
               "particles >= 20 % each; pore-over intact: over-segmented intact (porous) grains; segment s: tomograin's",
-              "seconds_total, the peer's threshold..relabel stages; peak B/vox: the command's max RSS (GNU time) / voxels."]
+              "seconds_total, the peer's threshold..relabel stages; peak B/vox: the command's max RSS (GNU time) / voxels.",
+              "med. abs dV/V: of the label voxel counts; reported: of the volume_mm3 that `tomograin measure --grey`",
+              "(and `analyse`) report, the grey-level partial-volume estimate (measure/grey_volume.hpp), same matches."]
     lines += scene_checks(a, groups)
     with open(os.path.join(a.dir, f"sweep{a.tag}.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
@@ -265,7 +275,7 @@ def main():
     rows = []
     csv_path = os.path.join(a.dir, f"sweep{a.tag}.csv")
     keys = ["factor", "level", "size", "R", "seed", "pipeline", "scene", "gen_s", "wall_s", "cpu_s", "own_peak_b_per_vox",
-            "merges"] + METRICS + ["intact"]
+            "merges", "measure_wall_s"] + METRICS + ["intact"]
     with open(csv_path + ".part", "w", newline="") as fcsv:
         w = csv.DictWriter(fcsv, keys, extrasaction="ignore")
         w.writeheader()
@@ -289,7 +299,7 @@ def main():
                 fcsv.flush()
                 print(f"{fac:8s} {str(lev):12s} seed {seed} {pipe:9s} F1 {r['f1']:.3f} halves "
                       f"{r['halves_recovered']}/{r['halves']} over {r['over_segmented']} under {r['under_segmenting']} "
-                      f"|dV/V| {r['median_abs_dv']:.4f} pore-over {r['pore_over_segmented_intact']} "
+                      f"|dV/V| {r['median_abs_dv']:.4f} (reported {r['median_abs_dv_reported'] or float('nan'):.4f}) pore-over {r['pore_over_segmented_intact']} "
                       f"{r['segment_s']:.2f} s {r['peak_b_per_vox']:.1f} B/vox", flush=True)
             write_md(a, rows, header)
     os.replace(csv_path + ".part", csv_path)

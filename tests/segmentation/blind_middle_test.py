@@ -7,25 +7,34 @@ middle setting: 15 % of the grains split in halves 1 voxel apart, 5 %
 chipped (chip kept, 1 voxel away), 2-5 pores of radius 1-3 voxels per grain,
 PSF sigma 0.7 voxel, CNR 13, no cupping, no drift. About 270 particles and
 65-70 halves per scan. Segmented as a user would:
-`tomograin segment SCAN.h5:/scan --grain-radius-vox 16`, scored by
-bench/segmentation/blind_score.py against the exact truth.
+`tomograin segment SCAN.h5:/scan --grain-radius-vox 16`, measured as
+`analyse` does (`tomograin measure LABELS --grey SCAN`: the volumes a user
+reads, measure/grey_volume.hpp), scored by bench/segmentation/blind_score.py
+against the exact truth.
 
 Issue 19's targets, over both scans together: F1 (IoU >= 0.5, one-to-one)
 >= 0.98, split halves recovered >= 95 %, median |dV/V| <= 1 % on each scan,
-no intact (porous) grain over-segmented. Seeds: 101 and 102. The generator
+no intact (porous) grain over-segmented. |dV/V| is scored twice on the
+same matches: the label's voxel count, and the volume tomograin reports. Seeds: 101 and 102. The generator
 and the sweep were developed on seeds 1-9 only; these two seeds were not
 looked at while tuning anything.
 
-Measured (both seeds, shared 2-core VM, ~15 s CPU):
+Measured (both seeds, shared 2-core VM, ~15 s CPU; ~17 s with the measure step):
   f06130f (before the grey evidence): F1 0.880 (0.907, 0.852), halves 66/135
     (48.9 %), median |dV/V| 2.40 % and 2.42 %, no intact grain over-segmented
   ee93d95 (grey evidence, h from R):  F1 0.941 (0.957, 0.924), halves 123/135
     (91.1 %), median |dV/V| 2.53 % and 2.57 %, no intact grain over-segmented
-The targets are not reached yet (docs/segmentation.md says why: thin chips
-and slivers cut by the faces without a bright core of their own; the void
-lines the design asks for cost ~1-3 % of a particle's voxels), so the test
-asserts regression bounds a little under today's figures, prints the
-targets beside them, and fails when the method falls back.
+  5e1f391 (same labels; reported volume from measure --grey): median |dV/V|
+    of the reported volume 0.56 % and 0.61 % (the label counts' 2.53 and
+    2.57 % unchanged). The volume target is asserted on the reported volume
+    as it stands (<= 1 %); the method was fixed on dev seeds 1-3 before
+    these two seeds were run.
+The F1 and halves targets are not reached yet (docs/segmentation.md says
+why: thin chips and slivers cut by the faces without a bright core of their
+own; the void lines the design asks for cost ~1-3 % of a particle's voxels,
+which the reported volume gives back), so the test asserts regression bounds a little
+under today's figures for those, prints the targets beside them, and fails
+when the method falls back.
 
 usage: blind_middle_test.py TOMOGRAIN [WORKDIR]
 """
@@ -51,31 +60,36 @@ def main():
     work = sys.argv[2] if len(sys.argv) > 2 else tempfile.mkdtemp(prefix="tg_blind_")
     os.makedirs(work, exist_ok=True)
     tot = {"matched": 0, "n_true": 0, "n_pred": 0, "halves": 0, "halves_recovered": 0, "pore_over_segmented_intact": 0}
-    medians = []
+    medians, reported_medians = [], []
     for seed in SEEDS:
         prefix = os.path.join(work, f"blind_{seed}")
         blind_scene.main(["-o", prefix, "--size", str(SIZE), "--radius", str(R), "--seed", str(seed), "--no-measure"])
         out = prefix + "_labels.h5"
-        p = subprocess.run([tomograin, "segment", prefix + ".h5:/scan", "-o", out, "--grain-radius-vox", str(R)],
-                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        if p.returncode:
-            sys.exit(f"FAIL: tomograin segment exit {p.returncode}\n{p.stdout}")
+        parts = prefix + "_particles.csv"
+        for cmd in ([tomograin, "segment", prefix + ".h5:/scan", "-o", out, "--grain-radius-vox", str(R)],
+                    [tomograin, "measure", out, "--grey", prefix + ".h5:/scan", "-o", parts, "--no-contacts"]):
+            p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            if p.returncode:
+                sys.exit(f"FAIL: tomograin {cmd[1]} exit {p.returncode}\n{p.stdout}")
         truth, table = blind_score.load_truth(prefix)
-        res = blind_score.evaluate(truth, blind_score.load_labels(out, truth.shape), table)
+        reported = blind_score.load_reported_volumes(parts, blind_score.label_voxel_m3(out))
+        res = blind_score.evaluate(truth, blind_score.load_labels(out, truth.shape), table, reported)
         print(f"seed {seed}: {json.dumps(res)}")
         for k in tot:
             tot[k] += res[k]
         medians.append(res["median_abs_dv"])
+        reported_medians.append(res["median_abs_dv_reported"])
     f1 = 2 * tot["matched"] / (tot["n_true"] + tot["n_pred"])
     halves = tot["halves_recovered"] / tot["halves"]
     print(f"both seeds: F1 {f1:.4f}, halves {tot['halves_recovered']}/{tot['halves']} ({100 * halves:.1f} %), "
-          f"median |dV/V| {', '.join(f'{100 * m:.2f} %' for m in medians)}, "
+          f"median |dV/V| {', '.join(f'{100 * m:.2f} %' for m in medians)} (label voxels), "
+          f"{', '.join(f'{100 * m:.2f} %' for m in reported_medians)} (reported volume), "
           f"over-segmented intact grains {tot['pore_over_segmented_intact']}")
     # (bound asserted, issue 19's target)
-    BOUND = {"f1": (0.925, 0.98), "halves": (0.87, 0.95), "dv": (0.030, 0.01)}
+    BOUND = {"f1": (0.925, 0.98), "halves": (0.87, 0.95), "dv": (0.030, 0.01), "dv_reported": (0.01, 0.01)}
     print(f"targets: F1 >= {BOUND['f1'][1]}, halves >= {100 * BOUND['halves'][1]:.0f} %, median |dV/V| <= "
           f"{100 * BOUND['dv'][1]:.0f} %; asserted bounds: {BOUND['f1'][0]}, {100 * BOUND['halves'][0]:.0f} %, "
-          f"{100 * BOUND['dv'][0]:.0f} %")
+          f"{100 * BOUND['dv'][0]:.0f} % (label voxels), {100 * BOUND['dv_reported'][0]:.0f} % (reported volume)")
     fails = []
     if tot["halves"] < 40:
         fails.append(f"only {tot['halves']} halves in the scenes (the test needs >= 40)")
@@ -84,7 +98,10 @@ def main():
     if halves < BOUND["halves"][0]:
         fails.append(f"halves recovered {100 * halves:.1f} % < {100 * BOUND['halves'][0]:.0f} %")
     if max(medians) > BOUND["dv"][0]:
-        fails.append(f"median |dV/V| {100 * max(medians):.2f} % > {100 * BOUND['dv'][0]:.0f} %")
+        fails.append(f"median |dV/V| of the label voxels {100 * max(medians):.2f} % > {100 * BOUND['dv'][0]:.0f} %")
+    if max(reported_medians) > BOUND["dv_reported"][0]:
+        fails.append(f"median |dV/V| of the reported volume {100 * max(reported_medians):.2f} % > "
+                     f"{100 * BOUND['dv_reported'][0]:.0f} %")
     if tot["pore_over_segmented_intact"]:
         fails.append(f"{tot['pore_over_segmented_intact']} intact porous grains over-segmented")
     if fails:

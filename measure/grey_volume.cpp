@@ -1,0 +1,120 @@
+#include "measure/grey_volume.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "core/errors.hpp"
+
+namespace tg::measure {
+namespace grey_volume_detail {
+
+// Fixed point of the sums: 2^-24 voxel per unit. A contribution is at most
+// 2 voxels (f clamped to [-1, 2]), so a label of up to 2^38 voxels (far
+// beyond a 1220^3 scan) cannot overflow an int64.
+constexpr double kUnit = 16777216.0;  // 2^24
+
+inline int64_t fixed(double voxels) { return static_cast<int64_t>(std::llround(voxels * kUnit)); }
+
+}  // namespace grey_volume_detail
+
+std::vector<double> grey_volumes(const VolumeView<const uint32_t>& labels, const VolumeView<const uint16_t>& grey,
+                                 const std::vector<uint32_t>& ids, const GreyVolumeOptions& opt) {
+  using grey_volume_detail::fixed;
+  const Shape s = labels.shape();
+  if (!(grey.shape() == s))
+    throw UsageError("grey volume " + grey.shape().str() + " and labels " + s.str() + " differ in shape");
+  if (!(opt.solid_grey > opt.void_grey))
+    throw UsageError("grey volume: the solid level (" + std::to_string(opt.solid_grey) +
+                     ") must be above the void level (" + std::to_string(opt.void_grey) + ")");
+  if (!std::is_sorted(ids.begin(), ids.end()) || std::adjacent_find(ids.begin(), ids.end()) != ids.end())
+    throw UsageError("grey volume: the label list must be ascending without repeats");
+  const int nt = opt.threads > 0 ? opt.threads : omp_get_max_threads();
+  const size_t nl = ids.size();
+  // Label -> index in ids: a table up to 2^24 (64 MB), else binary search.
+  std::vector<int32_t> table;
+  if (!ids.empty() && ids.back() <= (1u << 24)) {
+    table.assign(size_t(ids.back()) + 1, -1);
+    for (size_t n = 0; n < nl; ++n) table[ids[n]] = int32_t(n);
+  }
+  auto index_of = [&](uint32_t l) -> int32_t {
+    if (!table.empty()) return l < table.size() ? table[l] : -1;
+    const auto it = std::lower_bound(ids.begin(), ids.end(), l);
+    return it != ids.end() && *it == l ? int32_t(it - ids.begin()) : -1;
+  };
+
+  // f(g) for every grey level: (g - void) / (solid - void), clamped to
+  // [-1, 2]; grey 0 is pre-masked void (header).
+  std::vector<double> frac(65536);
+  const double span = opt.solid_grey - opt.void_grey;
+  for (size_t g = 0; g < frac.size(); ++g)
+    frac[g] = g == 0 ? 0.0 : std::clamp((double(g) - opt.void_grey) / span, -1.0, 2.0);
+  const int64_t one = fixed(1.0);
+
+  std::vector<std::vector<int64_t>> part(static_cast<size_t>(nt));
+#pragma omp parallel num_threads(nt)
+  {
+    const int t = omp_get_thread_num();
+    const int n_threads = omp_get_num_threads();
+    std::vector<int64_t>& acc = part[static_cast<size_t>(t)];
+    acc.assign(nl, 0);
+    const int64_t z0 = s.nz * t / n_threads, z1 = s.nz * (t + 1) / n_threads;
+    std::array<uint32_t, 26> nb_label{};
+    std::array<int, 26> nb_count{};
+    for (int64_t k = z0; k < z1; ++k)
+      for (int64_t j = 0; j < s.ny; ++j) {
+        const uint32_t* row = labels.row(k, j).data();
+        const uint16_t* grow = grey.row(k, j).data();
+        for (int64_t i = 0; i < s.nx; ++i) {
+          const uint32_t l = row[i];
+          const double f = frac[grow[i]];
+          if (l) {
+            const bool boundary = k == 0 || k == s.nz - 1 || j == 0 || j == s.ny - 1 || i == 0 || i == s.nx - 1 ||
+                                  labels(k - 1, j, i) != l || labels(k + 1, j, i) != l ||
+                                  labels(k, j - 1, i) != l || labels(k, j + 1, i) != l || row[i - 1] != l ||
+                                  row[i + 1] != l;
+            const int32_t x = index_of(l);
+            if (x >= 0) acc[size_t(x)] += boundary ? fixed(f) : one;
+            continue;
+          }
+          // Unlabelled: share f among the labels of the 26 neighbours, by count.
+          int distinct = 0, n = 0;
+          for (int64_t dk = -1; dk <= 1; ++dk) {
+            const int64_t kk = k + dk;
+            if (kk < 0 || kk >= s.nz) continue;
+            for (int64_t dj = -1; dj <= 1; ++dj) {
+              const int64_t jj = j + dj;
+              if (jj < 0 || jj >= s.ny) continue;
+              const uint32_t* nrow = labels.row(kk, jj).data();
+              for (int64_t di = -1; di <= 1; ++di) {
+                const int64_t ii = i + di;
+                if (ii < 0 || ii >= s.nx) continue;
+                const uint32_t m = nrow[ii];
+                if (!m) continue;  // the voxel itself is 0 too
+                ++n;
+                int d = 0;
+                while (d < distinct && nb_label[size_t(d)] != m) ++d;
+                if (d == distinct) nb_label[size_t(distinct++)] = m, nb_count[size_t(d)] = 0;
+                ++nb_count[size_t(d)];
+              }
+            }
+          }
+          for (int d = 0; d < distinct; ++d) {
+            const int32_t x = index_of(nb_label[size_t(d)]);
+            if (x >= 0) acc[size_t(x)] += fixed(f * nb_count[size_t(d)] / n);
+          }
+        }
+      }
+  }
+
+  std::vector<int64_t> sum(nl, 0);
+  for (const auto& p : part)  // integer sums: any order gives the same result
+    for (size_t n = 0; n < p.size(); ++n) sum[n] += p[n];
+  std::vector<double> out(nl);
+  for (size_t n = 0; n < nl; ++n) out[n] = double(sum[n]) / grey_volume_detail::kUnit;
+  return out;
+}
+
+}  // namespace tg::measure

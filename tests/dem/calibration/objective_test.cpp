@@ -67,6 +67,46 @@ TEST(CalibrationObjective, HandComputedMisfits) {
   EXPECT_TRUE(std::isnan(cal::score_run(t, h, 100).objective));
 }
 
+TEST(CalibrationObjective, CrushTermHandComputed) {
+  cal::Target t;
+  t.curve_strain = {0.03};
+  t.curve_stress_Pa = {2e6};
+  t.crush_bonds_broken = 120;
+  t.w_crush = 0.5;
+  tg::Table h;
+  h.add("strain", {0.0, 0.03});
+  h.add("top_stress_Pa", {0.0, 3e6});
+  // Curve: |3 - 2| / 2 = 0.5. Crush: run mean 150 vs 120 -> 30 / 120 = 0.25,
+  // weighted 0.5 -> 0.125; 90 is as far below: the same term.
+  const cal::RunScore s = cal::score_run(t, h, 10, 150.0);
+  EXPECT_NEAR(s.curve_misfit, 0.5, 1e-12);
+  EXPECT_NEAR(s.crush_misfit, 0.25, 1e-12);
+  EXPECT_DOUBLE_EQ(s.crush_bonds_broken, 150.0);
+  EXPECT_NEAR(s.objective, 0.5 + 0.125, 1e-12);
+  EXPECT_NEAR(cal::score_run(t, h, 10, 90.0).objective, 0.625, 1e-12);
+  // The crush tests failed (NaN): no objective, not a silent zero term.
+  EXPECT_TRUE(std::isnan(cal::score_run(t, h, 10).objective));
+  // Without a crush target the mean is ignored.
+  t.crush_bonds_broken = 0;
+  EXPECT_NEAR(cal::score_run(t, h, 10, 150.0).objective, 0.5, 1e-12);
+}
+
+TEST(CalibrationObjective, ReadsCrushTarget) {
+  TmpDir d;
+  const auto t = cal::read_target(d.write("c.toml", "[crush]\nbonds_broken = 134.5\ngrains = 12\n[weights]\ncrush = 2.0\n"));
+  EXPECT_DOUBLE_EQ(t.crush_bonds_broken, 134.5);
+  EXPECT_EQ(t.crush_grains, 12);
+  EXPECT_DOUBLE_EQ(t.crush_diameter_m, 1.2e-3);  // documented defaults
+  EXPECT_DOUBLE_EQ(t.crush_travel, 0.4);
+  EXPECT_DOUBLE_EQ(t.w_crush, 2.0);
+  EXPECT_NE(error_of(d.write("n.toml", "[crush]\nbonds_broken = -3.0\n")).find("crush.bonds_broken must be > 0"),
+            std::string::npos);
+  EXPECT_NE(error_of(d.write("k.toml", "[crush]\nbonds_broken = 100.0\nseeds = 30\n")).find("unknown key 'crush.seeds'"),
+            std::string::npos);
+  EXPECT_NE(error_of(d.write("g.toml", "[crush]\nbonds_broken = 100.0\ngrains = 0\n")).find("crush.grains must be >= 1"),
+            std::string::npos);
+}
+
 TEST(CalibrationObjective, ExactRunScoresZero) {
   cal::Target t;
   t.curve_strain = {0.01, 0.02, 0.03};

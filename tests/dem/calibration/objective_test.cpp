@@ -1,5 +1,5 @@
 // The calibration objective (dem/calibration/objective.hpp) on hand-computed
-// cases, and the target file's checks.
+// cases, the target file's checks, and the crush tests behind the crush term.
 #include "dem/calibration/objective.hpp"
 
 #include <gtest/gtest.h>
@@ -10,6 +10,8 @@
 #include <unistd.h>
 
 #include "core/errors.hpp"
+#include "dem/breakage/crush.hpp"
+#include "dem/calibration/calibrate.hpp"
 
 namespace cal = tg::dem::calibration;
 namespace fs = std::filesystem;
@@ -155,4 +157,34 @@ TEST(CalibrationObjective, InterpolatesAndClamps) {
   EXPECT_DOUBLE_EQ(cal::interpolate(x, y, -1.0), 0.0);
   EXPECT_DOUBLE_EQ(cal::interpolate(x, y, 5.0), 30.0);
   EXPECT_DOUBLE_EQ(cal::interpolate(x, y, 1.0), 10.0);
+}
+
+// The crush term's tests (calibrate.hpp): each candidate's mean is the mean
+// of run_crush over strength seeds 1..grains with the target's diameter and
+// travel, d0 = 0 read as the crush diameter, and the same for any threads.
+TEST(CalibrationObjective, CrushMeanIsTheCrushTestsMean) {
+  cal::Target t;
+  t.crush_grains = 2;
+  t.crush_diameter_m = 1.2e-3;
+  t.crush_travel = 0.08;  // past the split and the first bond breaks (dozens), < 1 s a test
+  std::vector<tg::dem::OedometerSetup> s(2);
+  for (auto& x : s) x.breakage_options.min_time_step_s = 2e-8;
+  s[0].breakage_options.bond.radius_multiplier = 0.9;
+  s[1].breakage_options.bond.radius_multiplier = 1.6;
+  s[1].breakage_options.strength.sigma_t0_Pa = 8e6;
+  const std::vector<double> m = cal::crush_bonds_broken(t, s, 2);
+  ASSERT_EQ(m.size(), 2u);
+  double direct = 0;
+  for (uint64_t seed : {1, 2}) {
+    tg::dem::breakage::CrushOptions c;
+    c.diameter_m = 1.2e-3;
+    c.final_travel_fraction = 0.08;
+    c.engine = s[1].engine;
+    c.breakage = s[1].breakage_options;
+    c.breakage.strength.d0_m = 1.2e-3;
+    c.breakage.strength.seed = seed;
+    direct += static_cast<double>(tg::dem::breakage::run_crush(c).final_record.bonds_broken);
+  }
+  EXPECT_GT(direct, 0);  // the test breaks bonds: the term measures something
+  EXPECT_EQ(m[1], direct / 2);  // 2 threads over both setups = one by one, bit for bit
 }

@@ -19,6 +19,7 @@
 #include "core/atomic_file.hpp"
 #include "core/config.hpp"
 #include "core/errors.hpp"
+#include "dem/breakage/crush.hpp"
 #include "dem/oedometer.hpp"
 #include "dem/packing_io.hpp"
 
@@ -85,8 +86,8 @@ std::vector<double> scale(const std::vector<Parameter>& p, const Point& u) {
 void write_runs_csv(const fs::path& out, const std::vector<Parameter>& params, const std::vector<RunRecord>& runs) {
   std::vector<std::string> names{"run"};
   for (const auto& p : params) names.push_back(p.name);
-  for (const char* n : {"objective", "curve_misfit", "yield_misfit", "broken_misfit", "yield_stress_Pa", "peak_stress_Pa",
-                        "final_strain", "final_broken_fraction", "seconds"})
+  for (const char* n : {"objective", "curve_misfit", "yield_misfit", "broken_misfit", "crush_misfit", "yield_stress_Pa",
+                        "peak_stress_Pa", "final_strain", "final_broken_fraction", "crush_bonds_broken", "seconds"})
     names.push_back(n);
   names.push_back("status");
   Table t;
@@ -97,8 +98,8 @@ void write_runs_csv(const fs::path& out, const std::vector<Parameter>& params, c
     std::vector<double> row{static_cast<double>(i)};
     row.insert(row.end(), r.params.begin(), r.params.end());
     for (double v : {r.score.objective, r.score.curve_misfit, r.score.yield_misfit, r.score.broken_misfit,
-                     r.score.yield_stress_Pa, r.score.peak_stress_Pa, r.score.final_strain,
-                     r.score.final_broken_fraction, r.seconds})
+                     r.score.crush_misfit, r.score.yield_stress_Pa, r.score.peak_stress_Pa, r.score.final_strain,
+                     r.score.final_broken_fraction, r.score.crush_bonds_broken, r.seconds})
       row.push_back(v);
     for (size_t c = 0; c < row.size(); ++c) cols[c].push_back(row[c]);
     status.push_back(r.status);
@@ -115,6 +116,34 @@ fs::path plot_script(const std::string& given) {
 }
 
 }  // namespace calibrate_detail
+
+std::vector<double> crush_bonds_broken(const Target& t, const std::vector<OedometerSetup>& setups, int threads) {
+  const int n = t.crush_grains;
+  const int64_t tests = static_cast<int64_t>(setups.size()) * n;
+  std::vector<double> bonds(static_cast<size_t>(tests), std::numeric_limits<double>::quiet_NaN());
+#pragma omp parallel for schedule(dynamic) num_threads(std::max(1, threads))
+  for (int64_t k = 0; k < tests; ++k) {
+    const OedometerSetup& s = setups[static_cast<size_t>(k / n)];
+    breakage::CrushOptions c;
+    c.diameter_m = t.crush_diameter_m;
+    c.final_travel_fraction = t.crush_travel;
+    c.engine = s.engine;
+    c.breakage = s.breakage_options;
+    if (c.breakage.strength.d0_m == 0) c.breakage.strength.d0_m = t.crush_diameter_m;
+    c.breakage.strength.seed = static_cast<uint64_t>(k % n + 1);
+    try {
+      bonds[static_cast<size_t>(k)] = static_cast<double>(breakage::run_crush(c).final_record.bonds_broken);
+    } catch (const std::exception&) {  // leaves NaN: that setup has no objective
+    }
+  }
+  std::vector<double> mean;
+  for (size_t i = 0; i < setups.size(); ++i) {
+    double sum = 0;  // in seed order: the same sum for any thread count
+    for (int j = 0; j < n; ++j) sum += bonds[i * static_cast<size_t>(n) + static_cast<size_t>(j)];
+    mean.push_back(sum / n);
+  }
+  return mean;
+}
 
 std::string run_config_text(const std::filesystem::path& config, const std::vector<Parameter>& params,
                             const std::vector<double>& values) {
@@ -176,6 +205,16 @@ CalibrationResult run_calibration(const CalibrateOptions& o) {
     std::vector<std::chrono::steady_clock::time_point> start(pts.size());
     size_t next = 0;
     for (const Point& u : pts) runs.push_back({scale(params, u), {}, "", 0});
+    // The crush tests of the round's candidates, before their oedometer runs.
+    std::vector<double> crush(pts.size(), std::numeric_limits<double>::quiet_NaN());
+    if (t.crush_bonds_broken > 0) {
+      std::vector<OedometerSetup> setups;
+      for (size_t i = 0; i < pts.size(); ++i) {
+        Config cfg = Config::from_string(run_config_text(o.config, params, runs[first + i].params), o.config.string());
+        setups.push_back(read_oedometer_config(cfg, o.config.parent_path()));
+      }
+      crush = crush_bonds_broken(t, setups, o.jobs);
+    }
     auto launch = [&](size_t i) {
       const std::string name = run_name(first + i);
       const fs::path cfg = o.out / "runs" / (name + ".toml");
@@ -209,8 +248,10 @@ CalibrationResult run_calibration(const CalibrateOptions& o) {
           const fs::path dir = o.out / "runs" / name;
           const Table h = read_csv(dir / "history.csv", {"strain", "top_stress_Pa"});
           const double grains = static_cast<double>(read_csv(dir / "packing_initial.csv").rows());
-          r.score = score_run(t, h, grains);
-          r.status = std::isfinite(r.score.objective) ? "ok" : "short of the target strain";
+          r.score = score_run(t, h, grains, crush[i]);
+          r.status = std::isfinite(r.score.objective)           ? "ok"
+                     : t.crush_bonds_broken > 0 && !std::isfinite(crush[i]) ? "crush tests failed"
+                                                                             : "short of the target strain";
         } catch (const InputError& e) {
           r.status = std::string("unreadable (") + e.what() + ")";
         }
@@ -267,16 +308,22 @@ CalibrationResult run_calibration(const CalibrateOptions& o) {
   }
   nlohmann::json j;
   j["objective"] = {
-      {"definition", "J = w_curve*m_curve + w_yield*m_yield + w_broken*m_broken over the targets given"},
+      {"definition", "J = w_curve*m_curve + w_yield*m_yield + w_broken*m_broken + w_crush*m_crush over the targets given"},
       {"m_curve", "RMS_i(sigma_run(eps_i) - sigma_i) / RMS_i(sigma_i), top platen stress interpolated in history.csv"},
       {"m_yield", "|yield_run - yield_target| / yield_target (bilinear strain-log10 stress fit above 0.1 MPa; 1 if none)"},
       {"m_broken", "RMS_j(grains_broken/grains at eps_j - target fraction)"},
+      {"m_crush", "|b_run - b_target| / b_target, b = mean bonds broken by stress over single-grain crush tests "
+                  "(strength seeds 1..grains) run with the candidate's config"},
       {"weights", {{"stress_strain", t.curve_strain.empty() ? 0.0 : t.w_curve},
                    {"yield_stress", t.yield_stress_Pa > 0 ? t.w_yield : 0.0},
-                   {"broken_fraction", t.broken_strain.empty() ? 0.0 : t.w_broken}}}};
+                   {"broken_fraction", t.broken_strain.empty() ? 0.0 : t.w_broken},
+                   {"crush", t.crush_bonds_broken > 0 ? t.w_crush : 0.0}}}};
   j["target"] = {{"file", t.source}, {"stress_strain_csv", t.curve_file}, {"curve_points", t.curve_strain.size()},
                  {"yield_stress_Pa", t.yield_stress_Pa}, {"broken_strain", t.broken_strain},
                  {"broken_fraction", t.broken_fraction}};
+  if (t.crush_bonds_broken > 0)
+    j["target"]["crush"] = {{"bonds_broken", t.crush_bonds_broken}, {"grains", t.crush_grains},
+                            {"diameter_m", t.crush_diameter_m}, {"travel", t.crush_travel}};
   j["config"] = o.config.string();
   for (size_t k = 0; k < params.size(); ++k)
     j["parameters"].push_back({{"name", params[k].name}, {"config_key", params[k].config_key},

@@ -24,6 +24,7 @@
 #include <string>
 
 #include "dem/calibration/objective.hpp"
+#include "dem/oedometer.hpp"
 #include "dem/calibration/surrogate.hpp"
 
 namespace tg::dem::calibration {
@@ -49,6 +50,17 @@ struct CalibrationResult {
 // Checks everything a run needs (InputError / UsageError), then runs the
 // search. A plotting failure is a ResourceError after every data file exists.
 CalibrationResult run_calibration(const CalibrateOptions& o);
+
+// The mean number of bonds broken by stress over the target's crush tests
+// (dem/breakage/crush.hpp, strength seeds 1..t.crush_grains, diameter and
+// travel from the target) run with the material, contact, damping and
+// breakage options of `setup` (a run's config: the candidate's σ_t0 and λ).
+// breakage.d0_m = 0 (the packing's mean diameter in the oedometer) means the
+// crush diameter here: the crush grain is the reference size. One result per
+// entry of `setups`, `threads` tests at a time; each test is single-threaded
+// and independent, so the result does not depend on `threads`. NaN for a
+// setup whose tests failed.
+std::vector<double> crush_bonds_broken(const Target& t, const std::vector<OedometerSetup>& setups, int threads);
 
 // The config text of one run: CONFIG with `values` set at the parameters'
 // keys and relative paths made absolute (the run's config lives in DIR/runs).

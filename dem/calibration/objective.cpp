@@ -72,6 +72,12 @@ Target read_target(const std::filesystem::path& path) {
   t.w_curve = cfg.get("weights.stress_strain", t.w_curve);
   t.w_yield = cfg.get("weights.yield_stress", t.w_yield);
   t.w_broken = cfg.get("weights.broken_fraction", t.w_broken);
+  t.w_crush = cfg.get("weights.crush", t.w_crush);
+  const bool crush = cfg.has("crush.bonds_broken");
+  t.crush_bonds_broken = cfg.get("crush.bonds_broken", t.crush_bonds_broken);
+  t.crush_grains = cfg.get("crush.grains", t.crush_grains);
+  t.crush_diameter_m = cfg.get("crush.diameter_m", t.crush_diameter_m);
+  t.crush_travel = cfg.get("crush.travel", t.crush_travel);
   for (Parameter& p : t.parameters) {
     const std::string key = "parameters." + p.name;
     const std::vector<double> r = cfg.get(key, std::vector<double>{p.min, p.max});
@@ -91,16 +97,21 @@ Target read_target(const std::filesystem::path& path) {
   cfg.require(t.w_curve >= 0, "weights.stress_strain", "must be >= 0");
   cfg.require(t.w_yield >= 0, "weights.yield_stress", "must be >= 0");
   cfg.require(t.w_broken >= 0, "weights.broken_fraction", "must be >= 0");
+  cfg.require(t.w_crush >= 0, "weights.crush", "must be >= 0");
+  cfg.require(!crush || t.crush_bonds_broken > 0, "crush.bonds_broken", "must be > 0 (or left out)");
+  cfg.require(t.crush_grains >= 1, "crush.grains", "must be >= 1");
+  cfg.require(t.crush_diameter_m > 0, "crush.diameter_m", "must be > 0");
+  cfg.require(t.crush_travel > 0 && t.crush_travel < 0.9, "crush.travel", "must be in (0, 0.9) (platen travel / diameter)");
   if (!curve.empty()) {
     const std::filesystem::path p = std::filesystem::path(curve).is_absolute() ? std::filesystem::path(curve)
                                                                                 : path.parent_path() / curve;
     read_curve(t, p, src);
   }
   const bool any = (!t.curve_strain.empty() && t.w_curve > 0) || (t.yield_stress_Pa > 0 && t.w_yield > 0) ||
-                   (!t.broken_strain.empty() && t.w_broken > 0);
+                   (!t.broken_strain.empty() && t.w_broken > 0) || (t.crush_bonds_broken > 0 && t.w_crush > 0);
   if (!any)
     throw InputError(src + ": no target with a positive weight (give target.stress_strain_csv, "
-                           "target.yield_stress_Pa or target.broken_strain/broken_fraction)");
+                           "target.yield_stress_Pa, target.broken_strain/broken_fraction or crush.bonds_broken)");
   return t;
 }
 
@@ -112,9 +123,10 @@ double interpolate(const std::vector<double>& x, const std::vector<double>& y, d
   return y[i - 1] + w * (y[i] - y[i - 1]);
 }
 
-RunScore score_run(const Target& t, const Table& history, double initial_grains) {
+RunScore score_run(const Target& t, const Table& history, double initial_grains, double crush_bonds_broken) {
   using namespace objective_detail;
   RunScore s;
+  s.crush_bonds_broken = crush_bonds_broken;
   const std::vector<double>& e = history.num("strain");
   const std::vector<double>& sig = history.num("top_stress_Pa");
   if (e.empty()) {
@@ -153,6 +165,14 @@ RunScore score_run(const Target& t, const Table& history, double initial_grains)
     for (size_t i = 0; i < t.broken_strain.size(); ++i) d.push_back(interpolate(e, f, t.broken_strain[i]) - t.broken_fraction[i]);
     s.broken_misfit = rms(d);
     j += t.w_broken * s.broken_misfit;
+  }
+  if (t.crush_bonds_broken > 0) {
+    if (!std::isfinite(crush_bonds_broken)) {
+      s.objective = kNaN;
+      return s;
+    }
+    s.crush_misfit = std::abs(crush_bonds_broken - t.crush_bonds_broken) / t.crush_bonds_broken;
+    j += t.w_crush * s.crush_misfit;
   }
   s.objective = j;
   return s;

@@ -11,10 +11,16 @@
 //   yield_stress_Pa = 2.0e6          # the yield rule of dem/yield_stress.hpp
 //   broken_strain = [0.044, 0.1548]  # broken fraction of the initial grains
 //   broken_fraction = [0.05, 0.35]   # (grains_broken / grains) at these strains
+//   [crush]                          # single-grain crush tests (dem/breakage/crush.hpp)
+//   bonds_broken = 134.0             # mean bonds broken by stress over the tests
+//   grains = 30                      # tests, strength seeds 1..grains (default 30)
+//   diameter_m = 1.2e-3              # grain diameter (default 1.2 mm)
+//   travel = 0.4                     # final platen travel / diameter (default 0.4)
 //   [weights]                        # of each misfit in the objective (default 1)
 //   stress_strain = 1.0
 //   yield_stress = 1.0
 //   broken_fraction = 1.0
+//   crush = 1.0
 //   [parameters]                     # searched ranges [min, max]
 //   sigma_t0_Pa = [6.0e6, 24.0e6]           # breakage.sigma_t0_Pa
 //   bond_radius_multiplier = [0.8, 1.6]     # breakage.bond_radius_multiplier
@@ -26,9 +32,15 @@
 //   m_yield  = |σ_y,run − σ_y| / σ_y; 1 when the run's curve has no yield.
 //   m_broken = RMS_j(f_run(ε_j) − f_j), f = grains broken / initial grains
 //              (a fraction already, so not divided again).
+//   m_crush  = |b_run − b| / b, b = the mean number of bonds broken by stress
+//              over the crush tests, b_run the same tests run with the
+//              candidate's parameters (the oedometer bonds' λ acts on the
+//              fragments' bonds, which the crush test breaks by the hundred;
+//              the oedometer curve hardly sees λ: bench/dem/RESULTS.md).
 // A run that stops short of the largest target strain has no objective (NaN).
 #pragma once
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -53,26 +65,34 @@ struct Target {
   std::vector<double> curve_strain, curve_stress_Pa;  // empty: no curve target
   double yield_stress_Pa = 0;                         // 0: no yield target
   std::vector<double> broken_strain, broken_fraction;
-  double w_curve = 1, w_yield = 1, w_broken = 1;
+  double crush_bonds_broken = 0;  // 0: no crush target
+  int crush_grains = 30;
+  double crush_diameter_m = 1.2e-3, crush_travel = 0.4;
+  double w_curve = 1, w_yield = 1, w_broken = 1, w_crush = 1;
   std::vector<Parameter> parameters = default_parameters();
   double largest_strain() const;  // of any target point
 };
 
 // InputError naming the file: unreadable, unknown key, no target at all,
 // an empty or non-increasing curve, a bad range (min >= max, non-positive),
-// negative weights, fractions outside [0, 1].
+// negative weights, fractions outside [0, 1], a crush target that is not
+// positive or whose grains, diameter or travel are out of range.
 Target read_target(const std::filesystem::path& path);
 
 struct RunScore {
-  double curve_misfit = 0, yield_misfit = 0, broken_misfit = 0;
+  double curve_misfit = 0, yield_misfit = 0, broken_misfit = 0, crush_misfit = 0;
+  double crush_bonds_broken = 0;  // the run's mean over the crush tests (NaN: none run)
   double yield_stress_Pa = 0;   // the run's (NaN when its curve has none)
   double final_strain = 0, peak_stress_Pa = 0, final_broken_fraction = 0;
   double objective = 0;         // NaN when the run is unusable
 };
 
 // Scores a run from its history (columns strain, top_stress_Pa and, for a
-// broken-fraction target, grains_broken) and its initial grain count.
-RunScore score_run(const Target& t, const Table& history, double initial_grains);
+// broken-fraction target, grains_broken) and its initial grain count, and,
+// for a crush target, the candidate's mean bonds broken over the crush tests
+// (NaN, e.g. when the tests failed: no objective).
+RunScore score_run(const Target& t, const Table& history, double initial_grains,
+                   double crush_bonds_broken = std::numeric_limits<double>::quiet_NaN());
 
 // Linear interpolation of (x, y) at v, x increasing; clamped at the ends.
 double interpolate(const std::vector<double>& x, const std::vector<double>& y, double v);

@@ -92,6 +92,10 @@ printf '[target]\nstress_strain_csv = "curve.csv"\n[parameters]\nbond_radius_mul
 expect_bad "calibrate: bad range" "range.toml: parameters.bond_radius_multiplier must be \[min, max\]" -- "$TG" dem calibrate cal.toml --target range.toml -o out.cal
 printf '[target]\nstress_strain_csv = "curve.csv"\nyield = 2e6\n' > tkey.toml
 expect_bad "calibrate: unknown target key" "tkey.toml: unknown key 'target.yield'" -- "$TG" dem calibrate cal.toml --target tkey.toml -o out.cal
+printf '[target]\nstress_strain_csv = "curve.csv"\n[crush]\nbonds_broken = -5.0\n' > crushneg.toml
+expect_bad "calibrate: negative crush target" "crushneg.toml: crush.bonds_broken must be > 0" -- "$TG" dem calibrate cal.toml --target crushneg.toml -o out.cal
+printf '[crush]\nbonds_broken = 100.0\ndiameter = 1e-3\n' > crushkey.toml
+expect_bad "calibrate: unknown crush key" "crushkey.toml: unknown key 'crush.diameter'" -- "$TG" dem calibrate cal.toml --target crushkey.toml -o out.cal
 printf '[specimen]\npacking_csv = "nope.csv"\n[oedometer]\ntarget_strain = 0.05\nsnapshot_strains = [0.0]\n' > cal_nopack.toml
 expect_bad "calibrate: missing packing" "nope.csv" -- "$TG" dem calibrate cal_nopack.toml --target curve.csv -o out.cal
 printf 'strain,stress_Pa\n0.01,1e5\n0.09,1e6\n' > far.csv

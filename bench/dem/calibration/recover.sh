@@ -5,7 +5,8 @@
 #    ([6, 24] MPa, [0.8, 1.6]) from SEED (Python's random.Random(SEED));
 # 2. runs the small cell (small_cell.toml, 126 grains, to 8 % strain) with
 #    them: the target is that run's stress-strain curve (history.csv) and its
-#    broken fraction at 4, 6 and 8 % strain;
+#    broken fraction at 4, 6 and 8 % strain (plus the file EXTRA_TARGET's
+#    text when set: recover_crush.sh's crush target);
 # 3. calibrates from the default ranges with design seed SEED + 100 (a
 #    different starting design), RUNS runs (default 24), 2 at a time;
 # 4. prints the relative error of the best run's and of the surrogate's
@@ -35,6 +36,7 @@ with open(f"{out}/target.toml", "w") as t:
             f"broken_strain = {s}\nbroken_fraction = {f}\n")
 print("broken fraction at 4/6/8 %:", " ".join(f"{x:.3f}" for x in f))
 PYEOF
+if [ -n "${EXTRA_TARGET:-}" ]; then cat "$EXTRA_TARGET" >> "$OUT/target.toml"; fi
 nice -n 10 "$TG" dem calibrate "$HERE/small_cell.toml" --target "$OUT/target.toml" -o "$OUT/calib" \
   --runs "$RUNS" --initial 10 --batch 2 --jobs 2 --seed $((SEED + 100)) "$@"
 $PY - "$OUT" "$SIG" "$LAM" <<'PYEOF'

@@ -1,5 +1,5 @@
 // The calibration objective (dem/calibration/objective.hpp) on hand-computed
-// cases, and the target file's checks.
+// cases, the target file's checks, and the crush tests behind the crush term.
 #include "dem/calibration/objective.hpp"
 
 #include <gtest/gtest.h>
@@ -10,6 +10,8 @@
 #include <unistd.h>
 
 #include "core/errors.hpp"
+#include "dem/breakage/crush.hpp"
+#include "dem/calibration/calibrate.hpp"
 
 namespace cal = tg::dem::calibration;
 namespace fs = std::filesystem;
@@ -67,6 +69,46 @@ TEST(CalibrationObjective, HandComputedMisfits) {
   EXPECT_TRUE(std::isnan(cal::score_run(t, h, 100).objective));
 }
 
+TEST(CalibrationObjective, CrushTermHandComputed) {
+  cal::Target t;
+  t.curve_strain = {0.03};
+  t.curve_stress_Pa = {2e6};
+  t.crush_bonds_broken = 120;
+  t.w_crush = 0.5;
+  tg::Table h;
+  h.add("strain", {0.0, 0.03});
+  h.add("top_stress_Pa", {0.0, 3e6});
+  // Curve: |3 - 2| / 2 = 0.5. Crush: run mean 150 vs 120 -> 30 / 120 = 0.25,
+  // weighted 0.5 -> 0.125; 90 is as far below: the same term.
+  const cal::RunScore s = cal::score_run(t, h, 10, 150.0);
+  EXPECT_NEAR(s.curve_misfit, 0.5, 1e-12);
+  EXPECT_NEAR(s.crush_misfit, 0.25, 1e-12);
+  EXPECT_DOUBLE_EQ(s.crush_bonds_broken, 150.0);
+  EXPECT_NEAR(s.objective, 0.5 + 0.125, 1e-12);
+  EXPECT_NEAR(cal::score_run(t, h, 10, 90.0).objective, 0.625, 1e-12);
+  // The crush tests failed (NaN): no objective, not a silent zero term.
+  EXPECT_TRUE(std::isnan(cal::score_run(t, h, 10).objective));
+  // Without a crush target the mean is ignored.
+  t.crush_bonds_broken = 0;
+  EXPECT_NEAR(cal::score_run(t, h, 10, 150.0).objective, 0.5, 1e-12);
+}
+
+TEST(CalibrationObjective, ReadsCrushTarget) {
+  TmpDir d;
+  const auto t = cal::read_target(d.write("c.toml", "[crush]\nbonds_broken = 134.5\ngrains = 12\n[weights]\ncrush = 2.0\n"));
+  EXPECT_DOUBLE_EQ(t.crush_bonds_broken, 134.5);
+  EXPECT_EQ(t.crush_grains, 12);
+  EXPECT_DOUBLE_EQ(t.crush_diameter_m, 1.2e-3);  // documented defaults
+  EXPECT_DOUBLE_EQ(t.crush_travel, 0.4);
+  EXPECT_DOUBLE_EQ(t.w_crush, 2.0);
+  EXPECT_NE(error_of(d.write("n.toml", "[crush]\nbonds_broken = -3.0\n")).find("crush.bonds_broken must be > 0"),
+            std::string::npos);
+  EXPECT_NE(error_of(d.write("k.toml", "[crush]\nbonds_broken = 100.0\nseeds = 30\n")).find("unknown key 'crush.seeds'"),
+            std::string::npos);
+  EXPECT_NE(error_of(d.write("g.toml", "[crush]\nbonds_broken = 100.0\ngrains = 0\n")).find("crush.grains must be >= 1"),
+            std::string::npos);
+}
+
 TEST(CalibrationObjective, ExactRunScoresZero) {
   cal::Target t;
   t.curve_strain = {0.01, 0.02, 0.03};
@@ -115,4 +157,34 @@ TEST(CalibrationObjective, InterpolatesAndClamps) {
   EXPECT_DOUBLE_EQ(cal::interpolate(x, y, -1.0), 0.0);
   EXPECT_DOUBLE_EQ(cal::interpolate(x, y, 5.0), 30.0);
   EXPECT_DOUBLE_EQ(cal::interpolate(x, y, 1.0), 10.0);
+}
+
+// The crush term's tests (calibrate.hpp): each candidate's mean is the mean
+// of run_crush over strength seeds 1..grains with the target's diameter and
+// travel, d0 = 0 read as the crush diameter, and the same for any threads.
+TEST(CalibrationObjective, CrushMeanIsTheCrushTestsMean) {
+  cal::Target t;
+  t.crush_grains = 2;
+  t.crush_diameter_m = 1.2e-3;
+  t.crush_travel = 0.08;  // past the split and the first bond breaks (dozens), < 1 s a test
+  std::vector<tg::dem::OedometerSetup> s(2);
+  for (auto& x : s) x.breakage_options.min_time_step_s = 2e-8;
+  s[0].breakage_options.bond.radius_multiplier = 0.9;
+  s[1].breakage_options.bond.radius_multiplier = 1.6;
+  s[1].breakage_options.strength.sigma_t0_Pa = 8e6;
+  const std::vector<double> m = cal::crush_bonds_broken(t, s, 2);
+  ASSERT_EQ(m.size(), 2u);
+  double direct = 0;
+  for (uint64_t seed : {1, 2}) {
+    tg::dem::breakage::CrushOptions c;
+    c.diameter_m = 1.2e-3;
+    c.final_travel_fraction = 0.08;
+    c.engine = s[1].engine;
+    c.breakage = s[1].breakage_options;
+    c.breakage.strength.d0_m = 1.2e-3;
+    c.breakage.strength.seed = seed;
+    direct += static_cast<double>(tg::dem::breakage::run_crush(c).final_record.bonds_broken);
+  }
+  EXPECT_GT(direct, 0);  // the test breaks bonds: the term measures something
+  EXPECT_EQ(m[1], direct / 2);  // 2 threads over both setups = one by one, bit for bit
 }

@@ -205,9 +205,9 @@ tg::app::Registrar reg_measure{{"measure", 40,
                 "and Wadell sphericity; costs several times the Feret step");
   sub->add_option("--seed", o->seed, "Random seed of CGAL's oriented-box optimiser")->default_str("42");
   sub->add_option("--grey", o->grey,
-                  "The grey scan the labels were segmented from: volume_mm3 (and d_eq, d_med, fr) become "
-                  "partial-volume estimates from its grey levels, void lines and threshold bias included "
-                  "(measure/grey_volume.hpp); volume_from says which");
+                  "The grey scan the labels were segmented from: volume_mm3 and d_eq_mm become partial-volume "
+                  "estimates from its grey levels, void lines and threshold bias included "
+                  "(measure/grey_volume.hpp); d_med_mm and fr stay on the labels; volume_from says which");
   tg::app::add_threads_option(sub, o->threads);
   tg::app::add_voxel_option(sub, o->voxel_um);
   return [o] { return tg::app::run_measure(*o); };

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/errors.hpp"
+#include "core/memory.hpp"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -246,6 +247,30 @@ void squared_distance_transform(const Volume<uint8_t>& solid, Volume<float>& out
 
 void distance_transform(const Volume<uint8_t>& solid, Volume<float>& out, const EdtOptions& opt) {
   transform(solid, out, opt, true);
+}
+
+FixedDistance to_fixed_point(Volume<float>&& dist) {
+  const int64_t n = dist.size();
+  const float* d = dist.data();
+  float dmax = 0;
+  int bad = 0;  // bitwise, so that the loop vectorises
+#pragma omp parallel for simd schedule(static) reduction(max : dmax) reduction(| : bad)
+  for (int64_t i = 0; i < n; ++i) {
+    const float v = d[i];
+    bad |= int(!(v >= 0.0f)) | int(!(v <= std::numeric_limits<float>::max()));  // NaN, < 0, inf
+    dmax = v > dmax ? v : dmax;
+  }
+  if (bad) throw UsageError("distance map: not finite and >= 0 everywhere");
+  FixedDistance r;
+  r.per_unit = dmax > 0 ? std::min(256.0, 65535.0 / double(dmax)) : 256.0;
+  const float p = float(r.per_unit);
+  r.map = std::move(dist).convert_in_place<uint16_t>([p](float v) -> uint16_t {
+    const float f = v * p + 0.5f;  // <= 65535.5: per_unit keeps the top in range
+    const uint16_t u = uint16_t(f < 65535.0f ? f : 65535.0f);
+    return v > 0 && u == 0 ? uint16_t(1) : u;  // the solid stays > 0
+  });
+  discard_pages(r.map.data() + n, size_t(n) * (sizeof(float) - sizeof(uint16_t)));
+  return r;
 }
 
 }  // namespace tg

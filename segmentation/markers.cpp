@@ -26,30 +26,35 @@ constexpr uint32_t kMarkerMask = kVisited - 1;
 // 26 dependent branches. Same candidates as the neighbour loop.
 // By value, as MAXPS computes it (std::max returns a reference, which
 // kept GCC from vectorising the loops below).
-inline float max2(float a, float b) { return a > b ? a : b; }
+template <class T>
+inline T max2(T a, T b) {
+  return a > b ? a : b;
+}
 
-template <class Solid>
-void list_candidates_26(const float* d, Solid solid, const Shape& s, std::vector<std::vector<int64_t>>& part) {
+// T: float, or uint16_t (FixedDistance: the void is 0, below every solid value).
+template <class T, class Solid>
+void list_candidates_26(const T* d, Solid solid, const Shape& s, std::vector<std::vector<int64_t>>& part) {
   const int64_t nx = s.nx, ny = s.ny, sl = s.slice_voxels();
-  constexpr float kLow = -std::numeric_limits<float>::infinity();
+  constexpr T kLow = std::numeric_limits<T>::has_infinity ? -std::numeric_limits<T>::infinity()
+                                                          : std::numeric_limits<T>::lowest();
 #pragma omp parallel num_threads(int(part.size()))
   {
     auto& mine = part[size_t(omp_get_thread_num())];
-    std::vector<float> row(static_cast<size_t>(nx)), x3(static_cast<size_t>(sl)), planes(3 * static_cast<size_t>(sl));
+    std::vector<T> row(static_cast<size_t>(nx)), x3(static_cast<size_t>(sl)), planes(3 * static_cast<size_t>(sl));
     // Plane maximum (3x3 in y and x) of slice k into out; -inf outside.
-    auto plane_max = [&](int64_t k, float* out) {
+    auto plane_max = [&](int64_t k, T* out) {
       if (k < 0 || k >= s.nz) {
         std::fill(out, out + sl, kLow);
         return;
       }
-      const float* dk = d + k * sl;
+      const T* dk = d + k * sl;
       for (int64_t j = 0; j < ny; ++j) {
-        const float* dr = dk + j * nx;
+        const T* dr = dk + j * nx;
         const int64_t r0 = k * sl + j * nx;
-        float* xr = x3.data() + j * nx;
-        float* rw = row.data();
+        T* xr = x3.data() + j * nx;
+        T* rw = row.data();
         for (int64_t i = 0; i < nx; ++i) {
-          const float v = dr[i];  // loaded whatever the mask says: a select, not a branch
+          const T v = dr[i];  // loaded whatever the mask says: a select, not a branch
           rw[i] = solid(r0 + i) ? v : kLow;
         }
         xr[0] = nx > 1 ? max2(rw[0], rw[1]) : rw[0];
@@ -57,25 +62,25 @@ void list_candidates_26(const float* d, Solid solid, const Shape& s, std::vector
         if (nx > 1) xr[nx - 1] = max2(rw[nx - 2], rw[nx - 1]);
       }
       for (int64_t j = 0; j < ny; ++j) {
-        const float* up = x3.data() + std::max<int64_t>(j - 1, 0) * nx;  // row j itself at the edges: same max
-        const float* mid = x3.data() + j * nx;
-        const float* dn = x3.data() + std::min(j + 1, ny - 1) * nx;
-        float* o = out + j * nx;
+        const T* up = x3.data() + std::max<int64_t>(j - 1, 0) * nx;  // row j itself at the edges: same max
+        const T* mid = x3.data() + j * nx;
+        const T* dn = x3.data() + std::min(j + 1, ny - 1) * nx;
+        T* o = out + j * nx;
         for (int64_t i = 0; i < nx; ++i) o[i] = max2(max2(up[i], mid[i]), dn[i]);
       }
     };
     // This thread's slices: the t-th chunk, as schedule(static) gives it.
     const int t = omp_get_thread_num(), nt = omp_get_num_threads();
     const int64_t k0 = s.nz * t / nt, k1 = s.nz * (t + 1) / nt;
-    float* pl[3] = {planes.data(), planes.data() + sl, planes.data() + 2 * sl};  // slices k-1, k, k+1
+    T* pl[3] = {planes.data(), planes.data() + sl, planes.data() + 2 * sl};  // slices k-1, k, k+1
     if (k0 < k1) {
       plane_max(k0 - 1, pl[0]);
       plane_max(k0, pl[1]);
     }
     for (int64_t k = k0; k < k1; ++k) {
       plane_max(k + 1, pl[2]);
-      const float* dk = d + k * sl;
-      const float *p0 = pl[0], *p1 = pl[1], *p2 = pl[2];
+      const T* dk = d + k * sl;
+      const T *p0 = pl[0], *p1 = pl[1], *p2 = pl[2];
       auto is_candidate = [&](int64_t i) { return solid(k * sl + i) && !(max2(max2(p0[i], p1[i]), p2[i]) > dk[i]); };
       // Candidates are rare (1 voxel in 2000 at 256^3): a vectorised test of
       // 64 voxels at a time, and a second look only where it finds one.
@@ -92,9 +97,11 @@ void list_candidates_26(const float* d, Solid solid, const Shape& s, std::vector
   }
 }
 
-// The markers of the solid voxels x for which solid(x) holds.
-template <class Solid>
-uint32_t markers_of(const Volume<float>& dist, Solid solid, Volume<uint32_t>& markers, const MarkerOptions& opt) {
+// The markers of the solid voxels x for which solid(x) holds; h_units is
+// opt.h in the map's units (FixedDistance::per_unit of them a voxel).
+template <class T, class Solid>
+uint32_t markers_of(const Volume<T>& dist, Solid solid, Volume<uint32_t>& markers, const MarkerOptions& opt,
+                    double h_units) {
   if (!(opt.h >= 0) || !std::isfinite(opt.h)) throw UsageError("markers: h must be finite and >= 0");
   const Shape s = dist.shape();
   if (markers.shape() != s) markers = Volume<uint32_t>(s, dist.geometry());
@@ -106,7 +113,7 @@ uint32_t markers_of(const Volume<float>& dist, Solid solid, Volume<uint32_t>& ma
     for (int64_t i = 0; i < nz; ++i) z[i] = 0;
   }
   const seg::Neighbourhood nb(s, opt.connectivity);
-  const float* d = dist.data();
+  const T* d = dist.data();
   uint32_t* M = markers.data();
   uint32_t count = 0;
   std::vector<int64_t> queue;
@@ -145,7 +152,7 @@ uint32_t markers_of(const Volume<float>& dist, Solid solid, Volume<uint32_t>& ma
           for (int64_t i = 0; i < s.nx; ++i) {
             const int64_t idx = s.index(k, j, i);
             if (!solid(idx)) continue;
-            const float top = d[idx];
+            const T top = d[idx];
             bool higher = false;
             if (inner_row && i > 0 && i + 1 < s.nx) {
               for (int q = 0; q < nb.count && !higher; ++q) {
@@ -166,10 +173,10 @@ uint32_t markers_of(const Volume<float>& dist, Solid solid, Volume<uint32_t>& ma
   for (const auto& cand : part) {
     for (const int64_t start : cand) {
       if (M[start] & kDecided) continue;
-      const float top = d[start];
+      const T top = d[start];
       bool higher = false;
       // Flood the cap {d >= top - h} from `start`, stopping at a higher voxel.
-      const double floor_level = double(top) - opt.h;
+      const double floor_level = double(top) - h_units;
       queue.clear();
       queue.push_back(start);
       M[start] |= kVisited;
@@ -209,14 +216,19 @@ uint32_t find_markers(const Volume<float>& dist, const Volume<uint8_t>& solid, V
     throw UsageError("markers: distance map " + dist.shape().str() + " and mask " + solid.shape().str() +
                      " differ in shape");
   const uint8_t* m = solid.data();
-  const uint32_t n = markers_of(dist, [m](int64_t x) { return m[x] != 0; }, markers, opt);
+  const uint32_t n = markers_of(dist, [m](int64_t x) { return m[x] != 0; }, markers, opt, opt.h);
   markers.set_geometry(solid.geometry());
   return n;
 }
 
 uint32_t find_markers(const Volume<float>& dist, Volume<uint32_t>& markers, const MarkerOptions& opt) {
   const float* d = dist.data();
-  return markers_of(dist, [d](int64_t x) { return d[x] > 0; }, markers, opt);
+  return markers_of(dist, [d](int64_t x) { return d[x] > 0; }, markers, opt, opt.h);
+}
+
+uint32_t find_markers(const FixedDistance& dist, Volume<uint32_t>& markers, const MarkerOptions& opt) {
+  const uint16_t* d = dist.map.data();
+  return markers_of(dist.map, [d](int64_t x) { return d[x] > 0; }, markers, opt, opt.h * dist.per_unit);
 }
 
 }  // namespace tg

@@ -38,6 +38,7 @@
 #include <cstdint>
 
 #include "core/volume.hpp"
+#include "segmentation/distance_transform.hpp"
 
 namespace tg {
 
@@ -55,5 +56,9 @@ uint32_t find_markers(const Volume<float>& dist, const Volume<uint8_t>& solid, V
 // The same with the solid where dist > 0: the distance map of a mask with
 // some void is 0 exactly on the void, so the mask need not be kept.
 uint32_t find_markers(const Volume<float>& dist, Volume<uint32_t>& markers, const MarkerOptions& opt = {});
+
+// The same on the 16-bit fixed-point map (segment's path: 2 B/voxel
+// instead of 4); opt.h stays in distance units.
+uint32_t find_markers(const FixedDistance& dist, Volume<uint32_t>& markers, const MarkerOptions& opt = {});
 
 }  // namespace tg

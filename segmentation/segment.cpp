@@ -247,9 +247,9 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
     return r;
   }
 
-  // Memory: at most two 4-byte volumes live at once (8 B/voxel at peak):
-  // the mask goes once the distance map exists (the map is 0 exactly on
-  // the void), and the flood levels go over the map's own storage.
+  // Memory: the mask goes once the distance map exists (the map is 0
+  // exactly on the void), the map shrinks to 16 bits before the markers
+  // come, and the flood levels go over its storage (6 B/voxel at peak).
   // (Growing the mask's storage into the markers' instead cost more than
   // fresh pages: realloc copied it, 0.22 s at 512^3.)
   // Distance map in units of the finest voxel edge.
@@ -279,9 +279,13 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   clock.lap("edt");
 
   solid = Volume<uint8_t>();
-  r.markers = find_markers(dist, lab, {opt.h, opt.connectivity});
+  // The markers and the levels only compare distances: a 16-bit fixed-point
+  // map (1/256 voxel) over the float map's storage holds the peak at
+  // 2 + 4 B/voxel while the markers are found.
+  FixedDistance fixed = to_fixed_point(std::move(dist));
+  r.markers = find_markers(fixed, lab, {opt.h, opt.connectivity});
   clock.lap("markers");
-  Volume<uint8_t> levels = quantise_levels(std::move(dist), opt.buckets_per_unit, r.buckets_per_unit);
+  Volume<uint8_t> levels = quantise_levels(std::move(fixed), opt.buckets_per_unit, r.buckets_per_unit);
   if (r.buckets_per_unit < opt.buckets_per_unit)
     r.notes.push_back("watershed levels coarsened to " + std::to_string(r.buckets_per_unit) +
                       " per voxel (255 levels at most; the largest distance is " +

@@ -19,15 +19,17 @@
 // rvalue overload writes the u8 mask over the grey volume's own storage.
 // The pore filter works on runs of void voxels (no label volume). Then the
 // float distance map (4 B) is made; the mask goes (the map is 0 exactly
-// on the void), the u32 markers (4 B) come; the flood levels (u8) are
-// written over the map's storage, whose spent 3 B/voxel are given back;
-// the watershed labels and the merge are in place in the markers' volume.
-// At most two 4-byte volumes live at once: 8 B/voxel at peak, plus the
-// frontier queue (4 B per queued voxel, a small fraction of the volume)
-// and the process itself. Measured (peak RSS of the whole `tomograin
-// segment` process, data_synth zeolite stage 4): 9.1 B/voxel at 256^3
-// (the process is ~1 B/voxel at that size), 8.2 B/voxel at 512^3. A
-// 1220^3 scan (1.8e9 voxels) thus needs ~15 GB.
+// on the void); the map becomes 16-bit fixed point over its own storage
+// (distance_transform.hpp FixedDistance: 1/256 voxel, the spent 2 B given
+// back), the u32 markers (4 B) come; the flood levels (u8) are written over
+// the fixed-point map's storage; the watershed labels and the merge are in
+// place in the markers' volume. At most 6 B/voxel at peak (markers beside
+// the fixed-point map), plus the frontier queue (4 B per queued voxel, a
+// small fraction of the volume) and the process itself. Measured (peak RSS
+// of the whole `tomograin segment` process): 7.4 B/voxel at 256^3 (the
+// process is ~1 B/voxel at that size), 6.03 B/voxel on a 1220^3 zeolite
+// scan (10.9 GB; 8.05 with the float map beside the markers, labels
+// identical). A float map made the markers 8 B/voxel at peak.
 // No 64-bit label or index volumes.
 //
 // Distances are in units of the smallest voxel edge (anisotropic voxels

@@ -501,6 +501,23 @@ Volume<uint8_t> quantise_levels(Volume<float>&& dist, double buckets_per_unit, d
   return lev;
 }
 
+Volume<uint8_t> quantise_levels(FixedDistance&& dist, double buckets_per_unit, double& q_used) {
+  check_buckets(buckets_per_unit);
+  const int64_t n = dist.map.size();
+  const uint16_t* d = dist.map.data();
+  uint16_t vmax = 0;
+#pragma omp parallel for simd schedule(static) reduction(max : vmax)
+  for (int64_t i = 0; i < n; ++i) vmax = d[i] > vmax ? d[i] : vmax;
+  const double q = q_used = levels_per_unit(float(double(vmax) / dist.per_unit), buckets_per_unit);
+  const double step = q / dist.per_unit;  // levels per fixed-point unit
+  Volume<uint8_t> lev = std::move(dist.map).convert_in_place<uint8_t>([step](uint16_t v) -> uint8_t {
+    const int l = int(double(v) * step);
+    return v ? uint8_t(1 + (l < 254 ? l : 254)) : uint8_t(0);
+  });
+  discard_pages(lev.data() + n, size_t(n) * (sizeof(uint16_t) - 1));
+  return lev;
+}
+
 void watershed_levels(const Volume<uint8_t>& levels, Volume<uint32_t>& labels, const WatershedOptions& opt) {
   const Shape s = levels.shape();
   if (labels.shape() != s)

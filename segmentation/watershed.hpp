@@ -50,6 +50,7 @@
 #include <cstdint>
 
 #include "core/volume.hpp"
+#include "segmentation/distance_transform.hpp"
 
 namespace tg {
 
@@ -70,6 +71,11 @@ double quantise_levels(const Volume<float>& dist, Volume<uint8_t>& solid, double
 // where the map is > 0, as for an EDT of a mask with some void. The map
 // must be finite and >= 0; q_used is set to the q used.
 Volume<uint8_t> quantise_levels(Volume<float>&& dist, double buckets_per_unit, double& q_used);
+
+// The same from the 16-bit fixed-point map (segment's path; taken, its
+// spent 1 B/voxel given back): level 1 + floor(value * q / per_unit),
+// within 1/(2 per_unit) of a distance unit of the float map's levels.
+Volume<uint8_t> quantise_levels(FixedDistance&& dist, double buckets_per_unit, double& q_used);
 
 // The flood on quantised levels (from quantise_levels). `labels` holds the
 // markers on entry (1..2^29-2, 0 elsewhere) and the watershed labels on exit

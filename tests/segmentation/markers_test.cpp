@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <deque>
+#include <limits>
 #include <random>
 #include <set>
 
@@ -11,6 +13,7 @@
 #include "core/errors.hpp"
 #include "fixtures.hpp"
 #include "segmentation/distance_transform.hpp"
+#include "segmentation/watershed.hpp"
 
 namespace tg {
 namespace {
@@ -121,6 +124,63 @@ TEST(Markers, ZeroDepthGivesTheRegionalMaximaOfAnOracle) {
     }
   }
   omp_set_num_threads(before);
+}
+
+// The segment chain finds markers and levels on the 16-bit fixed-point map
+// (to_fixed_point): the float path is the reference.
+TEST(Markers, FixedPointMapGivesTheFloatMapsMarkersAndLevels) {
+  auto m = Volume<uint8_t>::filled(Shape{48, 48, 64}, 0);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> pos(6, 42), rad(4, 11);
+  for (int b = 0; b < 14; ++b) draw_ball(m, pos(rng), pos(rng), pos(rng) + 8, rad(rng));
+  test::cut_slab_x(m, 31, 1);  // a split: two peaks a voxel apart
+  Volume<float> d;
+  distance_transform(m, d);
+  for (const double h : {0.7, 1.5, 3.0}) {
+    Volume<uint32_t> want, got;
+    const uint32_t nwant = find_markers(d, want, {h, 26});
+    const FixedDistance fx = to_fixed_point(d.clone());
+    EXPECT_EQ(fx.per_unit, 256.0);
+    const uint32_t ngot = find_markers(fx, got, {h, 26});
+    EXPECT_GT(nwant, 3u);
+    ASSERT_EQ(ngot, nwant) << "h " << h;
+    // Same markers, same numbering; a cap's rim may gain or lose the voxels
+    // whose distance lies within 1/256 voxel of top - h.
+    int64_t differ = 0, cap = 0;
+    for (int64_t i = 0; i < d.size(); ++i) {
+      cap += want[i] != 0;
+      differ += want[i] != got[i];
+      if (want[i] && got[i]) ASSERT_EQ(want[i], got[i]) << "h " << h;
+    }
+    EXPECT_LE(differ, cap / 50) << "h " << h;
+  }
+  double qf = 0, qx = 0;
+  const Volume<uint8_t> lf = quantise_levels(d.clone(), 4.0, qf);
+  const Volume<uint8_t> lx = quantise_levels(to_fixed_point(d.clone()), 4.0, qx);
+  EXPECT_EQ(qf, qx);
+  int64_t off = 0;
+  for (int64_t i = 0; i < d.size(); ++i) {
+    ASSERT_LE(std::abs(int(lf[i]) - int(lx[i])), 1);
+    ASSERT_EQ(lf[i] == 0, lx[i] == 0);
+    off += lf[i] != lx[i];
+  }
+  EXPECT_LE(off, d.size() / 1000);  // only where d * 4 lies within 1/128 of an integer
+}
+
+TEST(Markers, FixedPointKeepsTheSolidAndScalesDeepMaps) {
+  Volume<float> d = Volume<float>::filled(Shape{1, 1, 4}, 0.f);
+  d[1] = 1e-3f;   // a dim voxel: still solid
+  d[2] = 2.5f;
+  d[3] = 1000.f;  // deep: per_unit drops to 65535 / 1000
+  const FixedDistance fx = to_fixed_point(std::move(d));
+  EXPECT_NEAR(fx.per_unit, 65.535, 1e-12);
+  EXPECT_EQ(fx.map[0], 0);
+  EXPECT_EQ(fx.map[1], 1);
+  EXPECT_EQ(fx.map[2], 164);  // round(2.5 * 65.535) = round(163.84)
+  EXPECT_EQ(fx.map[3], 65535);
+  Volume<float> bad = Volume<float>::filled(Shape{1, 1, 2}, 1.f);
+  bad[1] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(to_fixed_point(std::move(bad)), UsageError);
 }
 
 TEST(Markers, EmptyVolumeAndBadArguments) {

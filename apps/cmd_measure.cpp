@@ -67,7 +67,10 @@ int run_measure(const MeasureJob& o) {
   }
 
   const std::string path = split_dataset_spec(o.in).first;
-  const Volume<uint32_t> labels = read_labels(o.in, o.voxel_um);
+  Volume<uint32_t> read;
+  if (!o.labels) read = read_labels(o.in, o.voxel_um);
+  const Volume<uint32_t>& labels = o.labels ? *o.labels : read;
+  if (!labels.geometry().has_voxel_size()) throw InputError(o.in + ": no voxel size in the file; give --voxel-um");
 
   // With the grey scan, volumes from its grey levels (measure/grey_volume.hpp).
   Volume<uint16_t> grey;

@@ -123,6 +123,7 @@ int run_segment(SegmentJob& o) {
   if (summary.empty()) summary = std::filesystem::path(path).replace_extension(".segment.json").string();
   tg::write_file_atomic(summary, tg::summary_json(res, s) + "\n");
   fmt::print("wrote {} (/labels, uint32) and {}\n", path, summary);
+  if (o.keep_labels) *o.keep_labels = std::move(res.labels);
   return 0;
 }
 

@@ -20,6 +20,9 @@ struct SegmentJob {
   bool no_fov = false;                // --no-fov: no field-of-view detection
   std::vector<double> fov_centre;     // --fov-centre-vox Y,X (empty: the slice centre)
   int compression = 1;
+  // When set (analyse), the labels are moved here after they are written,
+  // so that the next step need not read and decompress them again.
+  Volume<uint32_t>* keep_labels = nullptr;
 };
 int run_segment(SegmentJob& job);
 
@@ -46,6 +49,9 @@ struct MeasureJob {
   // The grey scan the labels came from (any format segment reads): the
   // volumes become partial-volume estimates (measure/grey_volume.hpp).
   std::string grey;
+  // When set (analyse), these labels (read from `in` by an earlier step) are
+  // measured instead of reading `in` again; `in` still names them.
+  const Volume<uint32_t>* labels = nullptr;
 };
 int run_measure(const MeasureJob& job);
 

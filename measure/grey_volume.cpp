@@ -63,42 +63,56 @@ std::vector<double> grey_volumes(const VolumeView<const uint32_t>& labels, const
     const int64_t z0 = s.nz * t / n_threads, z1 = s.nz * (t + 1) / n_threads;
     std::array<uint32_t, 26> nb_label{};
     std::array<int, 26> nb_count{};
+    // near[i]: the OR of the labels in the 3x3 rows around (k, j) at column
+    // i (non-zero iff one is labelled); near3 the same over i - 1 .. i + 1.
+    // Most unlabelled voxels lie far from any label: they are skipped on
+    // near3 alone instead of a 26-neighbour scan (the whole pass took half
+    // of `measure`'s time on a 1220^3 scan before).
+    std::vector<uint32_t> near(static_cast<size_t>(s.nx)), near3(static_cast<size_t>(s.nx));
     for (int64_t k = z0; k < z1; ++k)
       for (int64_t j = 0; j < s.ny; ++j) {
         const uint32_t* row = labels.row(k, j).data();
         const uint16_t* grow = grey.row(k, j).data();
+        // The 3x3 neighbour rows (nullptr outside the volume); rows[4] is row.
+        std::array<const uint32_t*, 9> rows{};
+        for (int64_t dk = -1; dk <= 1; ++dk)
+          for (int64_t dj = -1; dj <= 1; ++dj) {
+            const int64_t kk = k + dk, jj = j + dj;
+            rows[size_t(3 * (dk + 1) + dj + 1)] =
+                kk >= 0 && kk < s.nz && jj >= 0 && jj < s.ny ? labels.row(kk, jj).data() : nullptr;
+          }
+        std::fill(near.begin(), near.end(), 0u);
+        for (const uint32_t* r : rows)
+          if (r)
+            for (int64_t i = 0; i < s.nx; ++i) near[size_t(i)] |= r[i];
+        for (int64_t i = 0; i < s.nx; ++i)
+          near3[size_t(i)] = near[size_t(i)] | (i > 0 ? near[size_t(i - 1)] : 0u) |
+                             (i + 1 < s.nx ? near[size_t(i + 1)] : 0u);
+        const uint32_t *below = rows[1], *above = rows[7], *before = rows[3], *after = rows[5];
+        const bool edge_row = !below || !above || !before || !after;
         for (int64_t i = 0; i < s.nx; ++i) {
           const uint32_t l = row[i];
-          const double f = frac[grow[i]];
           if (l) {
-            const bool boundary = k == 0 || k == s.nz - 1 || j == 0 || j == s.ny - 1 || i == 0 || i == s.nx - 1 ||
-                                  labels(k - 1, j, i) != l || labels(k + 1, j, i) != l ||
-                                  labels(k, j - 1, i) != l || labels(k, j + 1, i) != l || row[i - 1] != l ||
-                                  row[i + 1] != l;
+            const bool boundary = edge_row || i == 0 || i == s.nx - 1 || below[i] != l || above[i] != l ||
+                                  before[i] != l || after[i] != l || row[i - 1] != l || row[i + 1] != l;
             const int32_t x = index_of(l);
-            if (x >= 0) acc[size_t(x)] += boundary ? fixed(f) : one;
+            if (x >= 0) acc[size_t(x)] += boundary ? fixed(frac[grow[i]]) : one;
             continue;
           }
+          if (!near3[size_t(i)]) continue;  // no labelled neighbour
           // Unlabelled: share f among the labels of the 26 neighbours, by count.
+          const double f = frac[grow[i]];
           int distinct = 0, n = 0;
-          for (int64_t dk = -1; dk <= 1; ++dk) {
-            const int64_t kk = k + dk;
-            if (kk < 0 || kk >= s.nz) continue;
-            for (int64_t dj = -1; dj <= 1; ++dj) {
-              const int64_t jj = j + dj;
-              if (jj < 0 || jj >= s.ny) continue;
-              const uint32_t* nrow = labels.row(kk, jj).data();
-              for (int64_t di = -1; di <= 1; ++di) {
-                const int64_t ii = i + di;
-                if (ii < 0 || ii >= s.nx) continue;
-                const uint32_t m = nrow[ii];
-                if (!m) continue;  // the voxel itself is 0 too
-                ++n;
-                int d = 0;
-                while (d < distinct && nb_label[size_t(d)] != m) ++d;
-                if (d == distinct) nb_label[size_t(distinct++)] = m, nb_count[size_t(d)] = 0;
-                ++nb_count[size_t(d)];
-              }
+          for (const uint32_t* nrow : rows) {
+            if (!nrow) continue;
+            for (int64_t ii = std::max<int64_t>(i - 1, 0); ii <= std::min(i + 1, s.nx - 1); ++ii) {
+              const uint32_t m = nrow[ii];
+              if (!m) continue;  // the voxel itself is 0 too
+              ++n;
+              int d = 0;
+              while (d < distinct && nb_label[size_t(d)] != m) ++d;
+              if (d == distinct) nb_label[size_t(distinct++)] = m, nb_count[size_t(d)] = 0;
+              ++nb_count[size_t(d)];
             }
           }
           for (int d = 0; d < distinct; ++d) {

@@ -11,7 +11,7 @@ pkgs=(
   # build
   build-essential cmake pkg-config
   # libraries (see docs/architecture.md for what each is used for)
-  libopencv-dev libcgal-dev libeigen3-dev libhdf5-dev libtiff-dev libgmp-dev libmpfr-dev
+  libopencv-dev libcgal-dev libeigen3-dev libhdf5-dev zlib1g-dev libtiff-dev libgmp-dev libmpfr-dev
   libgtest-dev libbenchmark-dev libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev libxxhash-dev
   # sanitizer + fuzzing toolchain (tests/fuzz)
   clang libclang-rt-14-dev

@@ -1,4 +1,5 @@
 #include "core/io/hdf5.hpp"
+#include "core/io/hdf5_chunks.hpp"
 
 #include <hdf5.h>
 
@@ -234,9 +235,18 @@ void H5Writer::write_volume(const std::string& dataset, const Volume<T>& v, int 
                                H5P_DEFAULT));
   if (!d.ok()) throw InputError(impl_->path + ":" + ds + ": cannot create dataset");
   // Write in slabs of whole chunk rows so progress can be shown and the chunk cache stays small.
+  // Compressed chunks are filtered here on every core (hdf5_chunks.hpp).
+  const h5chunks::Pipeline pipe = h5chunks::pipeline_of(dcpl.get());
+  const h5chunks::Layout layout{{dims[0], dims[1], dims[2]}, {chunk[0], chunk[1], chunk[2]}, sizeof(T)};
   Progress bar("writing " + fs::path(impl_->path).filename().string() + ds, static_cast<double>(s.nz));
   for (hsize_t z0 = 0; z0 < dims[0]; z0 += chunk[0]) {
     const hsize_t start[3] = {z0, 0, 0}, count[3] = {std::min(chunk[0], dims[0] - z0), dims[1], dims[2]};
+    if (pipe.usable) {
+      h5chunks::write_rows(d.get(), layout, pipe, v.data() + static_cast<int64_t>(z0) * s.slice_voxels(),
+                           int64_t(z0), int64_t(count[0]), impl_->path + ":" + ds);
+      bar.update(static_cast<double>(z0 + count[0]));
+      continue;
+    }
     Handle fsp = space_h(H5Dget_space(d.get()));
     H5Sselect_hyperslab(fsp.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
     Handle msp = space_h(H5Screate_simple(3, count, nullptr));
@@ -368,10 +378,32 @@ AnyVolume H5Reader::read_volume(const std::string& dataset, bool progress) const
   for (double v : g.voxel_size_m)
     if (!(v >= 0 && std::isfinite(v))) throw InputError(where + ": attribute voxel_size_m is invalid");
   AnyVolume out = make_volume(dt, shape, g);
+  // Compressed chunks of a 3-D dataset are inflated on every core
+  // (hdf5_chunks.hpp); any other layout or pipeline goes through libhdf5.
+  h5chunks::Pipeline pipe;
+  h5chunks::Layout layout;
+  if (rank == 3) {
+    Handle dcpl = plist_h(H5Dget_create_plist(d.get()));
+    if (dcpl.ok() && H5Pget_layout(dcpl.get()) == H5D_CHUNKED && H5Pget_chunk(dcpl.get(), 3, layout.chunk) == 3) {
+      pipe = h5chunks::pipeline_of(dcpl.get());
+      std::copy(dims, dims + 3, layout.dims);
+      layout.elem = size_t(dtype_bytes(dt));
+    }
+  }
   std::visit(
       [&](auto& v) {
         using T = typename std::decay_t<decltype(v)>::value_type;
         Progress bar("reading " + fs::path(impl_->path).filename().string() + ds, static_cast<double>(shape.nz));
+        if (pipe.usable) {
+          const int64_t step = int64_t(layout.chunk[0]);
+          bool whole = true;
+          for (int64_t z0 = 0; z0 < shape.nz && whole; z0 += step) {
+            const int64_t nz = std::min(step, shape.nz - z0);
+            whole = h5chunks::read_rows(d.get(), layout, pipe, v.data() + z0 * shape.slice_voxels(), z0, nz, where);
+            if (progress) bar.update(static_cast<double>(z0 + nz));
+          }
+          if (whole) return;
+        }
         const hsize_t step = 16;
         for (hsize_t z0 = 0; z0 < static_cast<hsize_t>(shape.nz); z0 += step) {
           hsize_t start[3] = {z0, 0, 0};

@@ -343,4 +343,111 @@ TEST(VolumeIO, IsHdf5DecidesByTheFilePart) {
   EXPECT_FALSE(is_hdf5("stack.tif"));
   EXPECT_FALSE(is_hdf5("folder.h5x/"));
 }
+
+// Compressed volumes are (de)compressed chunk by chunk on every core
+// (core/io/hdf5_chunks.hpp) in HDF5's own filter format: libhdf5's filter
+// path is the independent reference, both ways, with edge chunks in every axis.
+namespace {
+template <class T>
+Volume<T> runs_volume(Shape s, uint64_t seed) {  // label-like: runs of equal values, many zeros
+  Volume<T> v(s, Geometry{{12.3e-6, 12.3e-6, 12.3e-6}, {0, 0, 0}});
+  std::mt19937_64 rng(seed);
+  T cur = 0;
+  for (auto& x : v) {
+    if (rng() % 23 == 0) cur = rng() % 3 == 0 ? T(0) : static_cast<T>(rng());
+    x = cur;
+  }
+  return v;
+}
+
+template <class T>
+Volume<T> read_with_libhdf5(const std::string& path, const char* name, Shape s) {
+  Volume<T> v(s);
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  const hid_t d = H5Dopen2(f, name, H5P_DEFAULT);
+  const hid_t t = std::is_same_v<T, uint32_t> ? H5T_NATIVE_UINT32 : std::is_same_v<T, uint16_t> ? H5T_NATIVE_UINT16
+                                                                                                : H5T_NATIVE_UINT8;
+  EXPECT_GE(H5Dread(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), 0);
+  H5Dclose(d);
+  H5Fclose(f);
+  return v;
+}
+}  // namespace
+
+TEST(Hdf5Chunks, ParallelDeflateReadsBackThroughLibhdf5) {
+  TempDir dir;
+  const Shape s{37, 300, 270};  // 3 chunk rows (16, 16, 5 slices), 2 x 2 chunks per row, edges in y and x
+  const auto labels = runs_volume<uint32_t>(s, 3);
+  const auto grey = runs_volume<uint16_t>(s, 4);
+  const auto mask = runs_volume<uint8_t>(s, 5);
+  {
+    H5Writer w(dir / "c.h5");
+    w.write_volume("/labels", labels, 1);
+    w.write_volume("/volume", grey, 6);
+    w.write_volume("/mask", mask, 1);
+    w.commit();
+  }
+  const auto l2 = read_with_libhdf5<uint32_t>(dir / "c.h5", "/labels", s);
+  const auto g2 = read_with_libhdf5<uint16_t>(dir / "c.h5", "/volume", s);
+  const auto m2 = read_with_libhdf5<uint8_t>(dir / "c.h5", "/mask", s);
+  EXPECT_EQ(std::memcmp(l2.data(), labels.data(), size_t(s.voxels()) * 4), 0);
+  EXPECT_EQ(std::memcmp(g2.data(), grey.data(), size_t(s.voxels()) * 2), 0);
+  EXPECT_EQ(std::memcmp(m2.data(), mask.data(), size_t(s.voxels())), 0);
+  // And through tomograin's reader (the parallel inflate).
+  const auto back = std::get<Volume<uint32_t>>(H5Reader(dir / "c.h5").read_volume("/labels"));
+  EXPECT_EQ(std::memcmp(back.data(), labels.data(), size_t(s.voxels()) * 4), 0);
+}
+
+TEST(Hdf5Chunks, ReadsWhatLibhdf5DeflatedIncludingUnwrittenChunks) {
+  TempDir dir;
+  const Shape s{21, 40, 50};
+  const auto grey = runs_volume<uint16_t>(s, 8);
+  const std::string path = dir / "lib.h5";
+  const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  const hsize_t dims[3] = {21, 40, 50}, chunk[3] = {8, 16, 32};  // not tomograin's chunk
+  const hid_t sp = H5Screate_simple(3, dims, nullptr);
+  const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+  H5Pset_chunk(dcpl, 3, chunk);
+  H5Pset_shuffle(dcpl);
+  H5Pset_deflate(dcpl, 4);
+  const hid_t d = H5Dcreate2(f, "volume", H5T_NATIVE_UINT16, sp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  // Slices 0..15 only: the chunks of the last row are never written (read as 0).
+  const hsize_t start[3] = {0, 0, 0}, count[3] = {16, 40, 50};
+  const hid_t fsp = H5Dget_space(d);
+  H5Sselect_hyperslab(fsp, H5S_SELECT_SET, start, nullptr, count, nullptr);
+  const hid_t msp = H5Screate_simple(3, count, nullptr);
+  ASSERT_GE(H5Dwrite(d, H5T_NATIVE_UINT16, msp, fsp, H5P_DEFAULT, grey.data()), 0);
+  for (hid_t h : {msp, fsp, sp}) H5Sclose(h);
+  H5Pclose(dcpl);
+  H5Dclose(d);
+  H5Fclose(f);
+  const auto back = std::get<Volume<uint16_t>>(H5Reader(path).read_volume("/volume"));
+  for (int64_t k = 0; k < s.nz; ++k)
+    for (int64_t j = 0; j < s.ny; ++j)
+      for (int64_t i = 0; i < s.nx; ++i) ASSERT_EQ(back(k, j, i), k < 16 ? grey(k, j, i) : 0) << k << " " << j << " " << i;
+}
+
+TEST(Hdf5Chunks, AChunkThatDoesNotInflateIsAnInputErrorNamingIt) {
+  TempDir dir;
+  const Shape s{16, 20, 20};
+  {
+    H5Writer w(dir / "bad.h5");
+    w.write_volume("/labels", runs_volume<uint32_t>(s, 1), 1);
+    w.commit();
+  }
+  const std::string path = dir / "bad.h5";
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  const hid_t d = H5Dopen2(f, "labels", H5P_DEFAULT);
+  const hsize_t offset[3] = {0, 0, 0};
+  const unsigned char junk[40] = {0x78, 0x01, 0xde, 0xad};  // a zlib header, then nonsense
+  ASSERT_GE(H5Dwrite_chunk(d, H5P_DEFAULT, 0, offset, sizeof junk, junk), 0);
+  H5Dclose(d);
+  H5Fclose(f);
+  try {
+    H5Reader(path).read_volume("/labels");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.h5:/labels: corrupt chunk at slice 0"), std::string::npos) << e.what();
+  }
+}
 }  // namespace tg

@@ -20,6 +20,8 @@ struct SegmentJob {
   bool no_fov = false;                // --no-fov: no field-of-view detection
   std::vector<double> fov_centre;     // --fov-centre-vox Y,X (empty: the slice centre)
   int compression = 1;
+  std::string memory_limit;           // --memory-limit (empty: none); slabs when the scan does not fit
+  int64_t slab_margin_vox = -1;       // --slab-margin-vox (< 0: 5 R + 4)
 };
 int run_segment(SegmentJob& job);
 

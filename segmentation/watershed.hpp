@@ -71,6 +71,10 @@ double quantise_levels(const Volume<float>& dist, Volume<uint8_t>& solid, double
 // must be finite and >= 0; q_used is set to the q used.
 Volume<uint8_t> quantise_levels(Volume<float>&& dist, double buckets_per_unit, double& q_used);
 
+// The same at exactly q levels per unit (levels above 255 clamped to 255):
+// a slab of a scan segmented slab by slab takes the whole scan's q.
+Volume<uint8_t> quantise_levels_at(Volume<float>&& dist, double q);
+
 // The flood on quantised levels (from quantise_levels). `labels` holds the
 // markers on entry (1..2^29-2, 0 elsewhere) and the watershed labels on exit
 // (0 on void and on line voxels). opt.buckets_per_unit is not used here.

@@ -110,6 +110,9 @@ int run_segment_chunked(const SegmentJob& o, const std::string& in_path, const s
     tg::AnyVolume v = reader.read_slab(in_ds, z0, nz);
     auto* g = std::get_if<tg::Volume<uint16_t>>(&v);
     if (!g) throw tg::InputError(o.in + ": slab-by-slab segmentation (--memory-limit) reads uint16 scans only");
+    tg::Geometry sg = g->geometry();
+    sg.voxel_size_m = geom.voxel_size_m;  // --voxel-um, as the whole scan's reader applies it
+    g->set_geometry(sg);
     return std::move(*g);
   };
   const std::string out_ds = ds.empty() ? "/labels" : ds;

@@ -4,11 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 
 #include "core/errors.hpp"
 #include "segmentation/segment.hpp"
 #include "segmentation/segment_chunked.hpp"
-#include "tests/segmentation/scan_scenes.hpp"
+#include "scan_scenes.hpp"
 
 namespace tg {
 namespace {
@@ -48,6 +49,7 @@ struct ChunkRun {
 };
 
 ChunkRun run_chunked(const Volume<uint16_t>& scan, const SegmentOptions& o, const ChunkPlan& plan) {
+  setenv("TOMOGRAIN_QUIET", "1", 0);  // no progress lines in the test log
   ChunkRun run;
   run.labels = Volume<uint32_t>::filled(scan.shape(), 0xffffffffu);
   const int64_t sl = scan.shape().slice_voxels();

@@ -35,8 +35,8 @@ struct OwnedParticle {
 };
 
 std::string margin_advice(const ChunkPlan& p) {
-  return fmt::format("the slab margin of {} slices is too small for these grains; give a larger --grain-radius-vox "
-                     "(margin 5 R + 4) or --slab-margin-vox",
+  return fmt::format("the slab margin of {} slices is too small for these grains; give a larger --slab-margin-vox "
+                     "(default 5 R + 4, R from --grain-radius-vox)",
                      p.margin);
 }
 
@@ -68,6 +68,9 @@ ChunkPlan plan_chunks(const Shape& s, double grain_radius_vox, const ChunkedOpti
 ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, const GreySlabReader& read,
                               const LabelSlabWriter& write, const SegmentOptions& opt_in, const ChunkPlan& plan) {
   const SegmentOptions opt = opt_in.resolved();
+  if (opt.threshold == ThresholdMethod::local)  // before reading anything (decide_grey says the same)
+    throw UsageError("segment: --threshold local needs the whole volume at once (its blocks' thresholds); it does not "
+                     "run slab by slab under --memory-limit");
   if (plan.core < kChunkAlign || plan.core % kChunkAlign || plan.margin % kChunkAlign || plan.margin < 0)
     throw UsageError("segment: slabs need a core and a margin in multiples of 16 slices");
   ChunkedResult cr;
@@ -193,9 +196,9 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
       } else if (fz < cb && (flags[l] & kCore)) {  // owned below, reaching into this core
         const auto it = owned.find(key);
         if ((flags[l] & kBottom) || it == owned.end() || it->second.size != size)
-          throw UsageError(fmt::format("segment: slab {} (slices {}..{}): the {} is not the particle that slab {} saw "
+          throw UsageError(fmt::format("segment: slab {} (slices {}..{}): the {} is not the particle that {} saw "
                                        "there ({}): {}",
-                                       s + 1, z0, z1 - 1, where(), s,
+                                       s + 1, z0, z1 - 1, where(), "an earlier slab",
                                        (flags[l] & kBottom) ? "it is cut by the slab's bottom face"
                                        : it == owned.end()  ? "no particle starts there"
                                                             : fmt::format("{} voxels, not {}", it->second.size, size),

@@ -11,6 +11,8 @@
 #include "core/io/volume_io.hpp"
 #include "segmentation/normalise.hpp"
 #include "segmentation/segment.hpp"
+#include "segmentation/segment_chunked.hpp"
+#include "core/memory.hpp"
 
 namespace cmd_segment {
 
@@ -43,11 +45,11 @@ Volume<uint16_t> read_grey(const std::string& in, double voxel_um, int& top) {
   return cmd_segment::to_grey(tg::read_volume(in, ro), in, top);
 }
 
-int run_segment(SegmentJob& o) {
-  int top = 65535;
-  tg::Volume<uint16_t> grey = read_grey(o.in, o.voxel_um, top);
-  const tg::Geometry geom = grey.geometry();
+namespace {
 
+// The options from the command line, for a scan of geometry geom whose top
+// grey level is `top`.
+tg::SegmentOptions segment_options(const SegmentJob& o, const tg::Geometry& geom, int top) {
   tg::SegmentOptions s = o.seg;
   s.saturation_level = top;
   s.threshold = tg::parse_threshold_method(o.threshold);
@@ -76,12 +78,115 @@ int run_segment(SegmentJob& o) {
       throw tg::UsageError(o.in + ": no voxel size in the file; give --voxel-um or --grain-radius-vox");
     s.grain_radius_vox = tg::grain_radius_in_voxels(o.grain_diameter_um * 1e-6 / 2.0, geom);
   }
+  return s;
+}
+
+void print_plan(const SegmentJob& o, const tg::SegmentOptions& s) {
   const auto r = s.resolved();
-  fmt::print("segmenting {} ({}), expected grain radius {:.3g} voxels\n", o.in, grey.shape().str(), r.grain_radius_vox);
   fmt::print("  pores: {}\n", s.fill_pores ? tg::PoreFilterOptions{r.pore_max_volume_vox, r.pore_min_sphericity}.describe()
                                             : std::string("not filled"));
   fmt::print("  markers: h-maxima of the distance map, h = {:.3g} voxels; watershed {}; merge ratio {}\n", r.h,
              s.watershed_lines ? "with lines" : "without lines", s.merge ? fmt::format("{}", s.merge_ratio) : "off");
+  (void)o;
+}
+
+// A scan that does not fit under --memory-limit: slab by slab from its
+// HDF5 file into the labels' HDF5 file (segment_chunked.hpp).
+int run_segment_chunked(const SegmentJob& o, const std::string& in_path, const std::string& in_ds,
+                        const tg::Shape& shape, const tg::Geometry& geom, const tg::ChunkedOptions& co) {
+  const auto [path, ds] = tg::split_dataset_spec(o.out);
+  if (tg::format_of(o.out, true) != tg::FileFormat::hdf5)
+    throw tg::UsageError(o.out + ": a scan segmented slab by slab (--memory-limit) is written to HDF5 only");
+  tg::SegmentOptions s = segment_options(o, geom, 65535);
+  const tg::ChunkPlan plan = tg::plan_chunks(shape, s.resolved().grain_radius_vox, co);
+  fmt::print("segmenting {} ({}) slab by slab: {} over --memory-limit {}; {} slabs of {} core + 2 x {} margin "
+             "slices (~{} each), expected grain radius {:.3g} voxels\n",
+             o.in, shape.str(), tg::human_bytes(double(plan.estimate_bytes)),
+             tg::human_bytes(double(co.memory_limit_bytes)), plan.slabs, plan.core, plan.margin,
+             tg::human_bytes(double(plan.slab_bytes)), s.resolved().grain_radius_vox);
+  print_plan(o, s);
+  tg::H5Reader reader(in_path);
+  auto read = [&](int64_t z0, int64_t nz) {
+    tg::AnyVolume v = reader.read_slab(in_ds, z0, nz);
+    auto* g = std::get_if<tg::Volume<uint16_t>>(&v);
+    if (!g) throw tg::InputError(o.in + ": slab-by-slab segmentation (--memory-limit) reads uint16 scans only");
+    tg::Geometry sg = g->geometry();
+    sg.voxel_size_m = geom.voxel_size_m;  // --voxel-um, as the whole scan's reader applies it
+    g->set_geometry(sg);
+    return std::move(*g);
+  };
+  const std::string out_ds = ds.empty() ? "/labels" : ds;
+  tg::H5Writer w(path);
+  w.create_volume(out_ds, tg::DType::u32, shape, geom, o.compression);
+  auto write = [&](int64_t z0, const tg::Volume<uint32_t>& l, int64_t vz0, int64_t nz) {
+    w.write_slab(out_ds, z0, l, vz0, nz);
+  };
+  tg::ChunkedResult res;
+  try {
+    res = tg::segment_chunked(shape, geom, read, write, s, plan);
+  } catch (const tg::InputError& e) {
+    throw tg::InputError(o.in + ": " + e.what());
+  }
+  const std::string summary_text = tg::summary_json(res, s);
+  w.write_attribute("segment_summary", summary_text);
+  w.commit();
+  const auto& r = res.result;
+  fmt::print("  threshold {} = {} (voxels above are solid), solid fraction {:.4f}{}\n",
+             tg::threshold_method_name(r.threshold.method), r.threshold.value, r.solid_fraction,
+             r.fov.active ? " (of the field of view)" : "");
+  for (const auto& n : r.notes) fmt::print("  note: {}\n", n);
+  fmt::print("  labels {} ({} dropped below {} voxels)\n", r.count, r.dropped, s.resolved().min_size_vox);
+  fmt::print("  pass 1 {:.2f} s ({} read{}), pass 2 {:.2f} s ({} slabs), peak memory {} ({:.2f} B/voxel)\n",
+             res.pass1_seconds, res.pass1_reads, res.pass1_reads > 1 ? "s" : "", res.pass2_seconds, res.plan.slabs,
+             tg::human_bytes(double(r.peak_rss_bytes)), double(r.peak_rss_bytes) / double(shape.voxels()));
+  std::string summary = o.summary;
+  if (summary.empty()) summary = std::filesystem::path(path).replace_extension(".segment.json").string();
+  tg::write_file_atomic(summary, summary_text + "\n");
+  fmt::print("wrote {} ({}, uint32) and {}\n", path, out_ds, summary);
+  return 0;
+}
+
+}  // namespace
+
+int run_segment(SegmentJob& o) {
+  tg::ChunkedOptions co;
+  co.margin_vox = o.slab_margin_vox;
+  if (!o.memory_limit.empty()) {
+    co.memory_limit_bytes = tg::parse_byte_size(o.memory_limit);
+    if (co.memory_limit_bytes <= 0)
+      throw tg::UsageError("--memory-limit " + o.memory_limit + ": not a size (e.g. 16GiB, 512MiB, 2G, 1000000000)");
+    // The scan's shape without reading it: slabs are read from HDF5 only.
+    const auto [in_path, in_ds] = tg::split_dataset_spec(o.in);
+    if (tg::is_hdf5(o.in)) {
+      tg::H5Reader r(in_path);
+      const std::string ds = in_ds.empty() ? "/volume" : in_ds;
+      const tg::Shape shape = r.shape(ds);
+      const tg::AnyVolume probe = r.read_slab(ds, 0, 1);
+      tg::Geometry geom = tg::geometry_of(probe);
+      if (o.voxel_um > 0) geom.voxel_size_m = {o.voxel_um * 1e-6, o.voxel_um * 1e-6, o.voxel_um * 1e-6};
+      const double radius = segment_options(o, geom, 65535).resolved().grain_radius_vox;
+      if (!tg::plan_chunks(shape, radius, co).in_memory) {
+        if (tg::dtype_of(probe) != tg::DType::u16)
+          throw tg::UsageError(o.in + ": slab-by-slab segmentation (--memory-limit) reads uint16 scans only (this one "
+                               "is " + tg::dtype_name(tg::dtype_of(probe)) + ")");
+        return run_segment_chunked(o, in_path, ds, shape, geom, co);
+      }
+    }
+  }
+  int top = 65535;
+  tg::Volume<uint16_t> grey = read_grey(o.in, o.voxel_um, top);
+  const tg::Geometry geom = grey.geometry();
+  if (co.memory_limit_bytes > 0) {
+    const tg::ChunkPlan plan = tg::plan_chunks(grey.shape(), 1.0, {co.memory_limit_bytes, 0});
+    if (!plan.in_memory)
+      throw tg::UsageError(o.in + ": segmenting it needs about " + tg::human_bytes(double(plan.estimate_bytes)) +
+                           ", over --memory-limit; slab by slab needs an HDF5 scan (tomograin convert)");
+  }
+
+  tg::SegmentOptions s = segment_options(o, geom, top);
+  const auto r = s.resolved();
+  fmt::print("segmenting {} ({}), expected grain radius {:.3g} voxels\n", o.in, grey.shape().str(), r.grain_radius_vox);
+  print_plan(o, s);
 
   tg::SegmentResult res;
   try {
@@ -161,12 +266,21 @@ static tg::app::Registrar reg{{"segment", 30,
     "    is an error (exit 2).\n"
     "  uneven brightness (cupping, drift along z): --threshold local, Tsai per block of\n"
     "    --local-window-vox voxels (default 4 R), interpolated between block centres.\n\n"
+    "Scans larger than memory: with --memory-limit, a uint16 HDF5 scan whose segmentation needs\n"
+    "more than the limit (~9 B/voxel + 128 MiB) is segmented slab by slab along z: one pass for\n"
+    "the field of view, histogram and threshold, then slabs of core slices (a multiple of 16),\n"
+    "each read with 5 R + 4 slices of margin below and above (--slab-margin-vox), written into\n"
+    "the labels file slab by slab. The labels are the same, voxel for voxel and number for\n"
+    "number, as in one piece; a grain that reaches past a margin is an error (exit 2) naming\n"
+    "--slab-margin-vox.\n"
+    "Under the limit, or without it, the whole scan is segmented at once, as always.\n\n"
     "Examples:\n"
     "  tomograin segment scan.h5 -o labels.h5 --voxel-um 12.3            (R from 1360 um grains)\n"
     "  tomograin segment scan.tif -o labels.h5 --grain-radius-vox 20 --h 2\n"
     "  tomograin segment scan.h5 -o labels.h5 --grain-radius-vox 20 --threshold otsu --no-lines\n"
     "  tomograin segment scan.tif -o labels.h5 --grain-radius-vox 20 --threshold local   (cupping)\n"
-    "  tomograin segment scan.tif -o labels.h5 --grain-radius-vox 20 --fov-radius-vox 600",
+    "  tomograin segment scan.tif -o labels.h5 --grain-radius-vox 20 --fov-radius-vox 600\n"
+    "  tomograin segment big.h5 -o labels.h5 --voxel-um 12.3 --memory-limit 16GiB   (2048^3: ~8 slabs)",
     [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<tg::app::SegmentJob>();
   sub->add_option("input", o->in, "Grey scan (.tif/.tiff, folder, .json sidecar, .h5[:/dataset]); uint16 or float32")
@@ -229,6 +343,13 @@ static tg::app::Registrar reg{{"segment", 30,
   sub->add_option("--min-size", o->seg.min_size_vox, "Smallest label kept, voxels")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  sub->add_option("--memory-limit", o->memory_limit,
+                  "Memory to stay under, e.g. 16GiB, 512MiB, 2G or a byte count. A scan whose segmentation needs more "
+                  "(~9 B/voxel) is segmented slab by slab from its HDF5 file, with the same labels")
+      ->type_name("SIZE");
+  sub->add_option("--slab-margin-vox", o->slab_margin_vox,
+                  "Slices read below and above each slab's core (default 5 R + 4, rounded up to 16)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("--compress", o->compression, "HDF5 deflate level 0-9")->check(CLI::Range(0, 9))->capture_default_str();
   return [o] { return tg::app::run_segment(*o); };
 }}};

@@ -23,6 +23,8 @@ struct SegmentJob {
   // When set (analyse), the labels are moved here after they are written,
   // so that the next step need not read and decompress them again.
   Volume<uint32_t>* keep_labels = nullptr;
+  std::string memory_limit;           // --memory-limit (empty: none); slabs when the scan does not fit
+  int64_t slab_margin_vox = -1;       // --slab-margin-vox (< 0: 5 R + 4)
 };
 int run_segment(SegmentJob& job);
 

@@ -3,6 +3,8 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -42,19 +44,6 @@ int64_t cgroup_limit_bytes() {
   return -1;
 }
 
-int64_t parse_bytes(const char* s) {
-  char* end = nullptr;
-  double v = std::strtod(s, &end);
-  if (end == s || v <= 0) return -1;
-  switch (*end) {
-    case 'k': case 'K': v *= 1024.0; break;
-    case 'm': case 'M': v *= 1024.0 * 1024; break;
-    case 'g': case 'G': v *= 1024.0 * 1024 * 1024; break;
-    default: break;
-  }
-  return static_cast<int64_t>(v);
-}
-
 }  // namespace
 
 int64_t available_memory_bytes() {
@@ -62,7 +51,7 @@ int64_t available_memory_bytes() {
   if (avail < 0) avail = std::numeric_limits<int64_t>::max();
   if (const int64_t cg = cgroup_limit_bytes(); cg > 0 && cg < avail) avail = cg;
   if (const char* env = std::getenv("TOMOGRAIN_MEMORY_LIMIT")) {
-    if (const int64_t lim = parse_bytes(env); lim > 0 && lim < avail) avail = lim;
+    if (const int64_t lim = parse_byte_size(env); lim > 0 && lim < avail) avail = lim;
   }
   return avail;
 }
@@ -73,6 +62,28 @@ void check_allocation(int64_t bytes, const std::string& what) {
   if (bytes > avail)
     throw ResourceError(what + " needs " + human_bytes(static_cast<double>(bytes)) + " but only " +
                         human_bytes(static_cast<double>(avail)) + " of memory is available");
+}
+
+int64_t parse_byte_size(const std::string& text) {
+  const char* s = text.c_str();
+  char* end = nullptr;
+  const double v = std::strtod(s, &end);
+  if (end == s || !(v > 0) || !std::isfinite(v)) return -1;
+  std::string unit(end);
+  while (!unit.empty() && unit.front() == ' ') unit.erase(unit.begin());
+  for (char& c : unit) c = char(std::toupper(static_cast<unsigned char>(c)));
+  if (unit.empty() || unit == "B") return v < 1 ? -1 : static_cast<int64_t>(v);
+  const std::string prefixes = "KMGT";
+  const size_t p = prefixes.find(unit[0]);
+  if (p == std::string::npos) return -1;
+  const std::string rest = unit.substr(1);
+  double base = 0;
+  if (rest.empty() || rest == "IB") base = 1024.0;  // K, KiB: binary (as the environment variable always took them)
+  else if (rest == "B") base = 1000.0;             // KB, GB: decimal
+  else return -1;
+  const double bytes = v * std::pow(base, double(p + 1));
+  if (bytes < 1 || bytes > 9.2e18) return -1;
+  return static_cast<int64_t>(bytes);
 }
 
 int64_t peak_rss_bytes() { return meminfo_field("/proc/self/status", "VmHWM:"); }

@@ -16,6 +16,12 @@ int64_t available_memory_bytes();
 // suffix) lowers the limit, which tests and shared machines use.
 void check_allocation(int64_t bytes, const std::string& what);
 
+// A byte count from text: a plain number of bytes ("1073741824", "512B"),
+// or a number with a binary unit ("16GiB", "16G", "1.5 MiB": powers of
+// 1024) or a decimal one ("16GB": powers of 1000); K, M, G, T, any case.
+// Returns -1 when the text is not such a size (the caller names the option).
+int64_t parse_byte_size(const std::string& text);
+
 // Peak resident set size of this process so far (VmHWM), in bytes.
 int64_t peak_rss_bytes();
 

@@ -249,7 +249,14 @@ void distance_transform(const Volume<uint8_t>& solid, Volume<float>& out, const 
   transform(solid, out, opt, true);
 }
 
-FixedDistance to_fixed_point(Volume<float>&& dist) {
+double fixed_point_units(float dmax) {
+  double u = 256.0;
+  while (u > 1.0 && double(dmax) * u > 65535.0) u /= 2;
+  return u;
+}
+
+FixedDistance to_fixed_point(Volume<float>&& dist, double per_unit) {
+  if (!(per_unit >= 0) || !std::isfinite(per_unit)) throw UsageError("distance map: fixed-point units must be >= 0");
   const int64_t n = dist.size();
   const float* d = dist.data();
   float dmax = 0;
@@ -262,10 +269,11 @@ FixedDistance to_fixed_point(Volume<float>&& dist) {
   }
   if (bad) throw UsageError("distance map: not finite and >= 0 everywhere");
   FixedDistance r;
-  r.per_unit = dmax > 0 ? std::min(256.0, 65535.0 / double(dmax)) : 256.0;
+  r.dmax = dmax;
+  r.per_unit = per_unit > 0 ? per_unit : fixed_point_units(dmax);
   const float p = float(r.per_unit);
   r.map = std::move(dist).convert_in_place<uint16_t>([p](float v) -> uint16_t {
-    const float f = v * p + 0.5f;  // <= 65535.5: per_unit keeps the top in range
+    const float f = v * p + 0.5f;
     const uint16_t u = uint16_t(f < 65535.0f ? f : 65535.0f);
     return v > 0 && u == 0 ? uint16_t(1) : u;  // the solid stays > 0
   });

@@ -71,20 +71,28 @@ void distance_transform(const Volume<uint8_t>& solid, Volume<float>& out, const 
 // The distance map in 16-bit fixed point, for the steps after the EDT
 // (markers, flood levels), which only compare distances: value =
 // round(d * per_unit), at least 1 where d > 0 (so the solid is exactly
-// where value > 0), 0 on the void. per_unit = min(256, 65535 / dmax):
-// steps of 1/256 voxel (1/512 at most off) for grains up to 255 voxels
-// deep, far below the digital map's own staircase ripples (~0.5) and the
-// marker depth h (>= 0.7). Why: a float map beside the u32 markers made
-// 8 B/voxel the segmentation's peak; at 2 B the peak is 6 B/voxel
-// (issue #23: a 1220^3 scan within 7 B/voxel).
+// where value > 0), 0 on the void. per_unit = fixed_point_units(dmax):
+// 256, steps of 1/256 voxel (1/512 at most off) for grains up to 255
+// voxels deep, far below the digital map's own staircase ripples (~0.5)
+// and the marker depth h (>= 0.7). Why: a float map beside the u32
+// markers made 8 B/voxel the segmentation's peak; at 2 B the peak is
+// 6 B/voxel (issue #23: a 1220^3 scan within 7 B/voxel).
 struct FixedDistance {
   Volume<uint16_t> map;
   double per_unit = 1.0;  // fixed-point units per distance unit
+  float dmax = 0;         // the float map's deepest value (the flood's quantisation is decided on it)
 };
 
+// 256 while dmax <= 255, else the largest power of two that keeps dmax
+// within 16 bits. A scan segmented slab by slab gives each slab the whole
+// scan's (a slab's own deepest voxel may be shallower).
+double fixed_point_units(float dmax);
+
 // Converts a distance map (finite, >= 0) over its own storage (taken; the
-// spent 2 B/voxel are given back). UsageError on NaN, inf or < 0.
-FixedDistance to_fixed_point(Volume<float>&& dist);
+// spent 2 B/voxel are given back), at per_unit units per distance unit
+// (0: fixed_point_units of its own deepest value; values past 65535
+// clamp). UsageError on NaN, inf or < 0.
+FixedDistance to_fixed_point(Volume<float>&& dist, double per_unit = 0);
 
 namespace detail {
 // One parabola of a lower envelope, in voxel units along its line: root v,

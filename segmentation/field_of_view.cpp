@@ -61,31 +61,9 @@ FieldOfView no_fov(std::string why) {
   return f;
 }
 
-FieldOfView detect(const Volume<uint16_t>& g) {
-  const Shape s = g.shape();
-  if (s.empty() || s.ny < 8 || s.nx < 8) return no_fov("");
-  const uint16_t c = g(0, 0, 0);
-  for (int64_t k = 0; k < s.nz; ++k)
-    if (g(k, 0, 0) != c || g(k, 0, s.nx - 1) != c || g(k, s.ny - 1, 0) != c || g(k, s.ny - 1, s.nx - 1) != c)
-      return no_fov("");  // no constant outside: nothing to detect, nothing to say
-  // Per row y, the envelope over the slices of the first / last voxel != c.
+FieldOfView fit_field_of_view(const Shape& s, uint16_t c, const std::vector<int64_t>& xmin,
+                              const std::vector<int64_t>& xmax) {
   const int64_t ny = s.ny, nx = s.nx;
-  std::vector<int64_t> xmin(size_t(ny), nx), xmax(size_t(ny), -1);
-#pragma omp parallel for schedule(static)
-  for (int64_t j = 0; j < ny; ++j) {
-    int64_t lo = nx, hi = -1;
-    for (int64_t k = 0; k < s.nz; ++k) {
-      const uint16_t* row = &g(k, j, 0);
-      int64_t a = 0;
-      while (a < std::min(lo, nx) && row[a] == c) ++a;
-      if (a < lo && a < nx) lo = a;
-      if (a >= nx) continue;  // the whole row is c (or left of what is known)
-      int64_t b = nx - 1;
-      while (b > hi && row[b] == c) --b;
-      hi = std::max(hi, b);
-    }
-    xmin[size_t(j)] = lo, xmax[size_t(j)] = hi;
-  }
   // Boundary points: row ends, and column ends derived from the rows (the
   // region is taken as convex along rows). Points on the slice border are
   // where the slice clips the circle: left out.
@@ -125,6 +103,48 @@ FieldOfView detect(const Volume<uint16_t>& g) {
 
 }  // namespace
 
+FovScan::FovScan(int64_t ny, int64_t nx)
+    : nx_(nx), xmin_(size_t(std::max<int64_t>(ny, 0)), nx), xmax_(size_t(std::max<int64_t>(ny, 0)), -1) {}
+
+void FovScan::add(const Volume<uint16_t>& g) {
+  const Shape s = g.shape();
+  if (s.ny != int64_t(xmin_.size()) || s.nx != nx_)
+    throw UsageError("field of view: a slab of " + s.str() + " does not match the scan's slices");
+  if (s.empty() || !constant_) return;
+  if (slices_ == 0) c_ = g(0, 0, 0);
+  slices_ += s.nz;
+  const uint16_t c = c_;
+  for (int64_t k = 0; k < s.nz; ++k)
+    if (g(k, 0, 0) != c || g(k, 0, s.nx - 1) != c || g(k, s.ny - 1, 0) != c || g(k, s.ny - 1, s.nx - 1) != c) {
+      constant_ = false;  // no constant outside: nothing to detect, nothing to say
+      return;
+    }
+  // Per row y, the envelope over the slices of the first / last voxel != c
+  // (carried from slab to slab: the envelope of a union is the envelope of
+  // the parts' envelopes).
+  const int64_t ny = s.ny, nx = s.nx;
+#pragma omp parallel for schedule(static)
+  for (int64_t j = 0; j < ny; ++j) {
+    int64_t lo = xmin_[size_t(j)], hi = xmax_[size_t(j)];
+    for (int64_t k = 0; k < s.nz; ++k) {
+      const uint16_t* row = &g(k, j, 0);
+      int64_t a = 0;
+      while (a < std::min(lo, nx) && row[a] == c) ++a;
+      if (a < lo && a < nx) lo = a;
+      if (a >= nx) continue;  // the whole row is c (or left of what is known)
+      int64_t b = nx - 1;
+      while (b > hi && row[b] == c) --b;
+      hi = std::max(hi, b);
+    }
+    xmin_[size_t(j)] = lo, xmax_[size_t(j)] = hi;
+  }
+}
+
+FieldOfView FovScan::finish(const Shape& whole) const {
+  if (whole.empty() || whole.ny < 8 || whole.nx < 8 || !constant_ || slices_ == 0) return no_fov("");
+  return fit_field_of_view(whole, c_, xmin_, xmax_);
+}
+
 FieldOfView circular_field_of_view(double cy, double cx, double radius, const Shape& s) {
   FieldOfView f;
   f.active = true;
@@ -145,23 +165,28 @@ FieldOfView circular_field_of_view(double cy, double cx, double radius, const Sh
   return f;
 }
 
+FieldOfView given_field_of_view(const FovOptions& o, const Shape& s) {
+  if (!(o.radius_vox > 0 || std::isfinite(o.centre_y) || std::isfinite(o.centre_x))) return {};
+  if (!(o.radius_vox > 0) || !std::isfinite(o.radius_vox))
+    throw UsageError("segment: a field-of-view centre needs a positive radius (--fov-radius-vox)");
+  const double cy = std::isfinite(o.centre_y) ? o.centre_y : 0.5 * double(s.ny - 1);
+  const double cx = std::isfinite(o.centre_x) ? o.centre_x : 0.5 * double(s.nx - 1);
+  FieldOfView f = circular_field_of_view(cy, cx, o.radius_vox, s);
+  if (f.outside_voxels == s.voxels())
+    throw UsageError(fmt::format("segment: the field of view (centre y {:.1f}, x {:.1f}, radius {:.1f} voxels) holds "
+                                 "no voxel of the {}x{} slice",
+                                 cy, cx, o.radius_vox, s.ny, s.nx));
+  if (f.outside_voxels == 0) f.active = false;  // covers the slice: the plain path
+  return f;
+}
+
 FieldOfView find_field_of_view(const Volume<uint16_t>& grey, const FovOptions& o) {
   const Shape s = grey.shape();
-  if (o.radius_vox > 0 || std::isfinite(o.centre_y) || std::isfinite(o.centre_x)) {
-    if (!(o.radius_vox > 0) || !std::isfinite(o.radius_vox))
-      throw UsageError("segment: a field-of-view centre needs a positive radius (--fov-radius-vox)");
-    const double cy = std::isfinite(o.centre_y) ? o.centre_y : 0.5 * double(s.ny - 1);
-    const double cx = std::isfinite(o.centre_x) ? o.centre_x : 0.5 * double(s.nx - 1);
-    FieldOfView f = circular_field_of_view(cy, cx, o.radius_vox, s);
-    if (f.outside_voxels == s.voxels())
-      throw UsageError(fmt::format("segment: the field of view (centre y {:.1f}, x {:.1f}, radius {:.1f} voxels) holds "
-                                   "no voxel of the {}x{} slice",
-                                   cy, cx, o.radius_vox, s.ny, s.nx));
-    if (f.outside_voxels == 0) f.active = false;  // covers the slice: the plain path
-    return f;
-  }
+  if (o.radius_vox > 0 || std::isfinite(o.centre_y) || std::isfinite(o.centre_x)) return given_field_of_view(o, s);
   if (!o.detect) return {};
-  return detect(grey);
+  FovScan scan(s.ny, s.nx);
+  scan.add(grey);
+  return scan.finish(s);
 }
 
 std::vector<int64_t> histogram_in_fov(const Volume<uint16_t>& grey, const FieldOfView& fov) {

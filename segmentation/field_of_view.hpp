@@ -87,6 +87,28 @@ struct FieldOfView {
 // The field of view of a scan: given, detected, or none (see above). UsageError for a bad radius.
 FieldOfView find_field_of_view(const Volume<uint16_t>& grey, const FovOptions& opt);
 
+// The detection above, fed slab by slab (a scan larger than memory, read in
+// z order in slabs of any thickness): add() every slab of slices once, in
+// z order, then finish() with the whole scan's shape. The result is the
+// same as find_field_of_view on the whole volume, which runs it on one slab.
+class FovScan {
+ public:
+  FovScan(int64_t ny, int64_t nx);
+  void add(const Volume<uint16_t>& slab);
+  FieldOfView finish(const Shape& whole) const;
+
+ private:
+  int64_t nx_ = 0, slices_ = 0;
+  bool constant_ = true;  // every slice's corners so far hold c_
+  uint16_t c_ = 0;
+  std::vector<int64_t> xmin_, xmax_;  // per row y: envelope of the first / last voxel != c_
+};
+
+// The given field of view (FovOptions radius_vox > 0) of a scan of shape
+// s; inactive when none is given (nothing to detect: see FovScan).
+// UsageError for a bad radius.
+FieldOfView given_field_of_view(const FovOptions& opt, const Shape& s);
+
 // The circle (centre, radius) as a field of view of a slice ny x nx.
 FieldOfView circular_field_of_view(double centre_y, double centre_x, double radius, const Shape& s);
 

@@ -49,24 +49,9 @@ void validate(const SegmentOptions& o) {
   seg::check_connectivity(o.connectivity);
 }
 
-// The grey -> mask decisions: which voxels are data (field of view,
-// pre-masked zeros, saturation), then the threshold on their histogram,
-// and the grey level above which solid is bright (grey evidence; 0 when
-// not graded).
-struct GreyDecision {
-  FieldOfView fov;
-  LevelScreen levels;
-  ThresholdResult t;
-  LocalThreshold local;
-  bool graded = false;
-  uint16_t bright = 0;
-  double noise_sigma = 0;  // the solid peak's (graded only)
-};
-
-GreyDecision choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o) {
-  GreyDecision d;
-  d.fov = find_field_of_view(grey, o.fov);
-  auto hist = histogram_in_fov(grey, d.fov);
+// The threshold and the bright level from the histogram inside the field
+// of view (the local threshold's blocks need the volume: run_from_grey).
+void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist, const SegmentOptions& o) {
   d.levels = screen_levels(hist, o.saturation_level);
   bool any = false;
   for (const int64_t c : hist) any = any || c > 0;
@@ -85,11 +70,7 @@ GreyDecision choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions
     d.t = o.threshold == ThresholdMethod::otsu ? otsu_threshold(hist) : moments_threshold(hist);
   }
   d.t.separability = separability(hist, d.t.value);
-  if (o.threshold == ThresholdMethod::local) {
-    d.t.method = ThresholdMethod::local;
-    const int64_t w = o.local_window_vox > 0 ? o.local_window_vox : default_local_window(o.grain_radius_vox);
-    d.local = local_moments_thresholds(grey, d.fov, hist, w, d.t.value);
-  } else if (o.grey_evidence) {
+  if (o.threshold != ThresholdMethod::local && o.grey_evidence) {
     // Halfway to the solid's mean grey, and at least bright_sigmas noise
     // sigmas below the solid's peak (a noisy scan lowers it, down to t:
     // then nothing is dim, and the grey evidence is off).
@@ -101,17 +82,36 @@ GreyDecision choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions
     d.noise_sigma = peak.sigma;
     d.graded = d.bright > d.t.value;  // no dim band: the plain mask's chain (no second pore pass)
   }
+}
+
+GreyDecisions choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o) {
+  GreyDecisions d;
+  d.fov = find_field_of_view(grey, o.fov);
+  auto hist = histogram_in_fov(grey, d.fov);
+  threshold_from_histogram(d, hist, o);
+  if (o.threshold == ThresholdMethod::local) {
+    d.t.method = ThresholdMethod::local;
+    const int64_t w = o.local_window_vox > 0 ? o.local_window_vox : default_local_window(o.grain_radius_vox);
+    d.local = local_moments_thresholds(grey, d.fov, hist, w, d.t.value);
+  }
   return d;
 }
 
-SegmentResult segment_graded(Volume<uint8_t> mask, const SegmentOptions& opt, bool graded);
+// What a slab of a chunked run needs beyond the plain chain (segment.hpp
+// SlabWindow) and what it reports back.
+struct SlabRun {
+  SlabWindow window;
+  SlabOutcome* out = nullptr;
+};
 
-SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owned, const SegmentOptions& opt) {
-  validate(opt);
-  SegmentResult r0;
-  StageClock clock(r0);
-  GreyDecision d = choose_threshold(grey, opt);
+SegmentResult segment_graded(Volume<uint8_t> mask, const SegmentOptions& opt, bool graded, SlabRun* slab = nullptr);
+
+// grey -> mask with the decisions d, then the chain. The core's solid count
+// (slab) or the field of view's goes to *nsolid_out.
+SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owned, const GreyDecisions& d,
+                              const SegmentOptions& opt, SlabRun* slab, int64_t* nsolid_out, StageClock& clock) {
   const ThresholdResult& t = d.t;
+  const Shape shape = grey.shape();
   // An owned scan becomes the mask in its own storage.
   Volume<uint8_t> mask;
   if (t.method == ThresholdMethod::local) {
@@ -123,14 +123,44 @@ SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owne
       mask = owned ? binarise(std::move(*owned), t.value) : binarise(grey, t.value);
     clear_outside(mask, d.fov);
   }
-  int64_t nsolid = 0;  // solid fraction of the field of view (segment_mask's is of the whole volume)
-  if (d.fov.active) {
+  // Solid fraction of the field of view (segment_mask's is of the whole
+  // volume); of a slab, the core's solid voxels.
+  int64_t nsolid = 0;
+  if (d.fov.active || slab) {
+    const int64_t sl = shape.slice_voxels();
+    const int64_t lo = slab ? slab->window.core_begin * sl : 0, hi = slab ? slab->window.core_end * sl : mask.size();
     const uint8_t* m = mask.data();
 #pragma omp parallel for schedule(static) reduction(+ : nsolid)
-    for (int64_t i = 0; i < mask.size(); ++i) nsolid += m[i] != 0;
+    for (int64_t i = lo; i < hi; ++i) nsolid += m[i] != 0;
   }
+  *nsolid_out = nsolid;
   clock.lap("threshold");
-  SegmentResult r = segment_graded(std::move(mask), opt, d.graded);
+  return segment_graded(std::move(mask), opt, d.graded, slab);
+}
+
+
+
+SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owned, const SegmentOptions& opt) {
+  validate(opt);
+  SegmentResult r0;
+  StageClock clock(r0);
+  GreyDecisions d = choose_threshold(grey, opt);
+  int64_t nsolid = 0;
+  const Shape whole = grey.shape();
+  SegmentResult r = chain_from_grey(grey, owned, d, opt, nullptr, &nsolid, clock);
+  if (d.fov.active) {
+    const int64_t inside = d.fov.inside_voxels(whole);
+    r.solid_fraction = inside ? double(nsolid) / double(inside) : 0.0;
+  }
+  record_decisions(r, std::move(d), opt, whole);
+  r.stage_seconds.insert(r.stage_seconds.begin(), r0.stage_seconds.begin(), r0.stage_seconds.end());
+  return r;
+}
+
+}  // namespace
+
+void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& opt, const Shape& whole) {
+  const ThresholdResult& t = d.t;
   r.threshold = t;
   r.bright_value = d.bright;
   r.solid_noise_sigma = d.noise_sigma;
@@ -140,10 +170,6 @@ SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owne
                       std::to_string(int(opt.bright_sigmas)) + " sigmas below the solid's peak");
   if (opt.grey_evidence && t.method == ThresholdMethod::local)
     r.notes.push_back("grey evidence off: it needs one global threshold (not --threshold local)");
-  if (d.fov.active) {
-    const int64_t inside = d.fov.inside_voxels(r.labels.shape());
-    r.solid_fraction = inside ? double(nsolid) / double(inside) : 0.0;
-  }
   std::vector<std::string> notes;
   if (!t.note.empty()) notes.push_back(t.note);
   if (!d.fov.note.empty()) notes.push_back(d.fov.note);
@@ -151,7 +177,7 @@ SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owne
     notes.push_back(fmt::format("field of view ({}): centre (y {:.1f}, x {:.1f}), radius {:.1f} voxels; {:.3g} % of the "
                                 "voxels outside, not thresholded nor labelled",
                                 d.fov.source, d.fov.centre_y, d.fov.centre_x, d.fov.radius,
-                                100.0 * double(d.fov.outside_voxels) / double(std::max<int64_t>(1, r.labels.size()))));
+                                100.0 * double(d.fov.outside_voxels) / double(std::max<int64_t>(1, whole.voxels()))));
   notes.insert(notes.end(), d.levels.notes.begin(), d.levels.notes.end());
   if (!d.local.note.empty()) notes.push_back(d.local.note);
   r.notes.insert(r.notes.begin(), notes.begin(), notes.end());
@@ -162,11 +188,36 @@ SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owne
   r.fov = std::move(d.fov);
   r.levels = std::move(d.levels);
   r.local = std::move(d.local);
-  r.stage_seconds.insert(r.stage_seconds.begin(), r0.stage_seconds.begin(), r0.stage_seconds.end());
-  return r;
 }
 
-}  // namespace
+GreyDecisions decide_grey(FieldOfView fov, std::vector<int64_t> hist, const SegmentOptions& opt) {
+  validate(opt);
+  if (opt.threshold == ThresholdMethod::local)
+    throw UsageError("segment: --threshold local needs the whole volume at once (its blocks' thresholds); it does not "
+                     "run slab by slab under --memory-limit");
+  GreyDecisions d;
+  d.fov = std::move(fov);
+  threshold_from_histogram(d, hist, opt);
+  return d;
+}
+
+SlabOutcome segment_slab(Volume<uint16_t>&& grey, const GreyDecisions& d, const SegmentOptions& opt_in,
+                         const SlabWindow& w) {
+  validate(opt_in);
+  if (!(w.core_begin >= 0 && w.core_begin < w.core_end && w.core_end <= grey.shape().nz))
+    throw UsageError("segment: a slab's core must be a non-empty range of its slices");
+  if (!(w.buckets_per_unit > 0)) throw UsageError("segment: a slab needs the scan's watershed levels per unit");
+  SegmentOptions opt = opt_in;
+  opt.min_size_vox = 1;  // the size filter needs whole particles: the caller applies it
+  SlabOutcome out;
+  SlabRun run{w, &out};
+  SegmentResult r0;
+  StageClock clock(r0);
+  Volume<uint16_t> g = std::move(grey);
+  out.result = chain_from_grey(g, &g, d, opt, &run, &out.core_solid, clock);
+  out.result.stage_seconds.insert(out.result.stage_seconds.begin(), r0.stage_seconds.begin(), r0.stage_seconds.end());
+  return out;
+}
 
 SegmentOptions SegmentOptions::resolved() const {
   SegmentOptions o = *this;
@@ -198,7 +249,7 @@ namespace {
 
 // The chain from a mask: 0/nonzero (graded = false), or graded 0 void,
 // 1 dim, 2 bright (the header's grey evidence).
-SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in, bool graded) {
+SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in, bool graded, SlabRun* slab) {
   const SegmentOptions opt = opt_in.resolved();
   SegmentResult r;
   StageClock clock(r);
@@ -238,10 +289,11 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
     r.notes.push_back(nsolid == 0 ? "no solid voxel: no particles" : "no void voxel: the whole volume is one particle");
     lab = Volume<uint32_t>::filled(s, nsolid == 0 ? 0u : 1u, solid.geometry());
     r.markers = nsolid ? 1 : 0;
-    const auto rl = relabel_consecutive(lab, opt.min_size_vox);
+    auto rl = relabel_consecutive(lab, opt.min_size_vox);
     r.count = rl.count;
     r.dropped = rl.dropped;
     r.labels = std::move(lab);
+    if (slab) slab->out->sizes = std::move(rl.sizes);
     clock.lap("watershed");
     r.peak_rss_bytes = peak_rss_bytes();
     return r;
@@ -279,13 +331,27 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   clock.lap("edt");
 
   solid = Volume<uint8_t>();
+  if (slab) {
+    // The core's deepest voxel: exact there (the margin holds its nearest
+    // void), so the caller learns the whole scan's deepest from the cores.
+    const int64_t sl = s.slice_voxels();
+    const float* d = dist.data();
+    float dmax = 0;
+#pragma omp parallel for schedule(static) reduction(max : dmax)
+    for (int64_t i = slab->window.core_begin * sl; i < slab->window.core_end * sl; ++i) dmax = std::max(dmax, d[i]);
+    slab->out->core_dmax = dmax;
+  }
   // The markers and the levels only compare distances: a 16-bit fixed-point
   // map (1/256 voxel) over the float map's storage holds the peak at
-  // 2 + 4 B/voxel while the markers are found.
-  FixedDistance fixed = to_fixed_point(std::move(dist));
+  // 2 + 4 B/voxel while the markers are found. A slab takes the whole
+  // scan's units and quantisation (its own deepest voxel, perhaps in the
+  // margin, would change their rounding).
+  FixedDistance fixed = to_fixed_point(std::move(dist), slab ? slab->window.fixed_units : 0.0);
   r.markers = find_markers(fixed, lab, {opt.h, opt.connectivity});
   clock.lap("markers");
-  Volume<uint8_t> levels = quantise_levels(std::move(fixed), opt.buckets_per_unit, r.buckets_per_unit);
+  Volume<uint8_t> levels = slab ? quantise_levels_at(std::move(fixed), slab->window.buckets_per_unit)
+                                : quantise_levels(std::move(fixed), opt.buckets_per_unit, r.buckets_per_unit);
+  if (slab) r.buckets_per_unit = slab->window.buckets_per_unit;
   if (r.buckets_per_unit < opt.buckets_per_unit)
     r.notes.push_back("watershed levels coarsened to " + std::to_string(r.buckets_per_unit) +
                       " per voxel (255 levels at most; the largest distance is " +
@@ -306,11 +372,12 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   if (opt.merge) r.merge = merge_oversegmented(lab, levels, mo);
   clock.lap("merge");
   levels = Volume<uint8_t>();
-  const auto rl = relabel_consecutive(lab, opt.min_size_vox, r.merge.root.empty() ? nullptr : &r.merge.root);
+  auto rl = relabel_consecutive(lab, opt.min_size_vox, r.merge.root.empty() ? nullptr : &r.merge.root);
   r.merge.root = {};
   r.count = rl.count;
   r.dropped = rl.dropped;
   r.labels = std::move(lab);
+  if (slab) slab->out->sizes = std::move(rl.sizes);
   clock.lap("relabel");
   r.peak_rss_bytes = peak_rss_bytes();
   return r;

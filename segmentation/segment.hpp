@@ -179,6 +179,57 @@ SegmentResult segment(Volume<uint16_t>&& grey, const SegmentOptions& opt);
 // From a solid mask on (threshold already applied; the mask is consumed).
 SegmentResult segment_mask(Volume<uint8_t> solid, const SegmentOptions& opt);
 
+// ---- The pieces of segment() that a scan larger than memory runs slab by
+// slab (segment_chunked.hpp); segment() itself is made of them.
+
+// The decisions that need the whole scan: which voxels are data (field of
+// view, pre-masked zeros, saturation), the threshold chosen on the
+// histogram of those voxels, and the grey level above which solid is
+// bright (grey evidence; 0 when not graded).
+struct GreyDecisions {
+  FieldOfView fov;
+  LevelScreen levels;
+  ThresholdResult t;
+  LocalThreshold local;  // ThresholdMethod::local only (segment() alone: it needs the volume)
+  bool graded = false;
+  uint16_t bright = 0;
+  double noise_sigma = 0;  // the solid peak's (graded only)
+};
+
+// From the field of view (FovScan or given_field_of_view) and the 65536-bin
+// histogram of the voxels inside it (histogram_in_fov, summed over slabs).
+// UsageError for ThresholdMethod::local; InputError for an empty histogram
+// or a saturated scan, as segment().
+GreyDecisions decide_grey(FieldOfView fov, std::vector<int64_t> hist, const SegmentOptions& opt);
+
+// Puts the decisions into a result: threshold, bright level, field of
+// view, level screen, and their notes (segment() does the same).
+void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& opt, const Shape& whole);
+
+// A slab: slices [core_begin, core_end) of it are its core (the rest its
+// margins), and the watershed's levels per distance unit are the whole
+// scan's, not derived from the slab's own deepest voxel.
+struct SlabWindow {
+  int64_t core_begin = 0, core_end = 0;
+  double buckets_per_unit = 0;
+  double fixed_units = 0;  // the whole scan's fixed_point_units (distance_transform.hpp)
+};
+
+struct SlabOutcome {
+  // labels 1..count of the slab, numbered in raster order of their first
+  // voxel, *no* size filter (a particle cut by the slab's face is smaller
+  // than it is); counts of the chain's stages over the whole slab.
+  SegmentResult result;
+  std::vector<int64_t> sizes;  // sizes[l]: voxels of label l in the slab (sizes[0] unused)
+  int64_t core_solid = 0;      // solid voxels of the core after the threshold (inside the field of view)
+  float core_dmax = 0;         // deepest distance-map value of the core, distance units
+};
+
+// The chain of segment() on one slab with the whole scan's decisions: the
+// grey slab becomes the mask in its own storage.
+SlabOutcome segment_slab(Volume<uint16_t>&& grey, const GreyDecisions& d, const SegmentOptions& opt,
+                         const SlabWindow& w);
+
 // The summary as JSON text (options, threshold, pores, markers, merges,
 // labels, time per stage, peak memory).
 std::string summary_json(const SegmentResult& r, const SegmentOptions& opt);

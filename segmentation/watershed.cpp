@@ -95,36 +95,44 @@ class Bucket {
   size_t fill_ = kBlock;  // entries in the last block
 };
 
-// One round of the frontier in row order (slice order for rounds much
-// smaller than the number of rows): a stable counting sort of spans of
+// One round of the frontier in row order (slice order in slabs where the
+// round is much sparser than the rows): a stable counting sort of spans of
 // entries into a buffer that is reused round after round. Also gives where
 // each slab of the round starts. Row order lets the voxels of a row of the
 // frontier share the cache lines of their neighbour rows; at 256^3 (10 M
 // solid voxels, 2 threads) the visits took 0.24-0.32 s in row order
 // against 0.47 s in slice order.
+// Row or slice order is chosen per slab (8 slices), from the slab's own
+// entries: at least one per 4 rows of the slab, rows. (It used to be chosen
+// for the whole round from its total, which made the order in one slab, so
+// the ties of the flood and the labels, depend on the rest of the volume:
+// a slab of slices segmented alone, segment_chunked.hpp, then differed from
+// the same slices in the whole volume.) Counting costs O(m + slices + the
+// rows of the dense slabs), as before.
 template <class Index>
 class Round {
  public:
   Round(const Shape& s, int64_t slab_slices, int64_t slabs)
       : rows_{s.nx, s.nz * s.ny, slab_slices * s.ny}, slices_{s.slice_voxels(), s.nz, slab_slices},
-        slab_start_(size_t(slabs) + 1) {}
+        ny_(s.ny), slab_slices_(slab_slices), slab_start_(size_t(slabs) + 1), base_(size_t(s.nz) + 1),
+        dense_(size_t(s.nz)) {}
   using Spans = std::vector<std::pair<const Index*, size_t>>;
   // Sorts the entries of the spans (in queue order; m in all) into the
   // buffer. Large rounds are counted and scattered by threads, each on a
   // contiguous share of the entries; a stable sort has one result, so the
-  // thread count does not change it. The key (row or slice) depends on m
-  // alone, so it does not either.
+  // thread count does not change it. The keys depend on each slab's
+  // entries alone, so they do not either.
   void sort(const Spans& spans, size_t m) {
-    const Key& key = int64_t(m) * 4 >= rows_.bins ? rows_ : slices_;  // counting costs O(m + bins)
-    const int64_t bins = key.bins;
+    const int64_t nz = slices_.bins;
+    const int64_t slabs = int64_t(slab_start_.size()) - 1;
     if (buf_.size() < m) buf_.resize(m);
     const int threads = m >= (size_t(1) << 16) ? omp_get_max_threads() : 1;
-    count_.assign(size_t(threads) * size_t(bins), 0);
+    count_.assign(size_t(threads) * size_t(nz), 0);
+    int64_t bins = nz;
 #pragma omp parallel num_threads(threads)
     {
       const int t = omp_get_thread_num(), nt = omp_get_num_threads();
       const size_t lo = m * size_t(t) / size_t(nt), hi = m * size_t(t + 1) / size_t(nt);
-      int64_t* c = count_.data() + size_t(t) * size_t(bins);
       // Calls f(entry) for the entries at positions [lo, hi).
       auto share = [&](auto&& f) {
         size_t pos = 0;
@@ -135,21 +143,47 @@ class Round {
           if (pos >= hi) break;
         }
       };
-      share([&](Index x) { ++c[key.of(x)]; });
+      {
+        int64_t* c = count_.data() + size_t(t) * size_t(nz);
+        share([&](Index x) { ++c[slices_.of(x)]; });
+      }
 #pragma omp barrier
 #pragma omp single
       {
-        // Start of (bin k, share u): all of bins < k, then shares < u of bin k.
-        // Slab by slab (the last one takes the rest): no division per bin,
-        // which cost as much as the counting in the serial part.
-        const int64_t slabs = int64_t(slab_start_.size()) - 1;
+        // Each slab's density decides its key; bins are laid out slice by
+        // slice: ny of them (rows) in a dense slab, one in a sparse one.
+        bool any_dense = false;
+        for (int64_t p = 0; p < slabs; ++p) {
+          const int64_t k0 = p * slab_slices_, k1 = p + 1 < slabs ? k0 + slab_slices_ : nz;
+          int64_t mp = 0;
+          for (int64_t k = k0; k < k1; ++k)
+            for (int u = 0; u < nt; ++u) mp += count_[size_t(u) * size_t(nz) + size_t(k)];
+          const bool dense = mp * 4 >= (k1 - k0) * ny_;
+          any_dense = any_dense || dense;
+          for (int64_t k = k0; k < k1; ++k) dense_[size_t(k)] = dense;
+        }
+        for (int64_t k = 0; k < nz; ++k) base_[size_t(k + 1)] = base_[size_t(k)] + (dense_[size_t(k)] ? ny_ : 1);
+        bins = base_[size_t(nz)];
+        if (any_dense) count_.assign(size_t(nt) * size_t(bins), 0);
+      }
+      int64_t* c = count_.data() + size_t(t) * size_t(bins);
+      auto bin_of = [&](Index x) {
+        const int64_t k = slices_.of(x);
+        return dense_[size_t(k)] ? base_[size_t(k)] + rows_.of(x) - k * ny_ : base_[size_t(k)];
+      };
+      if (bins != nz) share([&](Index x) { ++c[bin_of(x)]; });
+#pragma omp barrier
+#pragma omp single
+      {
+        // Start of (bin b, share u): all of bins < b, then shares < u of bin b.
         int64_t run = 0;
         for (int64_t p = 0; p < slabs; ++p) {
           slab_start_[size_t(p)] = run;
-          const int64_t k1 = p + 1 < slabs ? (p + 1) * key.slab : bins;
-          for (int64_t k = p * key.slab; k < k1; ++k)
+          const int64_t b0 = base_[size_t(p * slab_slices_)];
+          const int64_t b1 = p + 1 < slabs ? base_[size_t((p + 1) * slab_slices_)] : bins;
+          for (int64_t b = b0; b < b1; ++b)
             for (int u = 0; u < nt; ++u) {
-              int64_t& cu = count_[size_t(u) * size_t(bins) + size_t(k)];
+              int64_t& cu = count_[size_t(u) * size_t(bins) + size_t(b)];
               const int64_t here = cu;
               cu = run;
               run += here;
@@ -157,7 +191,7 @@ class Round {
         }
         slab_start_[size_t(slabs)] = int64_t(m);
       }
-      share([&](Index x) { buf_[size_t(c[key.of(x)]++)] = x; });
+      share([&](Index x) { buf_[size_t(c[bin_of(x)]++)] = x; });
     }
   }
   // The entries of slab p: [slab_begin(p), slab_begin(p + 1)).
@@ -178,7 +212,9 @@ class Round {
     }
   };
   Key rows_, slices_;
-  std::vector<int64_t> slab_start_, count_;
+  int64_t ny_, slab_slices_;
+  std::vector<int64_t> slab_start_, count_, base_;  // base_[k]: first bin of slice k
+  std::vector<char> dense_;                          // per slice: its slab sorts by rows
   std::vector<Index> buf_;
 };
 
@@ -477,8 +513,11 @@ double quantise_levels(const Volume<float>& dist, Volume<uint8_t>& solid, double
   return q;
 }
 
-Volume<uint8_t> quantise_levels(Volume<float>&& dist, double buckets_per_unit, double& q_used) {
-  check_buckets(buckets_per_unit);
+namespace {
+
+// Levels over the float map's own storage, at q(dmax) levels per unit.
+template <class ChooseQ>
+Volume<uint8_t> levels_in_place(Volume<float>&& dist, ChooseQ choose_q) {
   const int64_t n = dist.size();
   const float* d = dist.data();
   float dmax = 0;
@@ -490,7 +529,7 @@ Volume<uint8_t> quantise_levels(Volume<float>&& dist, double buckets_per_unit, d
     dmax = v > dmax ? v : dmax;
   }
   if (bad) throw UsageError("watershed: the distance map is not finite and >= 0 everywhere");
-  const double q = q_used = levels_per_unit(dmax, buckets_per_unit);
+  const double q = choose_q(dmax);
   Volume<uint8_t> lev = std::move(dist).convert_in_place<uint8_t>(
       [q](float d) -> uint8_t {
         const uint8_t l = level_of(d, q);  // computed for the void too: a select, not a branch
@@ -501,14 +540,19 @@ Volume<uint8_t> quantise_levels(Volume<float>&& dist, double buckets_per_unit, d
   return lev;
 }
 
-Volume<uint8_t> quantise_levels(FixedDistance&& dist, double buckets_per_unit, double& q_used) {
+}  // namespace
+
+Volume<uint8_t> quantise_levels(Volume<float>&& dist, double buckets_per_unit, double& q_used) {
   check_buckets(buckets_per_unit);
+  return levels_in_place(std::move(dist),
+                         [&](float dmax) { return q_used = levels_per_unit(dmax, buckets_per_unit); });
+}
+
+namespace {
+
+// Levels over the fixed-point map's own storage, at q levels per unit.
+Volume<uint8_t> fixed_levels_in_place(FixedDistance&& dist, double q) {
   const int64_t n = dist.map.size();
-  const uint16_t* d = dist.map.data();
-  uint16_t vmax = 0;
-#pragma omp parallel for simd schedule(static) reduction(max : vmax)
-  for (int64_t i = 0; i < n; ++i) vmax = d[i] > vmax ? d[i] : vmax;
-  const double q = q_used = levels_per_unit(float(double(vmax) / dist.per_unit), buckets_per_unit);
   const double step = q / dist.per_unit;  // levels per fixed-point unit
   Volume<uint8_t> lev = std::move(dist.map).convert_in_place<uint8_t>([step](uint16_t v) -> uint8_t {
     const int l = int(double(v) * step);
@@ -516,6 +560,19 @@ Volume<uint8_t> quantise_levels(FixedDistance&& dist, double buckets_per_unit, d
   });
   discard_pages(lev.data() + n, size_t(n) * (sizeof(uint16_t) - 1));
   return lev;
+}
+
+}  // namespace
+
+Volume<uint8_t> quantise_levels(FixedDistance&& dist, double buckets_per_unit, double& q_used) {
+  check_buckets(buckets_per_unit);
+  q_used = levels_per_unit(dist.dmax, buckets_per_unit);
+  return fixed_levels_in_place(std::move(dist), q_used);
+}
+
+Volume<uint8_t> quantise_levels_at(FixedDistance&& dist, double q) {
+  check_buckets(q);
+  return fixed_levels_in_place(std::move(dist), q);
 }
 
 void watershed_levels(const Volume<uint8_t>& levels, Volume<uint32_t>& labels, const WatershedOptions& opt) {

@@ -41,6 +41,11 @@
 // slabs at once and then odd ones, so neighbours in one round are decided
 // one after the other (lines stay one voxel thick) and the queue order is
 // fixed by the shape: the labels do not depend on the thread count.
+// Each slab's round is put in row order, or in slice order when it holds
+// fewer entries than a quarter of its rows, decided from that slab's own
+// entries: a slab's order, and so the flood's ties, do not depend on the
+// rest of the volume, so slices segmented apart (segment_chunked.hpp,
+// slabs starting at multiples of 16) flood as in the whole volume.
 // Each slab queues lower levels into buckets of its own (no serial step
 // between rounds). 512^3 zeolite scan, 37.5 M solid voxels: 4.2 s serial
 // (session 3), 2.0 s on 2 threads with the SSE2 neighbour test and the
@@ -73,9 +78,14 @@ double quantise_levels(const Volume<float>& dist, Volume<uint8_t>& solid, double
 Volume<uint8_t> quantise_levels(Volume<float>&& dist, double buckets_per_unit, double& q_used);
 
 // The same from the 16-bit fixed-point map (segment's path; taken, its
-// spent 1 B/voxel given back): level 1 + floor(value * q / per_unit),
+// spent 1 B/voxel given back): q from the float map's deepest value
+// (dist.dmax) exactly as above, level 1 + floor(value * q / per_unit),
 // within 1/(2 per_unit) of a distance unit of the float map's levels.
 Volume<uint8_t> quantise_levels(FixedDistance&& dist, double buckets_per_unit, double& q_used);
+
+// The same at exactly q levels per unit (levels above 255 clamped to 255):
+// a slab of a scan segmented slab by slab takes the whole scan's q.
+Volume<uint8_t> quantise_levels_at(FixedDistance&& dist, double q);
 
 // The flood on quantised levels (from quantise_levels). `labels` holds the
 // markers on entry (1..2^29-2, 0 elsewhere) and the watershed labels on exit

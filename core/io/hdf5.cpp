@@ -213,10 +213,9 @@ H5Writer::H5Writer(const std::string& path) : impl_(std::make_unique<Impl>(path)
 
 H5Writer::~H5Writer() = default;
 
-template <class T>
-void H5Writer::write_volume(const std::string& dataset, const Volume<T>& v, int compression) {
+void H5Writer::create_volume(const std::string& dataset, DType type, const Shape& s, const Geometry& g,
+                             int compression) {
   const std::string ds = norm(dataset);
-  const auto& s = v.shape();
   if (s.empty()) throw UsageError(impl_->path + ":" + ds + ": cannot store an empty volume " + s.str());
   if (compression < 0 || compression > 9) throw UsageError("HDF5 compression level must be 0..9");
   const hsize_t dims[3] = {static_cast<hsize_t>(s.nz), static_cast<hsize_t>(s.ny), static_cast<hsize_t>(s.nx)};
@@ -230,38 +229,66 @@ void H5Writer::write_volume(const std::string& dataset, const Volume<T>& v, int 
     H5Pset_shuffle(dcpl.get());
     H5Pset_deflate(dcpl.get(), static_cast<unsigned>(compression));
   }
+  const hid_t ftype = type == DType::u8    ? H5T_NATIVE_UINT8
+                      : type == DType::u16 ? H5T_NATIVE_UINT16
+                      : type == DType::u32 ? H5T_NATIVE_UINT32
+                                           : H5T_NATIVE_FLOAT;
   Handle lcpl = plist_h(lcpl_intermediate());
-  Handle d = dset_h(H5Dcreate2(impl_->file.get(), ds.c_str(), native_type<T>(), space.get(), lcpl.get(), dcpl.get(),
-                               H5P_DEFAULT));
+  Handle d = dset_h(H5Dcreate2(impl_->file.get(), ds.c_str(), ftype, space.get(), lcpl.get(), dcpl.get(), H5P_DEFAULT));
   if (!d.ok()) throw InputError(impl_->path + ":" + ds + ": cannot create dataset");
-  // Write in slabs of whole chunk rows so progress can be shown and the chunk cache stays small.
-  // Compressed chunks are filtered here on every core (hdf5_chunks.hpp).
-  const h5chunks::Pipeline pipe = h5chunks::pipeline_of(dcpl.get());
-  const h5chunks::Layout layout{{dims[0], dims[1], dims[2]}, {chunk[0], chunk[1], chunk[2]}, sizeof(T)};
-  Progress bar("writing " + fs::path(impl_->path).filename().string() + ds, static_cast<double>(s.nz));
-  for (hsize_t z0 = 0; z0 < dims[0]; z0 += chunk[0]) {
-    const hsize_t start[3] = {z0, 0, 0}, count[3] = {std::min(chunk[0], dims[0] - z0), dims[1], dims[2]};
-    if (pipe.usable) {
-      h5chunks::write_rows(d.get(), layout, pipe, v.data() + static_cast<int64_t>(z0) * s.slice_voxels(),
-                           int64_t(z0), int64_t(count[0]), impl_->path + ":" + ds);
-      bar.update(static_cast<double>(z0 + count[0]));
-      continue;
-    }
-    Handle fsp = space_h(H5Dget_space(d.get()));
-    H5Sselect_hyperslab(fsp.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
-    Handle msp = space_h(H5Screate_simple(3, count, nullptr));
-    if (H5Dwrite(d.get(), native_type<T>(), msp.get(), fsp.get(), H5P_DEFAULT,
-                 v.data() + static_cast<int64_t>(z0) * s.slice_voxels()) < 0)
-      throw InputError(impl_->path + ":" + ds + ": write failed");
-    bar.update(static_cast<double>(z0 + count[0]));
-  }
-  const auto& g = v.geometry();
   write_attr_doubles(d.get(), "voxel_size_m", g.voxel_size_m.data(), 3);
   write_attr_doubles(d.get(), "origin_m", g.origin_m.data(), 3);
   write_attr_string(d.get(), "units", "voxel_size_m and origin_m in metres, (z, y, x) order");
   // Same geometry on the root, so tools that look at the file see it too.
   write_attr_doubles(impl_->file.get(), "voxel_size_m", g.voxel_size_m.data(), 3);
   write_attr_doubles(impl_->file.get(), "origin_m", g.origin_m.data(), 3);
+}
+
+template <class T>
+void H5Writer::write_slab(const std::string& dataset, int64_t z0, const Volume<T>& v, int64_t vz0, int64_t nz) {
+  const std::string ds = norm(dataset);
+  Handle d = dset_h(H5Dopen2(impl_->file.get(), ds.c_str(), H5P_DEFAULT));
+  if (!d.ok()) throw UsageError(impl_->path + ":" + ds + ": write_slab before create_volume");
+  Handle fsp = space_h(H5Dget_space(d.get()));
+  hsize_t dims[3] = {0, 0, 0};
+  if (H5Sget_simple_extent_ndims(fsp.get()) != 3) throw UsageError(impl_->path + ":" + ds + ": not a volume");
+  H5Sget_simple_extent_dims(fsp.get(), dims, nullptr);
+  const Shape& s = v.shape();
+  if (nz <= 0 || vz0 < 0 || vz0 + nz > s.nz || z0 < 0 || hsize_t(z0 + nz) > dims[0] || hsize_t(s.ny) != dims[1] ||
+      hsize_t(s.nx) != dims[2])
+    throw UsageError(impl_->path + ":" + ds + ": slab of " + std::to_string(nz) + " slices at " + std::to_string(z0) +
+                     " does not fit the dataset");
+  // Compressed chunks are filtered here on every core (hdf5_chunks.hpp)
+  // when the slab is whole rows of chunks, as write_volume's are.
+  Handle dcpl = plist_h(H5Dget_create_plist(d.get()));
+  h5chunks::Layout layout{{dims[0], dims[1], dims[2]}, {0, 0, 0}, sizeof(T)};
+  if (dcpl.ok() && H5Pget_layout(dcpl.get()) == H5D_CHUNKED && H5Pget_chunk(dcpl.get(), 3, layout.chunk) == 3) {
+    const h5chunks::Pipeline pipe = h5chunks::pipeline_of(dcpl.get());
+    const int64_t cz = int64_t(layout.chunk[0]);
+    if (pipe.usable && z0 % cz == 0 && (nz % cz == 0 || hsize_t(z0 + nz) == dims[0])) {
+      h5chunks::write_rows(d.get(), layout, pipe, v.data() + vz0 * s.slice_voxels(), z0, nz, impl_->path + ":" + ds);
+      return;
+    }
+  }
+  const hsize_t start[3] = {hsize_t(z0), 0, 0}, count[3] = {hsize_t(nz), dims[1], dims[2]};
+  H5Sselect_hyperslab(fsp.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
+  Handle msp = space_h(H5Screate_simple(3, count, nullptr));
+  if (H5Dwrite(d.get(), native_type<T>(), msp.get(), fsp.get(), H5P_DEFAULT, v.data() + vz0 * s.slice_voxels()) < 0)
+    throw InputError(impl_->path + ":" + ds + ": write failed");
+}
+
+template <class T>
+void H5Writer::write_volume(const std::string& dataset, const Volume<T>& v, int compression) {
+  const auto& s = v.shape();
+  create_volume(dataset, dtype_of<T>(), s, v.geometry(), compression);
+  // Write in slabs of whole chunk rows so progress can be shown and the chunk cache stays small.
+  Progress bar("writing " + fs::path(impl_->path).filename().string() + norm(dataset), static_cast<double>(s.nz));
+  constexpr int64_t kChunkSlices = 16;
+  for (int64_t z0 = 0; z0 < s.nz; z0 += kChunkSlices) {
+    const int64_t nz = std::min(kChunkSlices, s.nz - z0);
+    write_slab(dataset, z0, v, z0, nz);
+    bar.update(static_cast<double>(z0 + nz));
+  }
 }
 
 void H5Writer::write_volume(const std::string& dataset, const AnyVolume& v, int compression) {
@@ -313,6 +340,10 @@ template void H5Writer::write_volume(const std::string&, const Volume<uint8_t>&,
 template void H5Writer::write_volume(const std::string&, const Volume<uint16_t>&, int);
 template void H5Writer::write_volume(const std::string&, const Volume<uint32_t>&, int);
 template void H5Writer::write_volume(const std::string&, const Volume<float>&, int);
+template void H5Writer::write_slab(const std::string&, int64_t, const Volume<uint8_t>&, int64_t, int64_t);
+template void H5Writer::write_slab(const std::string&, int64_t, const Volume<uint16_t>&, int64_t, int64_t);
+template void H5Writer::write_slab(const std::string&, int64_t, const Volume<uint32_t>&, int64_t, int64_t);
+template void H5Writer::write_slab(const std::string&, int64_t, const Volume<float>&, int64_t, int64_t);
 
 // ------------------------------------------------------------------ reader
 struct H5Reader::Impl {
@@ -343,15 +374,14 @@ std::vector<std::string> H5Reader::datasets() const {
   return out;
 }
 
-AnyVolume H5Reader::read_volume(const std::string& dataset, bool progress) const {
+namespace {
+
+// Slices [z0, z0 + nz) of a dataset (nz < 0: all of them).
+AnyVolume read_range(hid_t file, const std::string& path, const std::string& dataset, int64_t z0, int64_t nz,
+                     bool progress) {
   const std::string ds = norm(dataset);
-  const std::string where = impl_->path + ":" + ds;
-  if (!has(ds)) {
-    std::string avail;
-    for (const auto& d : datasets()) avail += (avail.empty() ? "" : ", ") + d;
-    throw InputError(where + ": no such dataset" + (avail.empty() ? "" : " (file has: " + avail + ")"));
-  }
-  Handle d = dset_h(H5Dopen2(impl_->file.get(), ds.c_str(), H5P_DEFAULT));
+  const std::string where = path + ":" + ds;
+  Handle d = dset_h(H5Dopen2(file, ds.c_str(), H5P_DEFAULT));
   if (!d.ok()) throw InputError(where + ": not a dataset");
   Handle ft = type_h(H5Dget_type(d.get()));
   const H5T_class_t cls = H5Tget_class(ft.get());
@@ -368,15 +398,21 @@ AnyVolume H5Reader::read_volume(const std::string& dataset, bool progress) const
   if (rank != 3 && rank != 2) throw InputError(where + ": dataset has rank " + std::to_string(rank) + ", expected 3 (z, y, x)");
   hsize_t dims[3] = {1, 1, 1};
   H5Sget_simple_extent_dims(sp.get(), rank == 3 ? dims : dims + 1, nullptr);
-  const Shape shape{static_cast<int64_t>(dims[0]), static_cast<int64_t>(dims[1]), static_cast<int64_t>(dims[2])};
-  if (shape.empty()) throw InputError(where + ": dataset is empty " + shape.str());
+  const Shape whole{static_cast<int64_t>(dims[0]), static_cast<int64_t>(dims[1]), static_cast<int64_t>(dims[2])};
+  if (whole.empty()) throw InputError(where + ": dataset is empty " + whole.str());
+  if (nz < 0) z0 = 0, nz = whole.nz;
+  if (z0 < 0 || nz < 1 || z0 + nz > whole.nz)
+    throw InputError(where + ": slices " + std::to_string(z0) + ".." + std::to_string(z0 + nz - 1) +
+                     " are outside the dataset " + whole.str());
+  const Shape shape{nz, whole.ny, whole.nx};
   Geometry g;
   double buf[3];
-  if (read_voxel_size(d.get(), where, buf) || read_voxel_size(impl_->file.get(), where, buf))
+  if (read_voxel_size(d.get(), where, buf) || read_voxel_size(file, where, buf))
     g.voxel_size_m = {buf[0], buf[1], buf[2]};
   if (read_attr_doubles(d.get(), "origin_m", buf, 3)) g.origin_m = {buf[0], buf[1], buf[2]};
   for (double v : g.voxel_size_m)
     if (!(v >= 0 && std::isfinite(v))) throw InputError(where + ": attribute voxel_size_m is invalid");
+  g.origin_m[0] += double(z0) * g.voxel_size_m[0];
   AnyVolume out = make_volume(dt, shape, g);
   // Compressed chunks of a 3-D dataset are inflated on every core
   // (hdf5_chunks.hpp); any other layout or pipeline goes through libhdf5.
@@ -393,32 +429,53 @@ AnyVolume H5Reader::read_volume(const std::string& dataset, bool progress) const
   std::visit(
       [&](auto& v) {
         using T = typename std::decay_t<decltype(v)>::value_type;
-        Progress bar("reading " + fs::path(impl_->path).filename().string() + ds, static_cast<double>(shape.nz));
+        Progress bar("reading " + fs::path(path).filename().string() + ds, static_cast<double>(shape.nz));
         if (pipe.usable) {
-          const int64_t step = int64_t(layout.chunk[0]);
+          // Row of chunks by row of chunks (the first and last perhaps in part).
+          const int64_t cz = int64_t(layout.chunk[0]);
           bool whole = true;
-          for (int64_t z0 = 0; z0 < shape.nz && whole; z0 += step) {
-            const int64_t nz = std::min(step, shape.nz - z0);
-            whole = h5chunks::read_rows(d.get(), layout, pipe, v.data() + z0 * shape.slice_voxels(), z0, nz, where);
-            if (progress) bar.update(static_cast<double>(z0 + nz));
+          for (int64_t k0 = 0; k0 < shape.nz && whole;) {
+            const int64_t k1 = std::min(shape.nz, ((z0 + k0) / cz + 1) * cz - z0);
+            whole = h5chunks::read_rows(d.get(), layout, pipe, v.data() + k0 * shape.slice_voxels(), z0 + k0, k1 - k0,
+                                        where);
+            if (progress) bar.update(static_cast<double>(k1));
+            k0 = k1;
           }
           if (whole) return;
         }
         const hsize_t step = 16;
-        for (hsize_t z0 = 0; z0 < static_cast<hsize_t>(shape.nz); z0 += step) {
-          hsize_t start[3] = {z0, 0, 0};
-          hsize_t count[3] = {std::min<hsize_t>(step, shape.nz - z0), dims[1], dims[2]};
+        for (hsize_t k0 = 0; k0 < static_cast<hsize_t>(shape.nz); k0 += step) {
+          hsize_t start[3] = {hsize_t(z0) + k0, 0, 0};
+          hsize_t count[3] = {std::min<hsize_t>(step, shape.nz - k0), dims[1], dims[2]};
           Handle fsp = space_h(H5Dget_space(d.get()));
           if (rank == 3) H5Sselect_hyperslab(fsp.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
           Handle msp = space_h(H5Screate_simple(rank, rank == 3 ? count : count + 1, nullptr));
           if (H5Dread(d.get(), native_type<T>(), msp.get(), fsp.get(), H5P_DEFAULT,
-                      v.data() + static_cast<int64_t>(z0) * shape.slice_voxels()) < 0)
+                      v.data() + static_cast<int64_t>(k0) * shape.slice_voxels()) < 0)
             throw InputError(where + ": read failed (corrupt or truncated file?)");
-          if (progress) bar.update(static_cast<double>(z0 + count[0]));
+          if (progress) bar.update(static_cast<double>(k0 + count[0]));
         }
       },
       out);
   return out;
+}
+
+}  // namespace
+
+AnyVolume H5Reader::read_volume(const std::string& dataset, bool progress) const {
+  const std::string ds = norm(dataset);
+  if (!has(ds)) {
+    std::string avail;
+    for (const auto& d : datasets()) avail += (avail.empty() ? "" : ", ") + d;
+    throw InputError(impl_->path + ":" + ds + ": no such dataset" + (avail.empty() ? "" : " (file has: " + avail + ")"));
+  }
+  return read_range(impl_->file.get(), impl_->path, ds, 0, -1, progress);
+}
+
+AnyVolume H5Reader::read_slab(const std::string& dataset, int64_t z0, int64_t nz) const {
+  const std::string ds = norm(dataset);
+  if (!has(ds)) throw InputError(impl_->path + ":" + ds + ": no such dataset");
+  return read_range(impl_->file.get(), impl_->path, ds, z0, nz, false);
 }
 
 Shape H5Reader::shape(const std::string& dataset) const {

@@ -23,6 +23,15 @@ class H5Writer {
   template <class T>
   void write_volume(const std::string& dataset, const Volume<T>& v, int compression = 0);
   void write_volume(const std::string& dataset, const AnyVolume& v, int compression = 0);
+  // A volume written slab by slab (one larger than memory): create_volume
+  // makes the dataset (same layout and attributes as write_volume), then
+  // write_slab stores slices [vz0, vz0 + nz) of v as the dataset's slices
+  // [z0, z0 + nz), in any order. Slabs that start on a multiple of 16
+  // slices fill whole chunks.
+  void create_volume(const std::string& dataset, DType type, const Shape& shape, const Geometry& geometry,
+                     int compression = 0);
+  template <class T>
+  void write_slab(const std::string& dataset, int64_t z0, const Volume<T>& v, int64_t vz0, int64_t nz);
   void write_table(const std::string& group, const Table& t);
   // A string attribute on the root group (e.g. provenance JSON).
   void write_attribute(const std::string& name, const std::string& value);
@@ -40,6 +49,9 @@ class H5Reader {
   bool has(const std::string& dataset) const;
   std::vector<std::string> datasets() const;  // all dataset paths, for messages and `info`
   AnyVolume read_volume(const std::string& dataset, bool progress = false) const;
+  // Slices [z0, z0 + nz) of a 3-D dataset (a slab of a volume larger than
+  // memory), its origin moved to slice z0. InputError outside the dataset.
+  AnyVolume read_slab(const std::string& dataset, int64_t z0, int64_t nz) const;
   // The dataset's shape (z, y, x) without reading it; a 2-D dataset is one slice.
   Shape shape(const std::string& dataset) const;
   Table read_table(const std::string& group) const;

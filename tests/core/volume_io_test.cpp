@@ -116,6 +116,30 @@ TEST(VolumeIO, HDF5CompressedAndTables) {
   EXPECT_THROW(read_volume(d / "f.h5:/nope"), InputError);
 }
 
+// Slabs of z written out of order into one dataset, read back whole and as
+// slabs (origin moved to the slab's first slice); out-of-range slabs are errors.
+TEST(VolumeIO, HDF5SlabsWriteAndRead) {
+  TempDir d;
+  const auto v = random_volume<uint32_t>(Shape{40, 30, 20}, 5);
+  Geometry g = v.geometry();
+  g.origin_m = {1e-3, 0, 0};
+  {
+    H5Writer w(d / "s.h5");
+    w.create_volume("/labels", DType::u32, v.shape(), g, 1);
+    w.write_slab("/labels", 32, v, 32, 8);
+    w.write_slab("/labels", 0, v, 0, 32);
+    EXPECT_THROW(w.write_slab("/labels", 35, v, 0, 8), UsageError);
+    w.commit();
+  }
+  H5Reader r(d / "s.h5");
+  expect_same(v, r.read_volume("/labels"));
+  const auto slab = std::get<Volume<uint32_t>>(r.read_slab("/labels", 17, 9));
+  ASSERT_EQ(slab.shape(), (Shape{9, 30, 20}));
+  for (int64_t i = 0; i < slab.size(); ++i) ASSERT_EQ(slab[i], v[17 * 600 + i]);
+  EXPECT_DOUBLE_EQ(slab.geometry().origin_m[0], 1e-3 + 17 * g.voxel_size_m[0]);
+  EXPECT_THROW(r.read_slab("/labels", 35, 6), InputError);
+}
+
 TEST(VolumeIO, NaturalSortOfSlices) {
   EXPECT_TRUE(natural_less("slice_9.tif", "slice_10.tif"));
   EXPECT_FALSE(natural_less("slice_10.tif", "slice_9.tif"));

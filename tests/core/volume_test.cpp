@@ -1,4 +1,5 @@
 #include "core/volume.hpp"
+#include "core/memory.hpp"
 
 #include <gtest/gtest.h>
 #include <stdlib.h>
@@ -45,6 +46,17 @@ TEST(Volume, AllocationBeyondAvailableMemoryFailsClearly) {
   }
   unsetenv("TOMOGRAIN_MEMORY_LIMIT");
   EXPECT_THROW(Volume<uint16_t>(Shape{int64_t{1} << 40, 1 << 20, 1 << 20}), ResourceError);
+}
+
+TEST(Memory, ParseByteSize) {
+  EXPECT_EQ(parse_byte_size("1073741824"), int64_t(1) << 30);
+  EXPECT_EQ(parse_byte_size("16GiB"), int64_t(16) << 30);
+  EXPECT_EQ(parse_byte_size("16G"), int64_t(16) << 30);
+  EXPECT_EQ(parse_byte_size("16gb"), int64_t(16000000000));
+  EXPECT_EQ(parse_byte_size("1.5 MiB"), int64_t(3) << 19);
+  EXPECT_EQ(parse_byte_size("512B"), 512);
+  EXPECT_EQ(parse_byte_size("2T"), int64_t(2) << 40);
+  for (const char* bad : {"", "GiB", "-1G", "16 GiBs", "16X", "0", "nan"}) EXPECT_EQ(parse_byte_size(bad), -1) << bad;
 }
 
 TEST(Volume, EmptyVolumeIsValid) {

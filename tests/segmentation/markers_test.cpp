@@ -171,13 +171,19 @@ TEST(Markers, FixedPointKeepsTheSolidAndScalesDeepMaps) {
   Volume<float> d = Volume<float>::filled(Shape{1, 1, 4}, 0.f);
   d[1] = 1e-3f;   // a dim voxel: still solid
   d[2] = 2.5f;
-  d[3] = 1000.f;  // deep: per_unit drops to 65535 / 1000
-  const FixedDistance fx = to_fixed_point(std::move(d));
-  EXPECT_NEAR(fx.per_unit, 65.535, 1e-12);
+  d[3] = 1000.f;  // deep: 64 units per voxel, the largest power of two with 1000 u <= 65535
+  const FixedDistance fx = to_fixed_point(d.clone());
+  EXPECT_EQ(fx.per_unit, 64.0);
+  EXPECT_EQ(fx.dmax, 1000.f);
   EXPECT_EQ(fx.map[0], 0);
   EXPECT_EQ(fx.map[1], 1);
-  EXPECT_EQ(fx.map[2], 164);  // round(2.5 * 65.535) = round(163.84)
-  EXPECT_EQ(fx.map[3], 65535);
+  EXPECT_EQ(fx.map[2], 160);
+  EXPECT_EQ(fx.map[3], 64000);
+  const FixedDistance given = to_fixed_point(std::move(d), 128.0);  // a slab's units, given: the deep value clamps
+  EXPECT_EQ(given.map[2], 320);
+  EXPECT_EQ(given.map[3], 65535);
+  EXPECT_EQ(fixed_point_units(255.0f), 256.0);
+  EXPECT_EQ(fixed_point_units(256.0f), 128.0);
   Volume<float> bad = Volume<float>::filled(Shape{1, 1, 2}, 1.f);
   bad[1] = std::numeric_limits<float>::quiet_NaN();
   EXPECT_THROW(to_fixed_point(std::move(bad)), UsageError);

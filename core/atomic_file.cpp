@@ -16,6 +16,12 @@ AtomicPath::AtomicPath(fs::path target) : target_(std::move(target)) {
   if (dir.empty()) dir = ".";
   if (!fs::is_directory(dir))
     throw InputError(target_.string() + ": output folder " + dir.string() + " does not exist");
+  // A device, pipe or socket must not be replaced by the rename (`-o
+  // /dev/null` once replaced the device node with a folder of slices).
+  std::error_code ec;
+  const fs::file_status st = fs::symlink_status(target_, ec);
+  if (fs::exists(st) && !fs::is_regular_file(st) && !fs::is_directory(st) && !fs::is_symlink(st))
+    throw UsageError(target_.string() + ": exists and is not a file or folder (a device, pipe or socket); give a file path");
   // Hidden, same folder (so rename is atomic on one file system), unique per process and call.
   std::string name(1, '.');  // built by append: GCC 12 warns falsely (-Wrestrict) on "." + string
   name += target_.filename().string();
@@ -32,7 +38,9 @@ AtomicPath::~AtomicPath() {
 
 void AtomicPath::commit() {
   std::error_code ec;
-  if (fs::is_directory(temp_) && fs::exists(target_)) fs::remove_all(target_, ec);
+  // A folder replaces an earlier output (file or folder), nothing else.
+  const fs::file_status st = fs::symlink_status(target_, ec);
+  if (fs::is_directory(temp_) && (fs::is_regular_file(st) || fs::is_directory(st))) fs::remove_all(target_, ec);
   fs::rename(temp_, target_, ec);
   if (ec) throw InputError(target_.string() + ": cannot write (" + ec.message() + ")");
   committed_ = true;

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <random>
 
+#include "core/atomic_file.hpp"
 #include "core/io/hdf5.hpp"
 #include "core/io/tiff.hpp"
 
@@ -473,5 +474,24 @@ TEST(Hdf5Chunks, AChunkThatDoesNotInflateIsAnInputErrorNamingIt) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("bad.h5:/labels: corrupt chunk at slice 0"), std::string::npos) << e.what();
   }
+}
+
+// An output path that names a device must be refused before any work, and
+// the device left alone (a folder of slices once replaced /dev/null).
+TEST(AtomicOutput, RefusesADeviceAndLeavesItAlone) {
+  ASSERT_TRUE(fs::is_character_file("/dev/null"));
+  EXPECT_THROW(AtomicPath("/dev/null"), UsageError);
+  EXPECT_THROW(write_file_atomic("/dev/null", "x"), UsageError);
+  EXPECT_TRUE(fs::is_character_file("/dev/null"));
+  // A folder output still replaces an earlier one.
+  TempDir dir;
+  fs::create_directories(dir.path() / "out" / "old");
+  {
+    AtomicPath out(dir.path() / "out");
+    fs::create_directories(out.temp() / "new");
+    out.commit();
+  }
+  EXPECT_TRUE(fs::is_directory(dir.path() / "out" / "new"));
+  EXPECT_FALSE(fs::exists(dir.path() / "out" / "old"));
 }
 }  // namespace tg

@@ -208,7 +208,7 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
 
 Tracker::Tracker(TrackOptions o) : o_(std::move(o)) {}
 
-void Tracker::add_stage(Volume<uint32_t> labels, const std::string& name) {
+Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& name) {
   const auto t0 = std::chrono::steady_clock::now();
   const int s = stages();
   if (s > 0) {
@@ -294,9 +294,11 @@ void Tracker::add_stage(Volume<uint32_t> labels, const std::string& name) {
   }
   lineage_.insert(lineage_.end(), rows.begin(), rows.end());
   prev_rows_ = std::move(rows);
+  Volume<uint32_t> spent = std::move(prev_);
   prev_ = std::move(labels);
   names_.push_back(name);
   seconds_.push_back(seconds_since(t0));
+  return spent;
 }
 
 TrackResult Tracker::result() const {
@@ -446,6 +448,7 @@ TrackResult track_files(const std::vector<std::string>& paths, const TrackOption
   if (!o.progress) bar.finish();
   std::vector<double> sec;
   std::vector<int64_t> peak;
+  AnyVolume spare;  // the stage before last's labels: the next stage is read into them
   bool own_peak = true;
   int64_t voxels = 0;
   for (size_t s = 0; s < paths.size(); ++s) {
@@ -456,9 +459,10 @@ TrackResult track_files(const std::vector<std::string>& paths, const TrackOption
     if (format_of(spec, false) == FileFormat::hdf5 && ds.empty() && H5Reader(file).has("/labels")) spec = file + ":/labels";
     ReadOptions ro;
     ro.progress = false;
+    ro.reuse = &spare;
     Volume<uint32_t> labels = read_volume_as<uint32_t>(spec, ro);
     voxels = labels.size();
-    tr.add_stage(std::move(labels), paths[s]);
+    spare = tr.add_stage(std::move(labels), paths[s]);
     sec.push_back(seconds_since(t0));
     peak.push_back(peak_rss_bytes());
     if (o.progress) bar.update(static_cast<double>(s + 1));

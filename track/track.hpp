@@ -167,7 +167,9 @@ class Tracker {
  public:
   explicit Tracker(TrackOptions options = {});
   // Stages must share shape and voxel size (InputError naming `name`).
-  void add_stage(Volume<uint32_t> labels, const std::string& name);
+  // Returns the stage before's labels, no longer needed (their storage can
+  // hold the next stage: ReadOptions::reuse).
+  Volume<uint32_t> add_stage(Volume<uint32_t> labels, const std::string& name);
   TrackResult result() const;  // derives events and summary
   int stages() const { return static_cast<int>(names_.size()); }
 

@@ -378,7 +378,7 @@ namespace {
 
 // Slices [z0, z0 + nz) of a dataset (nz < 0: all of them).
 AnyVolume read_range(hid_t file, const std::string& path, const std::string& dataset, int64_t z0, int64_t nz,
-                     bool progress) {
+                     bool progress, AnyVolume* reuse = nullptr) {
   const std::string ds = norm(dataset);
   const std::string where = path + ":" + ds;
   Handle d = dset_h(H5Dopen2(file, ds.c_str(), H5P_DEFAULT));
@@ -413,7 +413,11 @@ AnyVolume read_range(hid_t file, const std::string& path, const std::string& dat
   for (double v : g.voxel_size_m)
     if (!(v >= 0 && std::isfinite(v))) throw InputError(where + ": attribute voxel_size_m is invalid");
   g.origin_m[0] += double(z0) * g.voxel_size_m[0];
-  AnyVolume out = make_volume(dt, shape, g);
+  // Into `reuse`'s storage when it has this type and shape: its pages are
+  // the process's already, none for the kernel to zero.
+  const bool fits = reuse && dtype_of(*reuse) == dt && std::visit([&](const auto& v) { return v.shape() == shape; }, *reuse);
+  AnyVolume out = fits ? std::move(*reuse) : make_volume(dt, shape, g);
+  if (fits) std::visit([&](auto& v) { v.set_geometry(g); }, out);
   // Compressed chunks of a 3-D dataset are inflated on every core
   // (hdf5_chunks.hpp); any other layout or pipeline goes through libhdf5.
   h5chunks::Pipeline pipe;
@@ -462,14 +466,14 @@ AnyVolume read_range(hid_t file, const std::string& path, const std::string& dat
 
 }  // namespace
 
-AnyVolume H5Reader::read_volume(const std::string& dataset, bool progress) const {
+AnyVolume H5Reader::read_volume(const std::string& dataset, bool progress, AnyVolume* reuse) const {
   const std::string ds = norm(dataset);
   if (!has(ds)) {
     std::string avail;
     for (const auto& d : datasets()) avail += (avail.empty() ? "" : ", ") + d;
     throw InputError(impl_->path + ":" + ds + ": no such dataset" + (avail.empty() ? "" : " (file has: " + avail + ")"));
   }
-  return read_range(impl_->file.get(), impl_->path, ds, 0, -1, progress);
+  return read_range(impl_->file.get(), impl_->path, ds, 0, -1, progress, reuse);
 }
 
 AnyVolume H5Reader::read_slab(const std::string& dataset, int64_t z0, int64_t nz) const {

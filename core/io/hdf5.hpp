@@ -48,7 +48,9 @@ class H5Reader {
   ~H5Reader();
   bool has(const std::string& dataset) const;
   std::vector<std::string> datasets() const;  // all dataset paths, for messages and `info`
-  AnyVolume read_volume(const std::string& dataset, bool progress = false) const;
+  // `reuse`: a volume whose storage is read into when it has the dataset's
+  // type and shape (taken), e.g. a stage series' spent volume.
+  AnyVolume read_volume(const std::string& dataset, bool progress = false, AnyVolume* reuse = nullptr) const;
   // Slices [z0, z0 + nz) of a 3-D dataset (a slab of a volume larger than
   // memory), its origin moved to slice z0. InputError outside the dataset.
   AnyVolume read_slab(const std::string& dataset, int64_t z0, int64_t nz) const;

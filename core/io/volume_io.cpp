@@ -86,7 +86,7 @@ static AnyVolume read_volume_unchecked(const std::string& spec, const ReadOption
         else if (r.has("/labels")) name = "/labels";
         else throw InputError(path + ": no /volume or /labels dataset; name one as " + path + ":/DATASET");
       }
-      v = r.read_volume(name, opt.progress);
+      v = r.read_volume(name, opt.progress, opt.reuse);
       break;
     }
   }

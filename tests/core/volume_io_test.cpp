@@ -494,4 +494,25 @@ TEST(AtomicOutput, RefusesADeviceAndLeavesItAlone) {
   EXPECT_TRUE(fs::is_directory(dir.path() / "out" / "new"));
   EXPECT_FALSE(fs::exists(dir.path() / "out" / "old"));
 }
+
+TEST(Hdf5Chunks, ReadsIntoTheStorageOfAVolumeOfTheSameTypeAndShape) {
+  TempDir dir;
+  const Shape s{20, 30, 40};
+  const auto labels = runs_volume<uint32_t>(s, 9);
+  write_volume(labels, dir / "l.h5", WriteOptions{1, false});
+  AnyVolume spare = Volume<uint32_t>::filled(s, 7u);
+  const uint32_t* storage = std::get<Volume<uint32_t>>(spare).data();
+  ReadOptions ro;
+  ro.progress = false;
+  ro.reuse = &spare;
+  const auto back = read_volume_as<uint32_t>(dir / "l.h5", ro);
+  EXPECT_EQ(back.data(), storage);  // taken
+  EXPECT_EQ(std::memcmp(back.data(), labels.data(), size_t(s.voxels()) * 4), 0);
+  EXPECT_EQ(back.geometry().voxel_size_m, labels.geometry().voxel_size_m);
+  AnyVolume other = Volume<uint32_t>::filled(Shape{20, 30, 41}, 7u);  // another shape: not used
+  ro.reuse = &other;
+  const auto fresh = read_volume_as<uint32_t>(dir / "l.h5", ro);
+  EXPECT_NE(fresh.data(), std::get<Volume<uint32_t>>(other).data());
+  EXPECT_EQ(std::memcmp(fresh.data(), labels.data(), size_t(s.voxels()) * 4), 0);
+}
 }  // namespace tg

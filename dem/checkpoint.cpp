@@ -19,28 +19,41 @@ constexpr char kMagic[8] = {'T', 'G', 'D', 'E', 'M', 'C', 'K', '3'};
 // 64-bit FNV-1a over the body. Each step (xor a byte, multiply by an odd
 // constant) is a bijection of the state, so any change confined to one byte
 // always changes the sum; other damage escapes with probability ~2^-64.
-uint64_t fnv1a(const char* p, size_t n) {
-  uint64_t h = 14695981039346656037ull;
+constexpr uint64_t kFnvOffset = 14695981039346656037ull;
+uint64_t fnv1a_update(uint64_t h, const char* p, size_t n) {
   for (size_t k = 0; k < n; ++k) {
     h ^= static_cast<unsigned char>(p[k]);
     h *= 1099511628211ull;
   }
   return h;
 }
+uint64_t fnv1a(const char* p, size_t n) { return fnv1a_update(kFnvOffset, p, n); }
+
+// The body goes straight to the file, hashed on the way: no copy of the
+// state in memory (a buffered body doubled the run's peak memory at 10^6
+// spheres, bench/dem/RESULTS.md, issue 23).
+struct CheckpointWriter {
+  std::ofstream& f;
+  uint64_t hash = kFnvOffset;
+  void write(const char* p, size_t n) {
+    hash = fnv1a_update(hash, p, n);
+    f.write(p, static_cast<std::streamsize>(n));
+  }
+};
 
 template <class T>
-void put(std::ostream& os, const T& v) {
+void put(CheckpointWriter& os, const T& v) {
   os.write(reinterpret_cast<const char*>(&v), sizeof(T));
 }
-void put_str(std::ostream& os, const std::string& s) {
+void put_str(CheckpointWriter& os, const std::string& s) {
   put<int64_t>(os, static_cast<int64_t>(s.size()));
-  os.write(s.data(), static_cast<std::streamsize>(s.size()));
+  os.write(s.data(), s.size());
 }
 template <class T>
-void put_vec(std::ostream& os, const std::vector<T>& v) {
+void put_vec(CheckpointWriter& os, const std::vector<T>& v) {
   put<int64_t>(os, static_cast<int64_t>(v.size()));
   put<int64_t>(os, static_cast<int64_t>(sizeof(T)));
-  os.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(T)));
+  os.write(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
 }
 
 struct Reader {
@@ -71,8 +84,12 @@ struct Reader {
 }  // namespace
 
 void save_checkpoint(const Engine& e, const std::string& scene, const std::filesystem::path& path) {
-  std::ostringstream os(std::ios::binary);
+  AtomicPath out(path);
   {
+    std::ofstream f(out.temp(), std::ios::binary);
+    if (!f) throw InputError(path.string() + ": cannot write checkpoint");
+    f.write(kMagic, 8);
+    CheckpointWriter os{f};
     const Particles& p = e.particles();
     put<int64_t>(os, p.size());
     p.for_each_field([&](std::string_view name, const auto& v) {
@@ -89,15 +106,8 @@ void save_checkpoint(const Engine& e, const std::string& scene, const std::files
     put_vec(os, h.j);
     put_vec(os, h.xi);
     put_str(os, scene);
-  }
-  const std::string body = os.str();
-  AtomicPath out(path);
-  {
-    std::ofstream f(out.temp(), std::ios::binary);
-    if (!f) throw InputError(path.string() + ": cannot write checkpoint");
-    f.write(kMagic, 8);
-    f.write(body.data(), static_cast<std::streamsize>(body.size()));
-    put<uint64_t>(f, fnv1a(body.data(), body.size()));
+    const uint64_t sum = os.hash;
+    f.write(reinterpret_cast<const char*>(&sum), sizeof sum);
     if (!f) throw InputError(path.string() + ": write failed");
   }
   out.commit();

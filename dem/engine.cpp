@@ -92,7 +92,9 @@ void Engine::rebuild() {
     reff_[k] = p_.r[i] * p_.r[j] / (p_.r[i] + p_.r[j]);
     meff_[k] = p_.m[i] * p_.m[j] / (p_.m[i] + p_.m[j]);
   }
-  slot_.assign(np, PairData{});
+  // Force slots only for a force hook (breakage reads them): 72 bytes a
+  // pair, about a sixth of the engine's memory, unused without one.
+  slot_.assign(force_hook_ ? np : 0, PairData{});
   touching_.assign(np, 0);
   for (int64_t k = 0; k < np; ++k)
     if (xi_[3 * k] != 0 || xi_[3 * k + 1] != 0 || xi_[3 * k + 2] != 0) touching_[k] = kHistoryOnly;

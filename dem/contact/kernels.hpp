@@ -60,7 +60,7 @@ struct PairKernelArgs {
   const double *x, *y, *z, *r, *vx, *vy, *vz, *wx, *wy, *wz, *m;
   const double *reff, *meff;  // R*, m* per pair
   double* xi;                 // tangential history, 3 per pair
-  PairData* slot;             // written only when `keep`
+  PairData* slot;             // written only when `keep` (null or empty otherwise)
   uint8_t *touching, *bad;    // per pair
   HertzMindlin law;
   double dt, overlap_limit, gravity_z;
@@ -275,7 +275,7 @@ int pair_part(const PairKernelArgs& a, int part, double* __restrict acc) {
       if (!on[l] && touching[k[l]]) {
         touching[k[l]] = kNotTouching;
         xi[3 * k[l]] = xi[3 * k[l] + 1] = xi[3 * k[l] + 2] = 0;
-        slot[k[l]] = PairData{};
+        if (keep) slot[k[l]] = PairData{};  // slots exist only with a force hook
       }
     }
     if (!any(on)) return 0;
@@ -289,7 +289,7 @@ int pair_part(const PairKernelArgs& a, int part, double* __restrict acc) {
       if (on[l] && (!(dist[l] > 0) || delta[l] > lim * rmin)) {
         badk[k[l]] = 1;
         touching[k[l]] = kNotTouching;
-        slot[k[l]] = PairData{};
+        if (keep) slot[k[l]] = PairData{};
         on[l] = 0;
         failed = 1;
       }

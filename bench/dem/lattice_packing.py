@@ -1,31 +1,38 @@
 #!/usr/bin/env python3
 """Fast packing of N spheres in the oedometer's cylinder, for DEM benches at
 10^4-10^6 spheres (pluviation is far too slow there): every sphere rests on
-the layer below, so contacts exist from the first step.
+the layer below, most of them on three spheres, so a contact network exists
+from the first step (about 2.2 touching pairs a sphere, coordination ~4.5).
 
 Method (a deposit on a jittered lattice, computed, not simulated):
   * diameters ~ normal(d50, sigma) truncated at +-3 sigma, sigma from Cu as
     `tomograin dem pack` draws them (dem/pluviation.cpp, sigma_from_cu);
   * sites: triangular layers in ABC (fcc) order, in-plane spacing
-    s = d_max + 2 sqrt(2) j (d_max = d50 + 3 sigma), each site moved by a
-    uniform jitter in [-j, j]^2, so spheres of one layer never overlap;
-  * layer 0 lies on the bottom platen (z = r); a sphere of layer k > 0 is
-    lowered onto its pocket of layer k - 1: its height is the largest
-    z_b + sqrt((r + r_b)^2 - d_xy^2) over the spheres b below within reach,
-    i.e. it touches the support that stops it first (no overlap with any);
-    a site with no support below (cut by the cylinder) stays empty;
+    s = d_max + 2 sqrt(2) j + margin (d_max = d50 + 3 sigma), each site
+    moved by a uniform jitter in [-j, j]^2;
+  * layer 0 lies on the bottom platen (z = r); a sphere of layer k > 0 sits
+    in the pocket of the three spheres of layer k - 1 nearest its site,
+    touching all three (trilateration), where that point exists and is near
+    the site; else it is lowered straight down onto the sphere that stops it
+    first (two layers below are checked); a site with nothing below stays
+    empty; a pocket point that would cut a fourth sphere is raised until it
+    only touches it; of two spheres of one layer that overlap after these
+    shifts the later is left out;
   * sites whose sphere would cross the cylinder (radius R) are left out;
   * the N lowest spheres are kept (a nearly flat top).
-Every pair is then checked with a k-d tree (scipy.spatial.cKDTree):
-overlap <= 1e-9 of the smaller radius (rounding), or the script fails.
+Supports are placed --overlap (50 nm) closer than touching, so every support
+contact carries load from the first step (as the weight of 10-100 grains
+would press them). Every pair is then checked with a k-d tree
+(scipy.spatial.cKDTree): overlap <= --overlap + 1e-9 of the smaller radius
+(rounding), or the script fails.
 
-The cylinder radius is chosen so that the specimen's height is --aspect x its
-diameter (the study's cell: 12.25 mm / 15 mm = 0.817). The study's grain
-sizes are kept (so the study's time step 1e-7 s stays valid); the cell
-grows with N.
+The cylinder radius is chosen so that the specimen's height is about
+--aspect x its diameter (the study's cell: 12.25 mm / 15 mm = 0.817). The
+study's grain sizes are kept (so the study's time step 1e-7 s stays valid);
+the cell grows with N.
 
 Usage: lattice_packing.py N out.csv [--d50 1.36e-3] [--cu 1.07] [--jitter 0.03e-3]
-                                 [--aspect 0.817] [--seed 1]
+                                 [--margin 0.15e-3] [--aspect 0.817] [--radius R] [--seed 1]
 Writes x_m,y_m,z_m,r_m (metres, axis z, bottom z = 0: dem/packing_io.hpp) and
 prints one line: N, cylinder radius, H0 (top of the highest sphere), porosity,
 touching pairs (key=value).
@@ -43,12 +50,83 @@ def sigma_from_cu(d50, cu):
     return (cu - 1) * d50 / (0.2533 + 1.2816 * cu)
 
 
-def lattice_packing(n, d50, cu, jitter, aspect, seed, radius=None):
+def trilaterate(c1, c2, c3, d1, d2, d3):
+    """Points at distances d1, d2, d3 from the centres c1, c2, c3 (arrays of
+    shape (k, 3)), on the upper side (+z) of their plane; NaN where none."""
+    ex = c2 - c1
+    d = np.linalg.norm(ex, axis=1)
+    ex /= d[:, None]
+    v3 = c3 - c1
+    i = np.einsum("ij,ij->i", ex, v3)
+    ey = v3 - i[:, None] * ex
+    j = np.linalg.norm(ey, axis=1)
+    ey /= j[:, None]
+    ez = np.cross(ex, ey)
+    ez *= np.sign(ez[:, 2])[:, None]  # upwards (supports of one layer: ez.z != 0)
+    px = (d1**2 - d2**2 + d**2) / (2 * d)
+    py = (d1**2 - d3**2 + i**2 + j**2) / (2 * j) - i / j * px
+    h2 = d1**2 - px**2 - py**2
+    pz = np.sqrt(np.where(h2 > 0, h2, np.nan))
+    return c1 + px[:, None] * ex + py[:, None] * ey + pz[:, None] * ez
+
+
+def rest_on_layer(prev, x, y, r, rmax, prev2=None, overlap=0.0):
+    """Spheres of radii r over the sites (x, y) rest on the layer below
+    (prev = x, y, z, r; prev2 the one under it): each in the pocket of its three nearest spheres
+    below, touching all three (trilateration), where that point exists and
+    keeps clear of every other sphere below; else lowered straight down onto
+    the support that stops it first; else (nothing below) left out."""
+    px, py, pz, pr = prev
+    tree = cKDTree(np.column_stack([px, py]))
+    k = x.size
+    _, nb = tree.query(np.column_stack([x, y]), k=3)
+    below = np.column_stack([px, py, pz])
+    c = [below[nb[:, q]] for q in range(3)]
+    pt = trilaterate(c[0], c[1], c[2], *(r + pr[nb[:, q]] - overlap for q in range(3)))
+    # The pocket must lie over the triangle's interior (a stable tripod) and
+    # near the site (else the three nearest are not a pocket).
+    ok = np.isfinite(pt).all(axis=1) & (np.hypot(pt[:, 0] - x, pt[:, 1] - y) < 0.5 * rmax)
+    xo, yo, zo = np.where(ok, pt[:, 0], x), np.where(ok, pt[:, 1], y), np.where(ok, pt[:, 2], -np.inf)
+    # Straight down where there is no pocket; and every sphere of the two
+    # layers below within reach is checked (over a hole a sphere can reach
+    # the second layer): a pocket point that would cut a fourth sphere is
+    # raised until it only touches it.
+    if prev2 is not None:
+        px, py, pz, pr = (np.concatenate([u, v]) for u, v in zip(prev, prev2))
+        tree = cKDTree(np.column_stack([px, py]))
+    for a, cand in enumerate(tree.query_ball_point(np.column_stack([xo, yo]), r + rmax)):
+        zmin = zo[a]
+        for b in cand:
+            dxy2 = (xo[a] - px[b]) ** 2 + (yo[a] - py[b]) ** 2
+            cc = r[a] + pr[b] - overlap
+            if dxy2 < cc * cc:
+                zmin = max(zmin, pz[b] + math.sqrt(cc * cc - dxy2))
+        zo[a] = zmin
+    keep = np.isfinite(zo)
+    xo, yo, zo, r = xo[keep], yo[keep], zo[keep], r[keep]
+    # Pockets shift the spheres in the plane (by ~0.05 mm): of two spheres of
+    # this layer that would overlap, the later is left out.
+    pts = np.column_stack([xo, yo, zo])
+    pairs = cKDTree(pts).query_pairs(2 * rmax, output_type="ndarray")
+    drop = np.zeros(xo.size, bool)
+    if pairs.size:
+        pairs = pairs[np.argsort(pairs[:, 0] * xo.size + pairs[:, 1])]
+        dist = np.linalg.norm(pts[pairs[:, 0]] - pts[pairs[:, 1]], axis=1)
+        for (a, b), dd in zip(pairs, dist):
+            if dd < r[a] + r[b] and not drop[a]:
+                drop[b] = True
+    keep = ~drop
+    return xo[keep], yo[keep], zo[keep], r[keep]
+
+
+def lattice_packing(n, d50, cu, jitter, aspect, seed, radius=None, margin=0.15e-3, overlap=5e-8):
     rng = np.random.default_rng(seed)
     sig = sigma_from_cu(d50, cu)
     dmax = d50 + 3 * sig
     rmax = dmax / 2
-    s = dmax + 2 * math.sqrt(2) * jitter + 1e-9  # in-plane spacing: no overlap within a layer
+    # In-plane spacing: no overlap within a layer of sites, plus room for
+    # the pockets' shifts (with 0.15 mm, ~4 % of the sites are left out).
+    s = dmax + 2 * math.sqrt(2) * jitter + margin
     if radius is None:
         # Solid fraction of this deposit is ~0.6 (measured below); size R so
         # that N spheres give height ~ aspect * 2R.
@@ -63,7 +141,7 @@ def lattice_packing(n, d50, cu, jitter, aspect, seed, radius=None):
     by = (jj * math.sqrt(3) / 2).ravel() * s
     shifts = [(0.0, 0.0), (s / 2, s / (2 * math.sqrt(3))), (s, s / math.sqrt(3))]  # A, B, C
     xs, ys, zs, rs = [], [], [], []
-    prev = None  # (x, y, z, r) of the layer below
+    prev = prev2 = None  # (x, y, z, r) of the layer below and of the one under it
     total, layer = 0, 0
     while total < n + 1:
         ox, oy = shifts[layer % 3]
@@ -80,22 +158,11 @@ def lattice_packing(n, d50, cu, jitter, aspect, seed, radius=None):
             bad = np.abs(d - d50) > 3 * sig
         r = d / 2
         if prev is None:
-            z = r.copy()
+            z = r - overlap
         else:
-            px, py, pz, pr = prev
-            tree = cKDTree(np.column_stack([px, py]))
-            z = np.full(k, -np.inf)
-            # Supports: spheres below within lateral reach r + r_b < r + rmax.
-            for a, nb in enumerate(tree.query_ball_point(np.column_stack([x, y]), r + rmax)):
-                for b in nb:
-                    dxy2 = (x[a] - px[b]) ** 2 + (y[a] - py[b]) ** 2
-                    c = r[a] + pr[b]
-                    if dxy2 < c * c:
-                        z[a] = max(z[a], pz[b] + math.sqrt(c * c - dxy2))
-            ok = np.isfinite(z)
-            x, y, z, r = x[ok], y[ok], z[ok], r[ok]
+            x, y, z, r = rest_on_layer(prev, x, y, r, rmax, prev2, overlap)
         xs.append(x), ys.append(y), zs.append(z), rs.append(r)
-        prev = (x, y, z, r)
+        prev2, prev = prev, (x, y, z, r)
         total += x.size
         layer += 1
         if layer > 100000:
@@ -106,7 +173,7 @@ def lattice_packing(n, d50, cu, jitter, aspect, seed, radius=None):
     return R, x[order], y[order], z[order], r[order]
 
 
-def check_no_overlap(x, y, z, r, R):
+def check_overlaps(x, y, z, r, R, overlap):
     pts = np.column_stack([x, y, z])
     tree = cKDTree(pts)
     pairs = tree.query_pairs(2 * r.max(), output_type="ndarray")
@@ -114,9 +181,9 @@ def check_no_overlap(x, y, z, r, R):
     dist = np.linalg.norm(pts[i] - pts[j], axis=1)
     ov = (r[i] + r[j] - dist) / np.minimum(r[i], r[j])
     touching = ov > -1e-9
-    if (ov > 1e-9).any():
+    if (ov > 1e-9 + overlap / np.minimum(r[i], r[j])).any():
         raise SystemExit("lattice_packing.py: overlap %.3g of the smaller radius (bug)" % ov.max())
-    if (np.hypot(x, y) + r > R * (1 + 1e-12)).any() or (z < r * (1 - 1e-12)).any():
+    if (np.hypot(x, y) + r > R * (1 + 1e-12)).any() or (z < r - overlap * (1 + 1e-6)).any():
         raise SystemExit("lattice_packing.py: a sphere crosses the cylinder or the bottom (bug)")
     return int(touching.sum())
 
@@ -130,13 +197,18 @@ def main():
     ap.add_argument("--jitter", type=float, default=0.03e-3, help="in-plane jitter half-width of the sites, m")
     ap.add_argument("--aspect", type=float, default=12.25 / 15, help="height / diameter of the specimen")
     ap.add_argument("--radius", type=float, default=None, help="cylinder radius, m (default: from N and --aspect)")
+    ap.add_argument("--margin", type=float, default=0.15e-3,
+                    help="in-plane spacing of the sites beyond d_max + 2 sqrt(2) jitter, m (room for the pockets' shifts)")
+    ap.add_argument("--overlap", type=float, default=5e-8,
+                    help="overlap of each sphere with its supports and of layer 0 with the platen, m (default 50 nm: "
+                         "about the gravity overlap of a contact under 10-100 grains, so the network carries load)")
     ap.add_argument("--seed", type=int, default=1)
     a = ap.parse_args()
     if a.n < 1 or a.d50 <= 0 or a.cu < 1 or a.jitter < 0 or a.aspect <= 0:
         print("lattice_packing.py: need N >= 1, d50 > 0, cu >= 1, jitter >= 0, aspect > 0", file=sys.stderr)
         sys.exit(2)
-    R, x, y, z, r = lattice_packing(a.n, a.d50, a.cu, a.jitter, a.aspect, a.seed, a.radius)
-    contacts = check_no_overlap(x, y, z, r, R)
+    R, x, y, z, r = lattice_packing(a.n, a.d50, a.cu, a.jitter, a.aspect, a.seed, a.radius, a.margin, a.overlap)
+    contacts = check_overlaps(x, y, z, r, R, a.overlap)
     h0 = float((z + r).max())
     por = 1 - float((4 / 3 * math.pi * r**3).sum()) / (math.pi * R * R * h0)
     tmp = a.out + ".tmp"

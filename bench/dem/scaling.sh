@@ -6,8 +6,9 @@
 # a fixed number of steps (PSTEPS / N), tomograin on 1 and 2 threads,
 # LIGGGHTS on 1 and 2 MPI ranks (only for N <= LG_MAX), run in turn.
 # Packings: bench/dem/lattice_packing.py (a computed deposit: every sphere
-# rests on the layer below, so contacts exist from the first step; the
-# cylinder grows with N, the grains keep the study's sizes).
+# rests on the layer below, most in a pocket of three, so a contact network
+# exists from the first step; the cylinder grows with N, the grains keep the
+# study's sizes).
 # Each run under /usr/bin/time -v: wall, user and system CPU, CPU share, peak
 # RSS (LIGGGHTS on 2 ranks: the sum of the ranks' peaks, each rank under its
 # own /usr/bin/time). Bytes per sphere = (peak RSS - peak RSS of the same
@@ -21,6 +22,8 @@
 #   sh bench/dem/scaling.sh BUILD_DIR OUT_DIR ["10000 100000 1000000"]
 # Environment: PSTEPS (particle-steps per run, default 3e8: ~40-60 s of one
 # tomograin thread), LG_MAX (largest N given to LIGGGHTS, default 100000).
+# Also for each N: tomograin, 1 thread, skin 0 (a neighbour search every
+# step), PSTEPS / 10 particle-steps: the search's cost per sphere against N.
 set -eu
 BUILD=${1:-build/release}; OUT=${2:-out/bench_dem_scaling}; SIZES=${3:-"10000 100000 1000000"}
 PSTEPS=${PSTEPS:-300000000}; LG_MAX=${LG_MAX:-100000}
@@ -38,7 +41,7 @@ mkdir -p "$OUT"; cd "$OUT"
 } > conditions.txt
 cat conditions.txt
 
-# tg_run N THREADS DIR PACK R H0 STEPS
+# tg_run N THREADS DIR PACK R H0 STEPS [SKIN]
 tg_run() {
   eps=$($PY -c "print(repr(($7 - 0.5) * 1e-7 * 0.1 / $6))")
   every=$(( $7 / 5 > 0 ? $7 / 5 : 1 ))
@@ -50,6 +53,7 @@ packing_csv = "$(realpath "$4")"
 cylinder_radius_m = $5
 [run]
 threads = $2
+${8:+neighbour_skin_m = $8}
 [oedometer]
 target_strain = $eps
 snapshot_strains = []
@@ -103,6 +107,9 @@ for N in $SIZES; do
   [ "$N" -le "$LG_MAX" ] && lg_run "$N" 1 "lg_${N}_np1" "pack_$N.data" "plate_$N.stl" "$R" "$STEPS"
   tg_run "$N" 2 "tg_${N}_t2" "pack_$N.csv" "$R" "$H0" "$STEPS"
   [ "$N" -le "$LG_MAX" ] && lg_run "$N" 2 "lg_${N}_np2" "pack_$N.data" "plate_$N.stl" "$R" "$STEPS"
+  # Neighbour search at every step (skin 0: the list is rebuilt whenever a
+  # sphere has moved): its cost per sphere against N, one thread.
+  tg_run "$N" 1 "tgskin0_${N}_t1" "pack_$N.csv" "$R" "$H0" "$(( PSTEPS / 10 / N ))" 0
 done
 echo "ended $(date -u +%FT%TZ); uptime:$(uptime)" >> conditions.txt
 $PY "$ROOT/bench/dem/scaling_report.py" .

@@ -68,21 +68,25 @@ def liggghts_run(d, n, workers):
 def main():
     out = sys.argv[1]
     runs = []
-    for d in sorted(glob.glob(os.path.join(out, "tg_*_t[12]"))):
-        _, n, t = os.path.basename(d).split("_")
+    for d in sorted(glob.glob(os.path.join(out, "tg_*_t[12]")) + glob.glob(os.path.join(out, "tgskin0_*_t1"))):
+        tag, n, t = os.path.basename(d).split("_")
         runs.append(tomograin_run(d, int(n), int(t[1:])))
+        if tag == "tgskin0":
+            runs[-1]["code"] = "tomograin skin 0"
     for d in sorted(glob.glob(os.path.join(out, "lg_*_np[12]"))):
         _, n, p = os.path.basename(d).split("_")
         if os.path.exists(os.path.join(d, "time.txt")):
             runs.append(liggghts_run(d, int(n), int(p[2:])))
     base = {r["code"]: r["rss_kb"] for r in runs if r["n"] == 10}
+    base["tomograin skin 0"] = base.get("tomograin", 0)
     runs = [r for r in runs if r["n"] > 10]
     for r in runs:
         r["psteps_per_s"] = r["n"] * r["steps"] / r["loop_s"]
+        r["ns_per_sphere_step"] = 1e9 / r["psteps_per_s"]
         r["bytes_per_sphere"] = (r["rss_kb"] - r["processes"] * base.get(r["code"], 0)) * 1024 / r["n"]
-    runs.sort(key=lambda r: (r["n"], r["workers"], r["code"] != "tomograin"))
+    runs.sort(key=lambda r: (r["code"] == "tomograin skin 0", r["n"], r["workers"], r["code"] != "tomograin"))
     cols = ["code", "n", "workers", "steps", "loop_s", "wall_s", "user_s", "sys_s", "cpu_pct", "rss_kb", "psteps_per_s",
-            "bytes_per_sphere", "cn"]
+            "bytes_per_sphere", "cn", "ns_per_sphere_step"]
     with open(os.path.join(out, "results.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=cols, extrasaction="ignore")
         w.writeheader()
@@ -102,13 +106,13 @@ def main():
     print("\n".join(lines))
 
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
-    for code, mk in (("tomograin", "o"), ("liggghts", "s")):
+    for code, mk in (("tomograin", "o"), ("liggghts", "s"), ("tomograin skin 0", "^")):
         for wk, ls in ((1, "-"), (2, "--")):
             rs = sorted((r for r in runs if r["code"] == code and r["workers"] == wk), key=lambda r: r["n"])
             if not rs:
                 continue
-            lab = "%s, %d %s" % ("tomograin" if code == "tomograin" else "LIGGGHTS 3.8", wk,
-                                 ("thread" if wk == 1 else "threads") if code == "tomograin" else ("rank" if wk == 1 else "ranks"))
+            lab = "%s, %d %s" % ("LIGGGHTS 3.8" if code == "liggghts" else code, wk,
+                                 ("rank" if wk == 1 else "ranks") if code == "liggghts" else ("thread" if wk == 1 else "threads"))
             ax[0].plot([r["n"] for r in rs], [r["psteps_per_s"] for r in rs], ls, marker=mk, label=lab)
             ax[1].plot([r["n"] for r in rs], [r["bytes_per_sphere"] for r in rs], ls, marker=mk, label=lab)
     for a, yl in ((ax[0], "particle-steps per second"), (ax[1], "bytes per sphere (peak RSS - 10-sphere run) / N")):

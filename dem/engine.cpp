@@ -306,9 +306,11 @@ void Engine::compute_pair_forces() {
                             reff_.data(), meff_.data(), xi_.data(), slot_.data(), touching_.data(), bad_.data(),
                             law_pp_, opt_.time_step, opt_.overlap_limit, opt_.gravity_z, keep_slots_, kForceParts};
   const PairPartKernel kernel = kernels_.pairs;
-  const int bad = for_each_or(kForceParts, parallel(np), [&](int64_t part) __attribute__((always_inline)) {
+  // One thread: the parts' chunks in list order in one sweep (the same sums:
+  // dem/contact/kernels.hpp, kAllParts).
+  const int bad = parallel(np) ? for_each_or(kForceParts, true, [&](int64_t part) __attribute__((always_inline)) {
     return kernel(args, static_cast<int>(part), acc0 + part * kAccStride * n);
-  });
+  }) : kernel(args, kAllParts, acc0);
   const double lim = opt_.overlap_limit;
   const Particles& p = p_;
   if (bad) {

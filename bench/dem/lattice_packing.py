@@ -14,7 +14,8 @@ Method (a deposit on a jittered lattice, computed, not simulated):
     in the pocket of the three spheres of layer k - 1 nearest its site,
     touching all three (trilateration), where that point exists and is near
     the site; else it is lowered straight down onto the sphere that stops it
-    first (two layers below are checked); a site with nothing below stays
+    first (three layers below are checked; one that falls past two layers
+    is left out); a site with nothing below stays
     empty; a pocket point that would cut a fourth sphere is raised until it
     only touches it; of two spheres of one layer that overlap after these
     shifts the later is left out;
@@ -70,29 +71,30 @@ def trilaterate(c1, c2, c3, d1, d2, d3):
     return c1 + px[:, None] * ex + py[:, None] * ey + pz[:, None] * ez
 
 
-def rest_on_layer(prev, x, y, r, rmax, prev2=None, overlap=0.0):
+def rest_on_layer(below, x, y, r, rmax, overlap=0.0):
     """Spheres of radii r over the sites (x, y) rest on the layer below
-    (prev = x, y, z, r; prev2 the one under it): each in the pocket of its three nearest spheres
+    (below[0] = its x, y, z, r; below[1], below[2] the ones under it, when
+    they exist): each in the pocket of its three nearest spheres
     below, touching all three (trilateration), where that point exists and
     keeps clear of every other sphere below; else lowered straight down onto
     the support that stops it first; else (nothing below) left out."""
-    px, py, pz, pr = prev
+    px, py, pz, pr = below[0]
     tree = cKDTree(np.column_stack([px, py]))
     k = x.size
     _, nb = tree.query(np.column_stack([x, y]), k=3)
-    below = np.column_stack([px, py, pz])
-    c = [below[nb[:, q]] for q in range(3)]
+    centres = np.column_stack([px, py, pz])
+    c = [centres[nb[:, q]] for q in range(3)]
     pt = trilaterate(c[0], c[1], c[2], *(r + pr[nb[:, q]] - overlap for q in range(3)))
     # The pocket must lie over the triangle's interior (a stable tripod) and
     # near the site (else the three nearest are not a pocket).
     ok = np.isfinite(pt).all(axis=1) & (np.hypot(pt[:, 0] - x, pt[:, 1] - y) < 0.5 * rmax)
     xo, yo, zo = np.where(ok, pt[:, 0], x), np.where(ok, pt[:, 1], y), np.where(ok, pt[:, 2], -np.inf)
-    # Straight down where there is no pocket; and every sphere of the two
-    # layers below within reach is checked (over a hole a sphere can reach
-    # the second layer): a pocket point that would cut a fourth sphere is
-    # raised until it only touches it.
-    if prev2 is not None:
-        px, py, pz, pr = (np.concatenate([u, v]) for u, v in zip(prev, prev2))
+    # Straight down where there is no pocket; and every sphere of the three
+    # layers below within reach is checked (over holes a sphere can fall
+    # past a layer): a pocket point that would cut a fourth sphere is raised
+    # until it only touches it.
+    if len(below) > 1:
+        px, py, pz, pr = (np.concatenate(u) for u in zip(*below))
         tree = cKDTree(np.column_stack([px, py]))
     for a, cand in enumerate(tree.query_ball_point(np.column_stack([xo, yo]), r + rmax)):
         zmin = zo[a]
@@ -102,7 +104,9 @@ def rest_on_layer(prev, x, y, r, rmax, prev2=None, overlap=0.0):
             if dxy2 < cc * cc:
                 zmin = max(zmin, pz[b] + math.sqrt(cc * cc - dxy2))
         zo[a] = zmin
-    keep = np.isfinite(zo)
+    # A sphere that fell below the second layer down (holes in two layers
+    # over one spot) is left out: it could reach layers not checked here.
+    keep = np.isfinite(zo) & (zo >= (below[1][2].min() if len(below) > 1 else -np.inf))
     xo, yo, zo, r = xo[keep], yo[keep], zo[keep], r[keep]
     # Pockets shift the spheres in the plane (by ~0.05 mm): of two spheres of
     # this layer that would overlap, the later is left out.
@@ -141,7 +145,7 @@ def lattice_packing(n, d50, cu, jitter, aspect, seed, radius=None, margin=0.15e-
     by = (jj * math.sqrt(3) / 2).ravel() * s
     shifts = [(0.0, 0.0), (s / 2, s / (2 * math.sqrt(3))), (s, s / math.sqrt(3))]  # A, B, C
     xs, ys, zs, rs = [], [], [], []
-    prev = prev2 = None  # (x, y, z, r) of the layer below and of the one under it
+    below = []  # (x, y, z, r) of the last three layers, the latest first
     total, layer = 0, 0
     while total < n + 1:
         ox, oy = shifts[layer % 3]
@@ -157,12 +161,12 @@ def lattice_packing(n, d50, cu, jitter, aspect, seed, radius=None, margin=0.15e-
             d[bad] = rng.normal(d50, sig, int(bad.sum()))
             bad = np.abs(d - d50) > 3 * sig
         r = d / 2
-        if prev is None:
+        if not below:
             z = r - overlap
         else:
-            x, y, z, r = rest_on_layer(prev, x, y, r, rmax, prev2, overlap)
+            x, y, z, r = rest_on_layer(below, x, y, r, rmax, overlap)
         xs.append(x), ys.append(y), zs.append(z), rs.append(r)
-        prev2, prev = prev, (x, y, z, r)
+        below = [(x, y, z, r)] + below[:2]
         total += x.size
         layer += 1
         if layer > 100000:

@@ -92,7 +92,9 @@ void Engine::rebuild() {
     reff_[k] = p_.r[i] * p_.r[j] / (p_.r[i] + p_.r[j]);
     meff_[k] = p_.m[i] * p_.m[j] / (p_.m[i] + p_.m[j]);
   }
-  slot_.assign(np, PairData{});
+  // Force slots only for a force hook (breakage reads them): 72 bytes a
+  // pair, about a sixth of the engine's memory, unused without one.
+  slot_.assign(force_hook_ ? np : 0, PairData{});
   touching_.assign(np, 0);
   for (int64_t k = 0; k < np; ++k)
     if (xi_[3 * k] != 0 || xi_[3 * k + 1] != 0 || xi_[3 * k + 2] != 0) touching_[k] = kHistoryOnly;
@@ -304,9 +306,11 @@ void Engine::compute_pair_forces() {
                             reff_.data(), meff_.data(), xi_.data(), slot_.data(), touching_.data(), bad_.data(),
                             law_pp_, opt_.time_step, opt_.overlap_limit, opt_.gravity_z, keep_slots_, kForceParts};
   const PairPartKernel kernel = kernels_.pairs;
-  const int bad = for_each_or(kForceParts, parallel(np), [&](int64_t part) __attribute__((always_inline)) {
+  // One thread: the parts' chunks in list order in one sweep (the same sums:
+  // dem/contact/kernels.hpp, kAllParts).
+  const int bad = parallel(np) ? for_each_or(kForceParts, true, [&](int64_t part) __attribute__((always_inline)) {
     return kernel(args, static_cast<int>(part), acc0 + part * kAccStride * n);
-  });
+  }) : kernel(args, kAllParts, acc0);
   const double lim = opt_.overlap_limit;
   const Particles& p = p_;
   if (bad) {

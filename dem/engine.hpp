@@ -159,7 +159,10 @@ class Engine {
   // Breakage hooks (issue 7, dem/breakage/). The force hook runs after the
   // contact forces are gathered into particles().f*/t* and before the
   // closing kick: the bond law adds its forces there. No hook: one branch.
-  void set_force_hook(std::function<void(Engine&)> hook) { force_hook_ = std::move(hook); }
+  void set_force_hook(std::function<void(Engine&)> hook) {
+    force_hook_ = std::move(hook);
+    slot_.assign(force_hook_ ? static_cast<size_t>(list_.pairs()) : 0, PairData{});  // kept only with a hook
+  }
   // Replaces the time step (> 0): breakage creates smaller spheres.
   void set_time_step(double dt);
   // Read-only view of the last force evaluation (per-sphere contact statistics).

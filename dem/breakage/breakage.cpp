@@ -129,14 +129,21 @@ std::vector<double> BreakageModel::max_normal_forces() const {
   return f;
 }
 
-std::vector<ContactLoad> BreakageModel::contacts_of(int64_t s) const {
+std::vector<std::vector<ContactLoad>> BreakageModel::contact_loads(const std::vector<int64_t>& spheres) const {
+  // One pass over the pair list for all the spheres (a pass per sphere made
+  // a check with k candidates cost k x pairs: quadratic in N once the number
+  // of simultaneous splits grows with the specimen). Each sphere's contacts
+  // keep the order of the single-sphere scan: pairs by ascending index, then
+  // bottom platen, top platen, cylinder.
   const Particles& p = eng_.particles();
-  std::vector<ContactLoad> c;
-  const Vec3 xs = pos(p, s);
+  std::vector<std::vector<ContactLoad>> out(spheres.size());
+  if (spheres.empty()) return out;
+  std::vector<int64_t> which(static_cast<size_t>(p.size()), -1);
+  for (size_t q = 0; q < spheres.size(); ++q) which[spheres[q]] = static_cast<int64_t>(q);
   for (int64_t k = 0; k < eng_.pair_count(); ++k) {
     if (!eng_.pair_touching(k)) continue;
     const int64_t i = eng_.pair_i(k), j = eng_.pair_j(k);
-    if (i != s && j != s) continue;
+    if (which[i] < 0 && which[j] < 0) continue;
     const Vec3 d = pos(p, j) - pos(p, i);
     const double dist = norm(d);
     const Vec3 n = (1 / dist) * d;
@@ -144,18 +151,24 @@ std::vector<ContactLoad> BreakageModel::contacts_of(int64_t s) const {
     const Vec3 point = pos(p, i) + (p.r[i] - 0.5 * delta) * n;
     const PairData& pd = eng_.pair_force(k);
     const Vec3 f{pd.fx, pd.fy, pd.fz};
-    c.push_back({point, i == s ? -f : f});
+    if (which[i] >= 0) out[which[i]].push_back({point, -f});
+    if (which[j] >= 0) out[which[j]].push_back({point, f});
   }
-  const double* w = eng_.sphere_wall_forces(s);
-  const double r = p.r[s];
-  if (w[0] != 0) c.push_back({xs - Vec3{0, 0, r}, {0, 0, -w[0]}});
-  if (w[1] != 0) c.push_back({xs + Vec3{0, 0, r}, {0, 0, -w[1]}});
-  if (w[2] != 0) {
-    const double rho = std::hypot(xs.x, xs.y);
-    const Vec3 nc{xs.x / rho, xs.y / rho, 0};
-    c.push_back({xs + r * nc, -w[2] * nc});
+  for (size_t q = 0; q < spheres.size(); ++q) {
+    const int64_t s = spheres[q];
+    std::vector<ContactLoad>& c = out[q];
+    const Vec3 xs = pos(p, s);
+    const double* w = eng_.sphere_wall_forces(s);
+    const double r = p.r[s];
+    if (w[0] != 0) c.push_back({xs - Vec3{0, 0, r}, {0, 0, -w[0]}});
+    if (w[1] != 0) c.push_back({xs + Vec3{0, 0, r}, {0, 0, -w[1]}});
+    if (w[2] != 0) {
+      const double rho = std::hypot(xs.x, xs.y);
+      const Vec3 nc{xs.x / rho, xs.y / rho, 0};
+      c.push_back({xs + r * nc, -w[2] * nc});
+    }
   }
-  return c;
+  return out;
 }
 
 int BreakageModel::check() {
@@ -177,6 +190,7 @@ int BreakageModel::check() {
     bonded.assign(n, 0);
     for (size_t b = 0; b < ba_.size(); ++b) bonded[ba_[b]] = bonded[bb_[b]] = 1;
   }
+  std::vector<int64_t> over_strength;  // spheres over their strength that may split
   for (int64_t s = 0; s < n; ++s) {
     const double d = 2 * p.r[s];
     if (!(p.flags[s] & kFlagBreakable)) continue;
@@ -188,10 +202,15 @@ int BreakageModel::check() {
       continue;
     }
     if (!over || (!opt_.split_bonded && bonded[s])) continue;
+    over_strength.push_back(s);
+  }
+  const std::vector<std::vector<ContactLoad>> loads = contact_loads(over_strength);
+  for (size_t q = 0; q < over_strength.size(); ++q) {
+    const int64_t s = over_strength[q];
+    const double d = 2 * p.r[s];
     const double sigma = fmax[s] / (d * d);
-    const std::vector<ContactLoad> c = contacts_of(s);
     const double volume = std::numbers::pi / 6 * d * d * d;
-    const auto plane = splitting_plane(pos(p, s), volume, c);
+    const auto plane = splitting_plane(pos(p, s), volume, loads[q]);
     if (!plane) continue;
     SplitEvent ev;
     ev.step = eng_.step_count();
@@ -205,6 +224,21 @@ int BreakageModel::check() {
     ev.strength_Pa = strength_[s];
     ev.plane = *plane;
     todo.push_back(ev);
+  }
+  // The mothers' bonds go with them: one pass over the bonds for all splits
+  // (a pass per split was splits x bonds). New fragment bonds only join a
+  // mother's own index to appended spheres, never another mother, so the
+  // bond list ends as dropping per split would leave it.
+  if (!todo.empty()) {
+    std::vector<uint8_t> mother(static_cast<size_t>(n), 0);
+    for (const SplitEvent& ev : todo) mother[ev.sphere] = 1;
+    bool dropped = false;
+    for (size_t b = 0; b < ba_.size(); ++b)
+      if (mother[ba_[b]] || mother[bb_[b]]) {
+        broken_[b] = 1;
+        dropped = true;
+      }
+    if (dropped) compact_bonds(&rec_.bonds_dropped);
   }
   // Spheres touching each mother (before any split): the only ones a
   // fragment sphere can overlap, since it lies inside its mother.
@@ -265,14 +299,7 @@ Replacement BreakageModel::split(int64_t s, const SplittingPlane& plane) {
   ++rec_.splits_by_generation[g];
   rec_.volume_lost_m3 += rep.volume_lost;
 
-  // The mother's bonds go with it.
-  bool dropped = false;
-  for (size_t b = 0; b < ba_.size(); ++b)
-    if (ba_[b] == s || bb_[b] == s) {
-      broken_[b] = 1;
-      dropped = true;
-    }
-  if (dropped) compact_bonds(&rec_.bonds_dropped);
+  // The mother has no bonds left: check() dropped them before the splits.
 
   const int64_t n0 = p.size();
   const int64_t count = static_cast<int64_t>(rep.spheres.size());

@@ -173,8 +173,11 @@ class BreakageModel {
 
  private:
   void add_bond_forces(Engine& e);
+  // Replaces sphere s, whose bonds the caller has dropped, by two fragments.
   Replacement split(int64_t s, const SplittingPlane& plane);
-  std::vector<ContactLoad> contacts_of(int64_t s) const;
+  // The contact loads (point, force on the sphere) of each of `spheres`, in
+  // one pass over the pair list: O(pairs + spheres).
+  std::vector<std::vector<ContactLoad>> contact_loads(const std::vector<int64_t>& spheres) const;
   void relabel_particles();
   void update_time_step();
   void update_mass_record();

@@ -60,7 +60,7 @@ struct PairKernelArgs {
   const double *x, *y, *z, *r, *vx, *vy, *vz, *wx, *wy, *wz, *m;
   const double *reff, *meff;  // R*, m* per pair
   double* xi;                 // tangential history, 3 per pair
-  PairData* slot;             // written only when `keep`
+  PairData* slot;             // written only when `keep` (null or empty otherwise)
   uint8_t *touching, *bad;    // per pair
   HertzMindlin law;
   double dt, overlap_limit, gravity_z;
@@ -71,8 +71,14 @@ struct PairKernelArgs {
 // Part `part` of the pair list: fills acc (kAccStride doubles per sphere,
 // 64-byte aligned) with the weights (part 0) or zeros, then adds the part's
 // contact forces and torques. Returns 1 if some pair overlapped beyond the
-// limit or was not finite (its bad flag set).
+// limit or was not finite (its bad flag set). part = kAllParts: every part
+// on this thread, acc = part 0's array (the parts' arrays follow it, n
+// spheres apart), the row chunks taken in list order, each into its own
+// part's array: the same sums in the same order as part by part, but each
+// chunk's spheres are read once a step, not once per part (at 10^5 spheres
+// and more they no longer stay in cache between the parts' sweeps).
 using PairPartKernel = int (*)(const PairKernelArgs&, int part, double* acc);
+constexpr int kAllParts = -1;
 
 // Spheres per block of the gather (and of the kicks in the engine).
 constexpr int64_t kSphereBlock = 64;
@@ -228,7 +234,7 @@ template <class V, class M>
 
 // The body of every kernel; V is Lanes2, Lanes4 or Lanes8.
 template <class V, class IV = LaneIndex<V>>
-int pair_part(const PairKernelArgs& a, int part, double* __restrict acc) {
+int pair_part(const PairKernelArgs& a, int part, double* acc_base) {
   static constexpr int W = sizeof(V) / sizeof(double);
   // Local, non-aliased views: the compiler keeps them in registers instead
   // of reloading them after every store into the pair arrays.
@@ -245,6 +251,7 @@ int pair_part(const PairKernelArgs& a, int part, double* __restrict acc) {
   const HertzMindlin law = a.law;
   const double dt = a.dt, lim = a.overlap_limit;
   const bool keep = a.keep;
+  double* __restrict acc = acc_base;  // the current chunk's part's sums
 
   // W listed pairs kk[0] < ... < kk[used-1]; lanes from `used` on repeat
   // the last pair and are dropped. A lane whose pair does not touch
@@ -275,7 +282,7 @@ int pair_part(const PairKernelArgs& a, int part, double* __restrict acc) {
       if (!on[l] && touching[k[l]]) {
         touching[k[l]] = kNotTouching;
         xi[3 * k[l]] = xi[3 * k[l] + 1] = xi[3 * k[l] + 2] = 0;
-        slot[k[l]] = PairData{};
+        if (keep) slot[k[l]] = PairData{};  // slots exist only with a force hook
       }
     }
     if (!any(on)) return 0;
@@ -289,7 +296,7 @@ int pair_part(const PairKernelArgs& a, int part, double* __restrict acc) {
       if (on[l] && (!(dist[l] > 0) || delta[l] > lim * rmin)) {
         badk[k[l]] = 1;
         touching[k[l]] = kNotTouching;
-        slot[k[l]] = PairData{};
+        if (keep) slot[k[l]] = PairData{};
         on[l] = 0;
         failed = 1;
       }
@@ -352,14 +359,19 @@ int pair_part(const PairKernelArgs& a, int part, double* __restrict acc) {
   };
 
   const int64_t n = a.n;
-  for (int64_t s = 0; s < n; ++s) {
-    double* c = acc + kAccStride * s;
-    c[0] = c[1] = 0;
-    c[2] = part == 0 ? a.m[s] * a.gravity_z : 0.0;
-    c[3] = c[4] = c[5] = c[6] = c[7] = 0;  // 6, 7: padding (the AVX-512 kernel adds whole lines)
+  const bool all = part == kAllParts;
+  for (int q = all ? 0 : part; q <= (all ? a.parts - 1 : part); ++q) {
+    double* const ap = all ? acc_base + q * kAccStride * n : acc_base;
+    for (int64_t s = 0; s < n; ++s) {
+      double* c = ap + kAccStride * s;
+      c[0] = c[1] = 0;
+      c[2] = q == 0 ? a.m[s] * a.gravity_z : 0.0;
+      c[3] = c[4] = c[5] = c[6] = c[7] = 0;  // 6, 7: padding (the AVX-512 kernel adds whole lines)
+    }
   }
   int failed = 0;
-  for (int64_t c = part; c * kRowChunk < a.rows; c += a.parts) {
+  for (int64_t c = all ? 0 : part; c * kRowChunk < a.rows; c += all ? 1 : a.parts) {
+    if (all) acc = acc_base + (c % a.parts) * kAccStride * n;
     const int64_t lo = a.offsets[c * kRowChunk];
     const int64_t hi = a.offsets[(c + 1) * kRowChunk < a.rows ? (c + 1) * kRowChunk : a.rows];
     for (int64_t kb = lo; kb < hi; kb += kPairBlock) failed |= block(kb, hi - kb < kPairBlock ? hi : kb + kPairBlock);

@@ -150,7 +150,9 @@ TEST(Markers, FixedPointMapGivesTheFloatMapsMarkersAndLevels) {
     for (int64_t i = 0; i < d.size(); ++i) {
       cap += want[i] != 0;
       differ += want[i] != got[i];
-      if (want[i] && got[i]) ASSERT_EQ(want[i], got[i]) << "h " << h;
+      if (want[i] && got[i]) {
+        ASSERT_EQ(want[i], got[i]) << "h " << h;
+      }
     }
     EXPECT_LE(differ, cap / 50) << "h " << h;
   }

@@ -8,7 +8,7 @@
 #      compressing the specimen along z by the study's strains
 #      (compress_stages.py: grains flatten, which real ones do not; the
 #      stages cost the tracker what real ones would: same size, same count).
-# Run it alone on the machine: it needs ~17 GiB of memory and ~75 GB of disk.
+# Run it alone on the machine: it needs ~17 GiB of memory (synth) and ~14 GB of disk.
 #
 #   bench/scale/full_size.sh BUILD WORK
 #   bench/scale/full_size.sh build/release /work/big

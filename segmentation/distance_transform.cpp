@@ -249,14 +249,7 @@ void distance_transform(const Volume<uint8_t>& solid, Volume<float>& out, const 
   transform(solid, out, opt, true);
 }
 
-double fixed_point_units(float dmax) {
-  double u = 256.0;
-  while (u > 1.0 && double(dmax) * u > 65535.0) u /= 2;
-  return u;
-}
-
-FixedDistance to_fixed_point(Volume<float>&& dist, double per_unit) {
-  if (!(per_unit >= 0) || !std::isfinite(per_unit)) throw UsageError("distance map: fixed-point units must be >= 0");
+float deepest_distance(const Volume<float>& dist, const std::string& who) {
   const int64_t n = dist.size();
   const float* d = dist.data();
   float dmax = 0;
@@ -267,7 +260,20 @@ FixedDistance to_fixed_point(Volume<float>&& dist, double per_unit) {
     bad |= int(!(v >= 0.0f)) | int(!(v <= std::numeric_limits<float>::max()));  // NaN, < 0, inf
     dmax = v > dmax ? v : dmax;
   }
-  if (bad) throw UsageError("distance map: not finite and >= 0 everywhere");
+  if (bad) throw UsageError(who + ": the distance map is not finite and >= 0 everywhere");
+  return dmax;
+}
+
+double fixed_point_units(float dmax) {
+  double u = 256.0;
+  while (u > 1.0 && double(dmax) * u > 65535.0) u /= 2;
+  return u;
+}
+
+FixedDistance to_fixed_point(Volume<float>&& dist, double per_unit) {
+  if (!(per_unit >= 0) || !std::isfinite(per_unit)) throw UsageError("distance map: fixed-point units must be >= 0");
+  const int64_t n = dist.size();
+  const float dmax = deepest_distance(dist, "distance map");
   FixedDistance r;
   r.dmax = dmax;
   r.per_unit = per_unit > 0 ? per_unit : fixed_point_units(dmax);

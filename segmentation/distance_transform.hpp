@@ -46,6 +46,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <string>
 
 #include "core/volume.hpp"
 
@@ -82,6 +83,10 @@ struct FixedDistance {
   double per_unit = 1.0;  // fixed-point units per distance unit
   float dmax = 0;         // the float map's deepest value (the flood's quantisation is decided on it)
 };
+
+// The map's deepest value; UsageError (naming `who`) when a value is NaN,
+// infinite or negative.
+float deepest_distance(const Volume<float>& dist, const std::string& who);
 
 // 256 while dmax <= 255, else the largest power of two that keeps dmax
 // within 16 bits. A scan segmented slab by slab gives each slab the whole

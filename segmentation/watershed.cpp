@@ -519,17 +519,7 @@ namespace {
 template <class ChooseQ>
 Volume<uint8_t> levels_in_place(Volume<float>&& dist, ChooseQ choose_q) {
   const int64_t n = dist.size();
-  const float* d = dist.data();
-  float dmax = 0;
-  int bad = 0;  // bitwise, so that the loop vectorises
-#pragma omp parallel for simd schedule(static) reduction(max : dmax) reduction(| : bad)
-  for (int64_t i = 0; i < n; ++i) {
-    const float v = d[i];
-    bad |= int(!(v >= 0.0f)) | int(!(v <= std::numeric_limits<float>::max()));  // NaN, < 0, inf
-    dmax = v > dmax ? v : dmax;
-  }
-  if (bad) throw UsageError("watershed: the distance map is not finite and >= 0 everywhere");
-  const double q = choose_q(dmax);
+  const double q = choose_q(deepest_distance(dist, "watershed"));
   Volume<uint8_t> lev = std::move(dist).convert_in_place<uint8_t>(
       [q](float d) -> uint8_t {
         const uint8_t l = level_of(d, q);  // computed for the void too: a select, not a branch

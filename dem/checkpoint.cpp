@@ -62,7 +62,7 @@ struct Reader {
   std::string path;
   void take(void* out, size_t n, const char* what) {
     if (static_cast<size_t>(end - at) < n) fail(what);
-    std::memcpy(out, at, n);
+    if (n) std::memcpy(out, at, n);  // an empty vector's data() may be null (memcpy's arguments must not be)
     at += n;
   }
   template <class T>

@@ -95,6 +95,16 @@ void BreakageModel::add_bond_forces(Engine& e) {
   if (any_broken) compact_bonds(&rec_.bonds_broken);
 }
 
+void BreakageModel::drop_bonds_of(const std::vector<uint8_t>& marked) {
+  bool dropped = false;
+  for (size_t b = 0; b < ba_.size(); ++b)
+    if (marked[ba_[b]] || marked[bb_[b]]) {
+      broken_[b] = 1;
+      dropped = true;
+    }
+  if (dropped) compact_bonds(&rec_.bonds_dropped);
+}
+
 void BreakageModel::compact_bonds(int64_t* counter) {
   int64_t w = 0;
   const int64_t nb = static_cast<int64_t>(ba_.size());
@@ -232,13 +242,7 @@ int BreakageModel::check() {
   if (!todo.empty()) {
     std::vector<uint8_t> mother(static_cast<size_t>(n), 0);
     for (const SplitEvent& ev : todo) mother[ev.sphere] = 1;
-    bool dropped = false;
-    for (size_t b = 0; b < ba_.size(); ++b)
-      if (mother[ba_[b]] || mother[bb_[b]]) {
-        broken_[b] = 1;
-        dropped = true;
-      }
-    if (dropped) compact_bonds(&rec_.bonds_dropped);
+    drop_bonds_of(mother);
   }
   // Spheres touching each mother (before any split): the only ones a
   // fragment sphere can overlap, since it lies inside its mother.
@@ -386,13 +390,7 @@ void BreakageModel::remove_fines(const std::vector<int64_t>& spheres) {
     rec_.volume_lost_m3 += v;
     ++rec_.fines_removed;
   }
-  bool dropped = false;
-  for (size_t b = 0; b < ba_.size(); ++b)
-    if (kill[ba_[b]] || kill[bb_[b]]) {
-      broken_[b] = 1;
-      dropped = true;
-    }
-  if (dropped) compact_bonds(&rec_.bonds_dropped);
+  drop_bonds_of(kill);
   const std::vector<int64_t> map = eng_.remove_spheres(kill);
   for (size_t b = 0; b < ba_.size(); ++b) {  // monotone map: ba < bb stays true
     ba_[b] = map[ba_[b]];

@@ -189,6 +189,8 @@ class BreakageModel {
   double wall_overlap(int64_t s) const;  // largest overlap with a wall, m (0 = none)
   // Removes the bonds flagged in broken_; adds their count to *counter.
   void compact_bonds(int64_t* counter);
+  // Drops (counted in bonds_dropped) every bond with an end marked non-zero.
+  void drop_bonds_of(const std::vector<uint8_t>& marked);
 
   Engine& eng_;
   BreakageOptions opt_;

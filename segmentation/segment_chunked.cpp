@@ -121,9 +121,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
   float dmax_seen = 0;
   double q = opt.buckets_per_unit;
   double units = fixed_point_units(0.0f);  // the fixed-point map's (distance_transform.hpp), likewise
-  auto q_for = [&](float dmax) {  // watershed.cpp levels_per_unit
-    return double(dmax) * opt.buckets_per_unit >= 255.0 ? 254.0 / double(dmax) : opt.buckets_per_unit;
-  };
+  auto q_for = [&](float dmax) { return levels_per_unit(dmax, opt.buckets_per_unit); };
   uint32_t running = 0;
   int64_t dropped = 0, core_solid = 0;
   std::unordered_map<int64_t, OwnedParticle> owned;  // by the first voxel's linear index in the scan

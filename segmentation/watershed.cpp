@@ -468,6 +468,10 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
 
 }  // namespace
 
+double levels_per_unit(float dmax, double buckets_per_unit) {
+  return double(dmax) * buckets_per_unit >= 255.0 ? 254.0 / double(dmax) : buckets_per_unit;
+}
+
 namespace {
 
 void check_buckets(double buckets_per_unit) {
@@ -475,10 +479,6 @@ void check_buckets(double buckets_per_unit) {
     throw UsageError("watershed: buckets per distance unit must be positive");
 }
 
-// The q that keeps the top level at 255 or below.
-double levels_per_unit(float dmax, double buckets_per_unit) {
-  return double(dmax) * buckets_per_unit >= 255.0 ? 254.0 / double(dmax) : buckets_per_unit;
-}
 
 // By value throughout (std::min returns a reference, which keeps GCC from
 // vectorising the loops that call this).

@@ -65,6 +65,10 @@ struct WatershedOptions {
   double buckets_per_unit = 4.0;   // distance quantisation: levels per distance unit
 };
 
+// The levels per distance unit the flood uses for a map whose deepest value
+// is dmax: buckets_per_unit, or 254 / dmax where that would pass level 255.
+double levels_per_unit(float dmax, double buckets_per_unit);
+
 // Rewrites `solid` (0 = void, non-zero = solid) in place into flooding
 // levels: 0 on void, 1 + floor(d * q) on the solid, where q is
 // buckets_per_unit, lowered when needed so that the top level is <= 255.

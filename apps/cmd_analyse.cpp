@@ -23,6 +23,7 @@ struct Opts {
   double voxel_um = 0, grain_diameter_um = 1360.0, grain_radius_vox = 0;
   std::string feret = "60";
   bool box = false;
+  std::string memory_limit;  // segment's and measure's --memory-limit
 };
 
 // Each job's wall time and its own peak resident memory (the peak is reset
@@ -89,6 +90,7 @@ int run_analyse(const Opts& o) {
   // from labels.h5 cost ~23 s of decompression on a 1220^3 scan.
   tg::Volume<uint32_t> labels;
   seg.keep_labels = &labels;
+  seg.memory_limit = o.memory_limit;
   std::vector<StageCost> costs;
   costs.push_back(run_stage("segment", [&] { tg::app::run_segment(seg); }));
 
@@ -99,7 +101,10 @@ int run_analyse(const Opts& o) {
   mea.grey = o.in;  // volumes from the grey levels (measure/grey_volume.hpp)
   mea.voxel_um = o.voxel_um;
   mea.box = o.box;
-  mea.labels = &labels;
+  // Segmented slab by slab, the labels are only in labels.h5: measure reads
+  // them from there (slab by slab too when they do not fit).
+  mea.labels = labels.size() ? &labels : nullptr;
+  mea.memory_limit = o.memory_limit;
   costs.push_back(run_stage("measure", [&] { tg::app::run_measure(mea); }));
   labels = tg::Volume<uint32_t>();
 
@@ -130,7 +135,8 @@ static tg::app::Registrar reg{{"analyse", 50,
       "time and peak memory, bytes and bytes per voxel). DIR appears only when all succeed.\n\n"
       "Examples:\n"
       "  tomograin analyse stage0.h5 -o results/stage0\n"
-      "  tomograin analyse slices/ -o results/stage3 --voxel-um 12.3 --feret exact",
+      "  tomograin analyse slices/ -o results/stage3 --voxel-um 12.3 --feret exact\n"
+      "  tomograin analyse scan2048.h5:/scan -o results/big --memory-limit 16GiB",
       [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<Opts>();
   sub->add_option("scan", o->in, "Grey scan (uint16, float32 is normalised; any volume format)")->required();
@@ -141,6 +147,9 @@ static tg::app::Registrar reg{{"analyse", 50,
   sub->add_option("--grain-radius-vox", o->grain_radius_vox, "Expected grain radius in voxels (overrides the diameter)");
   sub->add_option("--feret", o->feret, "Feret orientations N, or 'exact'")->capture_default_str();
   sub->add_flag("--box", o->box, "Also compute CGAL's oriented box (obb_* columns; slow on large scans)");
+  sub->add_option("--memory-limit", o->memory_limit,
+                  "Memory to stay under, e.g. 16GiB: a scan (HDF5) over it is segmented and measured slab by slab "
+                  "with the same labels and table (no coordination column then); see segment and measure --help");
   return [o] { return run_analyse(*o); };
 }}};
 }  // namespace cmd_analyse

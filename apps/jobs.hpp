@@ -54,6 +54,9 @@ struct MeasureJob {
   // When set (analyse), these labels (read from `in` by an earlier step) are
   // measured instead of reading `in` again; `in` still names them.
   const Volume<uint32_t>* labels = nullptr;
+  // --memory-limit (empty: none): labels (and grey scan) in HDF5 that do not
+  // fit are measured slab by slab (measure/measure_chunked.hpp).
+  std::string memory_limit;
 };
 int run_measure(const MeasureJob& job);
 

@@ -14,7 +14,7 @@ namespace grey_volume_detail {
 // Fixed point of the sums: 2^-24 voxel per unit. A contribution is at most
 // 2 voxels (f clamped to [-1, 2]), so a label of up to 2^38 voxels (far
 // beyond a 1220^3 scan) cannot overflow an int64.
-constexpr double kUnit = 16777216.0;  // 2^24
+constexpr double kUnit = grey_volume_units;
 
 inline int64_t fixed(double voxels) { return static_cast<int64_t>(std::llround(voxels * kUnit)); }
 
@@ -22,8 +22,20 @@ inline int64_t fixed(double voxels) { return static_cast<int64_t>(std::llround(v
 
 std::vector<double> grey_volumes(const VolumeView<const uint32_t>& labels, const VolumeView<const uint16_t>& grey,
                                  const std::vector<uint32_t>& ids, const GreyVolumeOptions& opt) {
+  const std::vector<int64_t> sum = grey_volume_sums(labels, grey, ids, opt, 0, labels.shape().nz);
+  std::vector<double> out(sum.size());
+  for (size_t n = 0; n < sum.size(); ++n) out[n] = double(sum[n]) / grey_volume_detail::kUnit;
+  return out;
+}
+
+std::vector<int64_t> grey_volume_sums(const VolumeView<const uint32_t>& labels, const VolumeView<const uint16_t>& grey,
+                                      const std::vector<uint32_t>& ids, const GreyVolumeOptions& opt, int64_t c0,
+                                      int64_t c1) {
   using grey_volume_detail::fixed;
   const Shape s = labels.shape();
+  if (c0 < 0 || c1 > s.nz || c0 > c1)
+    throw UsageError("grey volume: core slices [" + std::to_string(c0) + ", " + std::to_string(c1) +
+                     ") outside the window " + s.str());
   if (!(grey.shape() == s))
     throw UsageError("grey volume " + grey.shape().str() + " and labels " + s.str() + " differ in shape");
   if (!(opt.solid_grey > opt.void_grey))
@@ -60,7 +72,7 @@ std::vector<double> grey_volumes(const VolumeView<const uint32_t>& labels, const
     const int n_threads = omp_get_num_threads();
     std::vector<int64_t>& acc = part[static_cast<size_t>(t)];
     acc.assign(nl, 0);
-    const int64_t z0 = s.nz * t / n_threads, z1 = s.nz * (t + 1) / n_threads;
+    const int64_t z0 = c0 + (c1 - c0) * t / n_threads, z1 = c0 + (c1 - c0) * (t + 1) / n_threads;
     std::array<uint32_t, 26> nb_label{};
     std::array<int, 26> nb_count{};
     // near[i]: the OR of the labels in the 3x3 rows around (k, j) at column
@@ -126,9 +138,7 @@ std::vector<double> grey_volumes(const VolumeView<const uint32_t>& labels, const
   std::vector<int64_t> sum(nl, 0);
   for (const auto& p : part)  // integer sums: any order gives the same result
     for (size_t n = 0; n < p.size(); ++n) sum[n] += p[n];
-  std::vector<double> out(nl);
-  for (size_t n = 0; n < nl; ++n) out[n] = double(sum[n]) / grey_volume_detail::kUnit;
-  return out;
+  return sum;
 }
 
 }  // namespace tg::measure

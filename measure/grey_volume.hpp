@@ -78,4 +78,14 @@ struct GreyVolumeOptions {
 std::vector<double> grey_volumes(const VolumeView<const uint32_t>& labels, const VolumeView<const uint16_t>& grey,
                                  const std::vector<uint32_t>& ids, const GreyVolumeOptions& opt);
 
+// The same volumes as exact fixed-point sums (grey_volume_units per voxel),
+// from the voxels of slices [core_begin, core_end) of two windows: slabs of
+// larger volumes that hold the slices just below and above the core unless
+// it reaches a face of the volume (as label_sums). Sums of slabs add up to
+// the whole volume's (measure_chunked.hpp).
+std::vector<int64_t> grey_volume_sums(const VolumeView<const uint32_t>& labels, const VolumeView<const uint16_t>& grey,
+                                      const std::vector<uint32_t>& ids, const GreyVolumeOptions& opt,
+                                      int64_t core_begin, int64_t core_end);
+inline constexpr double grey_volume_units = 16777216.0;  // 2^24 per voxel
+
 }  // namespace tg::measure

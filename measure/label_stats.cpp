@@ -38,27 +38,13 @@ class LabelIndex {
   std::vector<int32_t> table_;
 };
 
-// Integer moments of one label in one thread's slab.
-struct Acc {
-  int64_t n = 0, sk = 0, sj = 0, si = 0, skk = 0, sjj = 0, sii = 0, skj = 0, ski = 0, sji = 0;
-  std::array<int64_t, 3> lo{std::numeric_limits<int64_t>::max(), std::numeric_limits<int64_t>::max(),
-                            std::numeric_limits<int64_t>::max()};
-  std::array<int64_t, 3> hi{-1, -1, -1};
-  bool border = false;
-  void merge(const Acc& o) {
-    n += o.n; sk += o.sk; sj += o.sj; si += o.si;
-    skk += o.skk; sjj += o.sjj; sii += o.sii; skj += o.skj; ski += o.ski; sji += o.sji;
-    for (int a = 0; a < 3; ++a) { lo[a] = std::min(lo[a], o.lo[a]); hi[a] = std::max(hi[a], o.hi[a]); }
-    border = border || o.border;
-  }
-};
-
-// Slab [z0, z1) of thread t out of nt: contiguous, in thread order.
-std::pair<int64_t, int64_t> slab(int64_t nz, int t, int nt) {
-  return {nz * t / nt, nz * (t + 1) / nt};
+// Slices [z0, z1) of thread t out of nt in the core [c0, c1): contiguous, in thread order.
+std::pair<int64_t, int64_t> slab(int64_t c0, int64_t c1, int t, int nt) {
+  const int64_t m = c1 - c0;
+  return {c0 + m * t / nt, c0 + m * (t + 1) / nt};
 }
 
-std::vector<uint32_t> distinct_labels(const VolumeView<const uint32_t>& v, int nt) {
+std::vector<uint32_t> distinct_labels(const VolumeView<const uint32_t>& v, int64_t c0, int64_t c1, int nt) {
   const Shape s = v.shape();
   std::vector<std::vector<uint32_t>> found(static_cast<size_t>(nt));
 #pragma omp parallel num_threads(nt)
@@ -67,7 +53,7 @@ std::vector<uint32_t> distinct_labels(const VolumeView<const uint32_t>& v, int n
     const int n = omp_get_num_threads();
     std::unordered_set<uint32_t> seen;
     uint32_t last = 0;
-    auto [z0, z1] = slab(s.nz, t, n);
+    auto [z0, z1] = slab(c0, c1, t, n);
     for (int64_t k = z0; k < z1; ++k)
       for (int64_t j = 0; j < s.ny; ++j)
         for (uint32_t l : v.row(k, j))
@@ -86,22 +72,37 @@ std::vector<uint32_t> distinct_labels(const VolumeView<const uint32_t>& v, int n
 
 }  // namespace
 
+void LabelMoments::merge(const LabelMoments& o) {
+  n += o.n; sk += o.sk; sj += o.sj; si += o.si;
+  skk += o.skk; sjj += o.sjj; sii += o.sii; skj += o.skj; ski += o.ski; sji += o.sji;
+  for (int a = 0; a < 3; ++a) { lo[a] = std::min(lo[a], o.lo[a]); hi[a] = std::max(hi[a], o.hi[a]); }
+  border = border || o.border;
+}
+
 LabelStatsResult label_stats(const VolumeView<const uint32_t>& v, const LabelStatsOptions& opt) {
-  const Geometry& g = v.geometry();
-  if (!g.has_voxel_size()) throw UsageError("label_stats: the label volume has no voxel size (give --voxel-um)");
+  if (!v.geometry().has_voxel_size()) throw UsageError("label_stats: the label volume has no voxel size (give --voxel-um)");
+  return label_stats_from_sums(label_sums(v, 0, v.shape().nz, 0, opt), v.geometry(), opt);
+}
+
+LabelSums label_sums(const VolumeView<const uint32_t>& v, int64_t c0, int64_t c1, int64_t k_offset,
+                     const LabelStatsOptions& opt) {
   if (opt.threads < 0) throw UsageError("label_stats: threads must be >= 0");
   const Shape s = v.shape();
-  // Sums of squared indices must fit int64: n * max_index^2 < 2^63.
-  const double big = static_cast<double>(std::max({s.nz, s.ny, s.nx}));
-  if (big * big * static_cast<double>(s.voxels()) > 9.0e18)
+  if (c0 < 0 || c1 > s.nz || c0 > c1 || k_offset < 0)
+    throw UsageError("label_sums: core slices [" + std::to_string(c0) + ", " + std::to_string(c1) +
+                     ") outside the window " + s.str());
+  // Sums of squared indices must fit int64: n * max_index^2 < 2^63 (the
+  // whole volume's extent: the sums of every slab add up).
+  const double big = static_cast<double>(std::max({s.nz + k_offset, s.ny, s.nx}));
+  if (big * big * static_cast<double>(s.nz + k_offset) * static_cast<double>(s.slice_voxels()) > 9.0e18)
     throw ResourceError("label_stats: volume " + s.str() + " too large for 64-bit moment sums");
   const int nt = opt.threads > 0 ? opt.threads : omp_get_max_threads();
 
-  const LabelIndex index(distinct_labels(v, nt));
+  const LabelIndex index(distinct_labels(v, c0, c1, nt));
   const size_t nl = index.labels().size();
 
   struct Partial {
-    std::vector<Acc> acc;
+    std::vector<LabelMoments> acc;
     std::vector<std::pair<int32_t, SurfaceVoxel>> surface;
   };
   std::vector<Partial> part(static_cast<size_t>(nt));
@@ -111,21 +112,24 @@ LabelStatsResult label_stats(const VolumeView<const uint32_t>& v, const LabelSta
     const int t = omp_get_thread_num();
     const int n_threads = omp_get_num_threads();
     Partial& P = part[static_cast<size_t>(t)];
-    P.acc.assign(nl, Acc{});
-    auto [z0, z1] = slab(s.nz, t, n_threads);
+    P.acc.assign(nl, LabelMoments{});
+    auto [z0, z1] = slab(c0, c1, t, n_threads);
     uint32_t last = 0;
     int32_t last_idx = -1;
     // Sum of i^2 for i in [0, m): the moments of a run of one label in a row
     // in closed form (runs are tens of voxels long: the per-voxel sums were
     // most of this pass).
     auto squares_below = [](int64_t m) { return (m - 1) * m * (2 * m - 1) / 6; };
-    for (int64_t k = z0; k < z1; ++k)
+    for (int64_t kw = z0; kw < z1; ++kw)
       for (int64_t j = 0; j < s.ny; ++j) {
-        const uint32_t* row = v.row(k, j).data();
-        const uint32_t* below = k > 0 ? v.row(k - 1, j).data() : nullptr;
-        const uint32_t* above = k + 1 < s.nz ? v.row(k + 1, j).data() : nullptr;
-        const uint32_t* before = j > 0 ? v.row(k, j - 1).data() : nullptr;
-        const uint32_t* after = j + 1 < s.ny ? v.row(k, j + 1).data() : nullptr;
+        const int64_t k = kw + k_offset;  // the whole volume's index
+        const uint32_t* row = v.row(kw, j).data();
+        // The window holds the slices next to the core, or the core ends at
+        // the volume's face: no slice there in the window = none in the volume.
+        const uint32_t* below = kw > 0 ? v.row(kw - 1, j).data() : nullptr;
+        const uint32_t* above = kw + 1 < s.nz ? v.row(kw + 1, j).data() : nullptr;
+        const uint32_t* before = j > 0 ? v.row(kw, j - 1).data() : nullptr;
+        const uint32_t* after = j + 1 < s.ny ? v.row(kw, j + 1).data() : nullptr;
         for (int64_t i0 = 0; i0 < s.nx;) {
           const uint32_t l = row[i0];
           int64_t i1 = i0 + 1;
@@ -135,7 +139,7 @@ LabelStatsResult label_stats(const VolumeView<const uint32_t>& v, const LabelSta
             continue;
           }
           if (l != last) { last = l; last_idx = index(l); }
-          Acc& a = P.acc[static_cast<size_t>(last_idx)];
+          LabelMoments& a = P.acc[static_cast<size_t>(last_idx)];
           const int64_t len = i1 - i0;
           const int64_t s1 = (i0 + i1 - 1) * len / 2, s2 = squares_below(i1) - squares_below(i0);
           a.n += len;
@@ -144,7 +148,7 @@ LabelStatsResult label_stats(const VolumeView<const uint32_t>& v, const LabelSta
           a.skj += k * j * len; a.ski += k * s1; a.sji += j * s1;
           a.lo = {std::min(a.lo[0], k), std::min(a.lo[1], j), std::min(a.lo[2], i0)};
           a.hi = {std::max(a.hi[0], k + 1), std::max(a.hi[1], j + 1), std::max(a.hi[2], i1)};
-          const bool edge = k == 0 || j == 0 || i0 == 0 || k == s.nz - 1 || j == s.ny - 1 || i1 == s.nx;
+          const bool edge = !below || !above || j == 0 || i0 == 0 || j == s.ny - 1 || i1 == s.nx;
           a.border = a.border || edge;
           if (opt.collect_surface) {
             for (int64_t i = i0; i < i1; ++i) {
@@ -166,14 +170,13 @@ LabelStatsResult label_stats(const VolumeView<const uint32_t>& v, const LabelSta
   }
 
   // Merge in thread order.
-  std::vector<Acc> acc(nl);
+  LabelSums r;
+  r.labels = index.labels();
+  r.moments.assign(nl, LabelMoments{});
   for (const auto& P : part)  // a thread the runtime did not start left its partial empty
-    for (size_t n = 0; n < P.acc.size(); ++n) acc[n].merge(P.acc[n]);
-
-  LabelStatsResult r;
-  r.labels.resize(nl);
+    for (size_t n = 0; n < P.acc.size(); ++n) r.moments[n].merge(P.acc[n]);
+  r.surface_offset.assign(nl + 1, 0);
   if (opt.collect_surface) {
-    r.surface_offset.assign(nl + 1, 0);
     for (const auto& P : part)
       for (const auto& [idx, sv] : P.surface) ++r.surface_offset[static_cast<size_t>(idx) + 1];
     for (size_t n = 0; n < nl; ++n) r.surface_offset[n + 1] += r.surface_offset[n];
@@ -181,16 +184,23 @@ LabelStatsResult label_stats(const VolumeView<const uint32_t>& v, const LabelSta
     std::vector<int64_t> fill(r.surface_offset.begin(), r.surface_offset.end() - 1);
     for (const auto& P : part)  // thread order = slab order = serial scan order
       for (const auto& [idx, sv] : P.surface) r.surface[static_cast<size_t>(fill[static_cast<size_t>(idx)]++)] = sv;
-  } else {
-    r.surface_offset.assign(nl + 1, 0);
   }
+  return r;
+}
 
+LabelStatsResult label_stats_from_sums(LabelSums sums, const Geometry& g, const LabelStatsOptions& opt) {
+  if (!g.has_voxel_size()) throw UsageError("label_stats: the label volume has no voxel size (give --voxel-um)");
+  const size_t nl = sums.labels.size();
+  LabelStatsResult r;
+  r.labels.resize(nl);
+  r.surface_offset = std::move(sums.surface_offset);
+  r.surface = std::move(sums.surface);
   const auto& h = g.voxel_size_m;
   const double dv = h[0] * h[1] * h[2];
   for (size_t n = 0; n < nl; ++n) {
-    const Acc& a = acc[n];
+    const LabelMoments& a = sums.moments[n];
     LabelStats& st = r.labels[n];
-    st.label = index.labels()[n];
+    st.label = sums.labels[n];
     st.voxels = a.n;
     st.volume_m3 = static_cast<double>(a.n) * dv;
     const double inv = 1.0 / static_cast<double>(a.n);

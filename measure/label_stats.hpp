@@ -80,7 +80,41 @@ struct LabelStatsResult {
 };
 
 // Statistics of every non-zero label. Needs the view's voxel size
-// (UsageError otherwise).
+// (UsageError otherwise). label_sums over the whole volume, then
+// label_stats_from_sums.
 LabelStatsResult label_stats(const VolumeView<const uint32_t>& labels, const LabelStatsOptions& opt = {});
+
+// The exact integer sums behind one label's statistics. Sums of two parts
+// of a label merged in any order are the sums of the whole, which is what
+// lets a volume larger than memory be measured slab by slab
+// (measure_chunked.hpp) with the numbers of the whole volume.
+struct LabelMoments {
+  int64_t n = 0, sk = 0, sj = 0, si = 0, skk = 0, sjj = 0, sii = 0, skj = 0, ski = 0, sji = 0;
+  std::array<int64_t, 3> lo{INT64_MAX, INT64_MAX, INT64_MAX};  // first voxel index (k, j, i)
+  std::array<int64_t, 3> hi{-1, -1, -1};                      // one past the last
+  bool border = false;
+  void merge(const LabelMoments& o);
+};
+
+// The sums of the labels with a voxel in slices [core_begin, core_end) of
+// `window`. The window is a slab of a volume whose slice k_offset + w is
+// the window's slice w, and must hold the slices just below and above the
+// core unless the core reaches the volume's own first or last slice: then
+// the boundary voxels and border flags are those of the whole volume. k is
+// the whole volume's index everywhere (moments, boxes, surface voxels).
+// Boundary lists are in scan order, so slabs taken in z order and
+// concatenated per label give label_stats' lists.
+struct LabelSums {
+  std::vector<uint32_t> labels;        // ascending
+  std::vector<LabelMoments> moments;   // aligned with labels
+  std::vector<int64_t> surface_offset; // as LabelStatsResult (all 0 without collect_surface)
+  std::vector<SurfaceVoxel> surface;
+};
+LabelSums label_sums(const VolumeView<const uint32_t>& window, int64_t core_begin, int64_t core_end, int64_t k_offset,
+                     const LabelStatsOptions& opt = {});
+
+// Statistics from the sums of the whole volume; `geometry` is the whole
+// volume's (origin and voxel size).
+LabelStatsResult label_stats_from_sums(LabelSums sums, const Geometry& geometry, const LabelStatsOptions& opt = {});
 
 }  // namespace tg::measure

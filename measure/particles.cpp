@@ -50,7 +50,9 @@ void fill_sizing(Particle& p, Sizing sizing) {
   p.ar = p.d_min_m > 0 ? p.d_max_m / p.d_min_m : 0.0;
 }
 
-std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels, const ParticleOptions& opt) {
+namespace {
+
+void check_particle_options(const ParticleOptions& opt) {
   if (!opt.feret_exact && opt.feret_directions < 3)
     throw UsageError("Feret orientations must be >= 3 (or exact), got " + std::to_string(opt.feret_directions));
   if (opt.sizing == Sizing::obb && !opt.oriented_box)
@@ -58,6 +60,12 @@ std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels
   // Checked here, not in the parallel loop below: an exception cannot leave an OpenMP region.
   if (!(opt.face_offset > 0 && opt.face_offset <= 1))
     throw UsageError("--face-offset must be in (0, 1], got " + std::to_string(opt.face_offset));
+}
+
+}  // namespace
+
+std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels, const ParticleOptions& opt) {
+  check_particle_options(opt);
   LabelStatsOptions so = opt.stats;
   so.collect_surface = true;
   so.threads = opt.threads;
@@ -70,8 +78,30 @@ std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels
     for (const LabelStats& st : ls.labels) ids.push_back(st.label);
     grey_vox = grey_volumes(labels, *opt.grey, ids, go);
   }
+  std::vector<Particle> out = particles_from_stats(ls, grey_vox, labels.geometry(), opt, &labels);
+  if (opt.contacts) {
+    ContactOptions co = opt.contact;
+    co.threads = opt.threads;
+    const auto res = find_contacts(labels, co);
+    std::vector<uint32_t> ids;
+    ids.reserve(out.size());
+    for (const auto& P : out) ids.push_back(P.stats.label);
+    const auto z = coordination(res.contacts, ids);
+    for (size_t p = 0; p < out.size(); ++p) out[p].coordination = z[p];
+  }
+  return out;
+}
+
+std::vector<Particle> particles_from_stats(const LabelStatsResult& ls, const std::vector<double>& grey_vox,
+                                           const Geometry& geometry, const ParticleOptions& opt,
+                                           const VolumeView<const uint32_t>* labels) {
+  check_particle_options(opt);
+  if (opt.surface && !labels) throw UsageError("surface areas need the whole label volume");
+  if (!grey_vox.empty() && grey_vox.size() != ls.labels.size())
+    throw UsageError("grey volumes: " + std::to_string(grey_vox.size()) + " for " + std::to_string(ls.labels.size()) +
+                     " labels");
   const auto dirs = opt.feret_exact ? std::vector<Vec3>{} : half_sphere_directions(opt.feret_directions);
-  const auto& h = labels.geometry().voxel_size_m;
+  const auto& h = geometry.voxel_size_m;
   FeretExactOptions exact;
   exact.tie_tolerance = opt.tie_tolerance_voxels * std::max({h[0], h[1], h[2]});
   FeretSampledOptions sampled;
@@ -88,7 +118,7 @@ std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels
     Particle& P = out[static_cast<size_t>(p)];
     P.stats = ls.labels[static_cast<size_t>(p)];
     if (!grey_vox.empty()) {
-      const auto& e = labels.geometry().voxel_size_m;
+      const auto& e = geometry.voxel_size_m;
       // Floor: a labelled voxel lies above a threshold near half contrast,
       // so it is about half solid at least; noise in the shell of a
       // one-voxel speck must not give it a volume of zero or less.
@@ -115,20 +145,10 @@ std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels
       P.feret = feret_sampled(points, dirs, sampled);
     }
     if (opt.surface) {
-      P.surface_m2 = surface_area(labels, P.stats.label, ls.surface_of(static_cast<size_t>(p)), opt.surface_opt);
+      P.surface_m2 = surface_area(*labels, P.stats.label, ls.surface_of(static_cast<size_t>(p)), opt.surface_opt);
       P.sphericity = wadell_sphericity(P.stats.volume_m3, P.surface_m2);
     }
     fill_sizing(P, opt.sizing);
-  }
-  if (opt.contacts) {
-    ContactOptions co = opt.contact;
-    co.threads = opt.threads;
-    const auto res = find_contacts(labels, co);
-    std::vector<uint32_t> ids;
-    ids.reserve(out.size());
-    for (const auto& P : out) ids.push_back(P.stats.label);
-    const auto z = coordination(res.contacts, ids);
-    for (size_t p = 0; p < out.size(); ++p) out[p].coordination = z[p];
   }
   return out;
 }

@@ -84,6 +84,15 @@ struct Particle {
 };
 
 std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels, const ParticleOptions& opt = {});
+// The per-particle part of measure_particles (hull, calipers, box, sizing)
+// from label_stats' result with its boundary voxels, and, with a grey scan,
+// the grey volumes in voxels aligned with ls.labels (empty: none;
+// ParticleOptions::grey is not read). Contacts are not found here; surface
+// areas need `labels` (the whole label volume; UsageError without it). The
+// slab-by-slab path (measure_chunked.hpp) calls it with its merged sums.
+std::vector<Particle> particles_from_stats(const LabelStatsResult& ls, const std::vector<double>& grey_vox,
+                                           const Geometry& geometry, const ParticleOptions& opt,
+                                           const VolumeView<const uint32_t>* labels = nullptr);
 
 // Dmed, FR, AR from volume and the two calipers (NaN-free: a zero caliper
 // gives 0, which cannot happen with the face-offset hull points: every voxel

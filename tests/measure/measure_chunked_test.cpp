@@ -1,0 +1,170 @@
+// The slab-by-slab particle table (measure_chunked.hpp) against the whole
+// volume's (measure_particles): every column equal, not close.
+#include "measure/measure_chunked.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "core/errors.hpp"
+
+namespace tg::measure {
+namespace {
+
+struct ChunkScene {
+  Volume<uint32_t> labels;
+  Volume<uint16_t> grey;
+};
+
+// Balls of radius 2-7 voxels at random (some cut by the faces, some
+// touching), each a label drawn in index order; label 5 is given to a second
+// ball far from its first one (a label in two pieces must add up too);
+// anisotropic voxels; grey: partial occupancy from 4^3 sub-samples, plus
+// noise.
+ChunkScene chunk_scene(unsigned seed) {
+  const Shape sh{37, 30, 33};
+  Geometry g;
+  g.voxel_size_m = {12e-6, 10e-6, 11e-6};
+  g.origin_m = {1e-3, -2e-3, 0.5e-3};
+  ChunkScene s{Volume<uint32_t>::filled(sh, 0, g), Volume<uint16_t>::filled(sh, 0, g)};
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  struct Ball { double z, y, x, r; uint32_t label; };
+  std::vector<Ball> balls;
+  for (uint32_t l = 1; l <= 24; ++l)
+    balls.push_back({u(rng) * sh.nz, u(rng) * sh.ny, u(rng) * sh.nx, 2 + 5 * u(rng), l});
+  balls.push_back({3.0, 4.0, 5.0, 3.0, 5});
+  balls.push_back({33.0, 26.0, 28.0, 2.5, 5});
+  std::normal_distribution<double> noise(0, 600);
+  for (int64_t k = 0; k < sh.nz; ++k)
+    for (int64_t j = 0; j < sh.ny; ++j)
+      for (int64_t i = 0; i < sh.nx; ++i) {
+        int inside = 0;
+        for (int a = 0; a < 64; ++a) {
+          const double z = k + (a / 16 + 0.5) / 4, y = j + (a / 4 % 4 + 0.5) / 4, x = i + (a % 4 + 0.5) / 4;
+          for (const Ball& b : balls)
+            if ((z - b.z) * (z - b.z) + (y - b.y) * (y - b.y) + (x - b.x) * (x - b.x) < b.r * b.r) {
+              ++inside;
+              break;
+            }
+        }
+        const double c = k + 0.5, cy = j + 0.5, cx = i + 0.5;
+        for (const Ball& b : balls)
+          if ((c - b.z) * (c - b.z) + (cy - b.y) * (cy - b.y) + (cx - b.x) * (cx - b.x) < b.r * b.r) {
+            s.labels(k, j, i) = b.label;
+            break;
+          }
+        s.grey(k, j, i) = uint16_t(std::clamp(10000.0 + 20000.0 * inside / 64.0 + noise(rng), 1.0, 65535.0));
+      }
+  return s;
+}
+
+ParticleOptions chunk_options(bool grey_levels, bool box = false) {
+  ParticleOptions o;
+  o.contacts = false;
+  o.oriented_box = box;  // CGAL's box: ~100x the calipers' cost, so in one run only
+  o.convex = true;
+  if (grey_levels) {
+    o.grey_levels.void_grey = 10000;
+    o.grey_levels.solid_grey = 30000;
+  }
+  return o;
+}
+
+void expect_same_tables(const std::vector<Particle>& a, const std::vector<Particle>& b, const std::string& what) {
+  const Table ta = particle_table(a), tb = particle_table(b);
+  ASSERT_EQ(ta.rows(), tb.rows()) << what;
+  ASSERT_EQ(ta.columns().size(), tb.columns().size()) << what;
+  for (const auto& c : ta.columns()) {
+    if (c.is_text) continue;
+    const auto& other = tb.num(c.name);
+    // The convex volume sums tetrahedra over CGAL's triangulation of the
+    // hull's coplanar facets, which follows CGAL's random state (the call
+    // history), not the points: equal to rounding only (particles.hpp).
+    const double tol = c.name == "convex_volume_mm3" || c.name == "solidity" ? 1e-12 : 0.0;
+    for (size_t r = 0; r < c.num.size(); ++r)
+      ASSERT_NEAR(c.num[r], other[r], tol * std::abs(c.num[r])) << what << ": column " << c.name << ", row " << r;
+  }
+}
+
+TEST(MeasureChunked, SlabsGiveTheWholeVolumesTable) {
+  const ChunkScene s = chunk_scene(7);
+  ParticleOptions whole = chunk_options(true);
+  const VolumeView<const uint16_t> gv = s.grey.view();
+  whole.grey = &gv;
+  const auto ref = measure_particles(s.labels.view(), whole);
+  ASSERT_GE(ref.size(), 20u);
+  const Shape sh = s.labels.shape();
+  auto labels = [&](int64_t z0, int64_t nz) {
+    Volume<uint32_t> v = Volume<uint32_t>::filled({nz, sh.ny, sh.nx}, 0, s.labels.geometry());
+    for (int64_t k = 0; k < nz; ++k)
+      for (int64_t j = 0; j < sh.ny; ++j)
+        for (int64_t i = 0; i < sh.nx; ++i) v(k, j, i) = s.labels(z0 + k, j, i);
+    return v;
+  };
+  auto grey = [&](int64_t z0, int64_t nz) {
+    Volume<uint16_t> v = Volume<uint16_t>::filled({nz, sh.ny, sh.nx}, 0, s.grey.geometry());
+    for (int64_t k = 0; k < nz; ++k)
+      for (int64_t j = 0; j < sh.ny; ++j)
+        for (int64_t i = 0; i < sh.nx; ++i) v(k, j, i) = s.grey(z0 + k, j, i);
+    return v;
+  };
+  const std::vector<std::pair<int64_t, int>> runs{{1, 1}, {2, 2}, {5, 1}, {36, 2}, {64, 1}};
+  for (const auto& [core, threads] : runs) {
+    ParticleOptions o = chunk_options(true);
+    o.threads = threads;
+    int64_t calls = 0, last = 0;
+    const auto got = measure_particles_chunked(sh, s.labels.geometry(), labels, grey, core, o,
+                                               [&](int64_t done, int64_t nz) {
+                                                 ++calls;
+                                                 EXPECT_GT(done, last);
+                                                 EXPECT_EQ(nz, sh.nz);
+                                                 last = done;
+                                               });
+    EXPECT_EQ(calls, (sh.nz + core - 1) / core);
+    EXPECT_EQ(last, sh.nz);
+    expect_same_tables(ref, got, "core " + std::to_string(core) + ", " + std::to_string(threads) + " threads");
+  }
+  // The oriented box sees the same points in the same order.
+  ParticleOptions boxed = chunk_options(true, true);
+  boxed.grey = &gv;
+  const auto ref_box = measure_particles(s.labels.view(), boxed);
+  boxed.grey = nullptr;
+  expect_same_tables(ref_box, measure_particles_chunked(sh, s.labels.geometry(), labels, grey, 3, boxed), "box");
+  // Without the grey scan: the label volumes.
+  const auto ref_plain = measure_particles(s.labels.view(), chunk_options(false));
+  const auto plain = measure_particles_chunked(sh, s.labels.geometry(), labels, {}, 3, chunk_options(false));
+  expect_same_tables(ref_plain, plain, "no grey scan");
+  EXPECT_LT(plain[0].grey_volume_m3, 0.0);
+}
+
+TEST(MeasureChunked, PlanAndRefusals) {
+  const Shape sh{2048, 2048, 2048};
+  const MeasureChunkPlan none = plan_measure_chunks(sh, true, 0);
+  EXPECT_TRUE(none.in_memory);
+  EXPECT_EQ(none.slabs, 1);
+  const int64_t gib = int64_t(1) << 30;
+  const MeasureChunkPlan p = plan_measure_chunks(sh, true, 16 * gib);
+  EXPECT_FALSE(p.in_memory);
+  EXPECT_GE(p.core, 1);
+  EXPECT_EQ(p.slabs, (sh.nz + p.core - 1) / p.core);
+  EXPECT_LE(p.slab_bytes, 16 * gib);
+  EXPECT_GT(double(p.estimate_bytes), 7.0 * double(sh.voxels()));  // labels + grey + lists
+  EXPECT_THROW(plan_measure_chunks(sh, true, gib), UsageError);     // the boundary lists alone need ~12 GiB
+  const Shape small{10, 10, 10};
+  auto none_read = [](int64_t, int64_t) -> Volume<uint32_t> { return {}; };
+  ParticleOptions o;
+  o.surface = true;
+  EXPECT_THROW(measure_particles_chunked(small, Geometry{}, none_read, {}, 2, o), UsageError);
+  o.surface = false;
+  Geometry g;
+  g.voxel_size_m = {1e-5, 1e-5, 1e-5};
+  EXPECT_THROW(measure_particles_chunked(small, g, none_read, {}, 0, o), UsageError);
+  // A reader that returns the wrong shape: InputError naming the slices.
+  EXPECT_THROW(measure_particles_chunked(small, g, none_read, {}, 4, o), InputError);
+}
+
+}  // namespace
+}  // namespace tg::measure

@@ -75,10 +75,10 @@ int run_measure_chunked(const MeasureJob& o, measure::ParticleOptions po, const 
   if (po.surface)
     throw UsageError(o.in + ": surface areas need the whole label volume in memory; drop --surface (or "
                      "--memory-limit)");
-  fmt::print("measuring {} ({}) slab by slab: about {} in one piece, over --memory-limit {}; {} slabs of {} "
-             "slices (~{} at peak)\n",
-             o.in, shape.str(), human_bytes(double(plan.estimate_bytes)), human_bytes(double(limit)), plan.slabs,
-             plan.core, human_bytes(double(plan.slab_bytes)));
+  fmt::print("measuring {} ({}) slab by slab: about {} in one piece, over --memory-limit {}; first slab {} "
+             "slices, then as the boundary lists leave room (planned {})\n",
+             o.in, shape.str(), human_bytes(double(plan.estimate_bytes)), human_bytes(double(limit)), plan.core,
+             human_bytes(double(plan.list_bytes)));
   if (po.contacts)
     fmt::print("  note: no coordination column: the contact search needs the whole label volume (run "
                "`tomograin contacts` on a crop, or measure without --memory-limit)\n");
@@ -113,8 +113,9 @@ int run_measure_chunked(const MeasureJob& o, measure::ParticleOptions po, const 
     };
     // The phases' levels from the whole scan's histogram: one read first.
     std::vector<int64_t> hist(65536, 0);
-    for (int64_t z0 = 0; z0 < shape.nz; z0 += plan.core) {
-      const auto h = histogram_u16(grey(z0, std::min(plan.core, shape.nz - z0)));
+    const int64_t step = std::max<int64_t>(1, plan.core);
+    for (int64_t z0 = 0; z0 < shape.nz; z0 += step) {
+      const auto h = histogram_u16(grey(z0, std::min(step, shape.nz - z0)));
       for (size_t b = 0; b < hist.size(); ++b) hist[b] += h[b];
     }
     try {
@@ -129,14 +130,15 @@ int run_measure_chunked(const MeasureJob& o, measure::ParticleOptions po, const 
     po.grey_levels.solid_grey = levels.solid;
   }
   Progress bar("measure slabs", double(shape.nz), "slices");
-  std::vector<measure::Particle> particles;
+  measure::ChunkedMeasure res;
   try {
-    particles = measure::measure_particles_chunked(shape, geom, labels, grey, plan.core, po,
-                                                   [&](int64_t done, int64_t) { bar.update(double(done)); });
+    res = measure::measure_particles_chunked(shape, geom, labels, grey, {0, limit}, po,
+                                             [&](int64_t done, int64_t) { bar.update(double(done)); });
   } catch (const InputError& e) {
     throw InputError(o.in + ": " + e.what());
   }
   bar.finish();
+  const std::vector<measure::Particle>& particles = res.particles;
   Table t = measure::particle_table(particles);
   add_text_columns(t, po, !o.grey.empty());
   for (const auto& out : o.out) write_csv(t, out);
@@ -144,8 +146,9 @@ int run_measure_chunked(const MeasureJob& o, measure::ParticleOptions po, const 
     fmt::print("volumes from the grey levels of {} (partial volume: void {:.0f}, solid {:.0f})\n", o.grey,
                levels.void_level, levels.solid);
   print_measured(o, particles, po);
-  fmt::print("  peak memory {} ({:.2f} B/voxel)\n", human_bytes(double(peak_rss_bytes())),
-             double(peak_rss_bytes()) / double(shape.voxels()));
+  fmt::print("  {} slabs, {} boundary voxels ({:.3f} per voxel), peak memory {} ({:.2f} B/voxel)\n", res.slabs,
+             res.boundary_voxels, double(res.boundary_voxels) / double(shape.voxels()),
+             human_bytes(double(peak_rss_bytes())), double(peak_rss_bytes()) / double(shape.voxels()));
   for (const auto& out : o.out) fmt::print("wrote {}\n", out);
   return 0;
 }

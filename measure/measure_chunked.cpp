@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <string>
 #include <unordered_map>
 
@@ -11,37 +12,26 @@
 #include "measure/label_stats.hpp"
 
 namespace tg::measure {
-
-MeasureChunkPlan plan_measure_chunks(const Shape& s, bool grey, int64_t limit) {
-  MeasureChunkPlan p;
-  const double per_voxel = kMeasureBytesPerVoxel + (grey ? 2.0 : 0.0);
-  p.estimate_bytes = int64_t(per_voxel * double(s.voxels())) + kMeasureFixedBytes;
-  if (limit <= 0 || p.estimate_bytes <= limit) {
-    p.core = s.nz;
-    p.slabs = 1;
-    p.slab_bytes = p.estimate_bytes;
-    return p;
-  }
-  p.in_memory = false;
-  // A slab: its labels and grey (4 + 2 B/voxel, margins included) beside the
-  // boundary lists of the whole volume, which grow to their full size.
-  const double slab_voxel = 4.0 + (grey ? 2.0 : 0.0);
-  const double lists = kMeasureListBytesPerVoxel * double(s.voxels());
-  const double room = double(limit - kMeasureFixedBytes) - lists;
-  const double slice = slab_voxel * double(s.slice_voxels());
-  const int64_t slices = room > 0 ? int64_t(room / slice) : 0;  // core + 2 margin slices
-  if (slices < 3)
-    throw UsageError("--memory-limit " + human_bytes(double(limit)) + " is too small to measure " + s.str() +
-                     " slab by slab: the boundary voxels of its particles need about " + human_bytes(lists) +
-                     " and a slab of one slice " + human_bytes(3 * slice) + "; give at least " +
-                     human_bytes(lists + 3 * slice + double(kMeasureFixedBytes)));
-  p.core = std::min(slices - 2, s.nz);
-  p.slabs = (s.nz + p.core - 1) / p.core;
-  p.slab_bytes = int64_t(double(p.core + 2) * slice + lists) + kMeasureFixedBytes;
-  return p;
-}
-
 namespace {
+
+// A boundary voxel in 8 B instead of SurfaceVoxel's 16: the lists are the
+// slab path's largest memory.
+struct PackedSurfaceVoxel {
+  uint16_t k = 0, j = 0, i = 0;
+  uint8_t exposed = 0;
+};
+static_assert(sizeof(PackedSurfaceVoxel) == 8);
+constexpr int64_t kPackedSide = 65535;
+constexpr double kPerLabelBytes = 160;  // moments, list header, map entries
+
+double slab_voxel_bytes(bool grey) { return 4.0 + (grey ? 2.0 : 0.0); }
+
+// Core slices that fit beside `lists` bytes of boundary lists (+ margins).
+int64_t core_room(const Shape& s, bool grey, int64_t limit, double lists) {
+  const double room = double(limit - kMeasureFixedBytes) - lists;
+  const double slice = slab_voxel_bytes(grey) * double(s.slice_voxels());
+  return room > 0 ? int64_t(room / slice) - 2 : -2;
+}
 
 // Ascending distinct non-zero labels of a volume.
 std::vector<uint32_t> chunk_distinct_labels(const Volume<uint32_t>& v) {
@@ -60,26 +50,56 @@ std::vector<uint32_t> chunk_distinct_labels(const Volume<uint32_t>& v) {
 
 }  // namespace
 
-std::vector<Particle> measure_particles_chunked(const Shape& shape, const Geometry& geometry,
-                                                const LabelSlabSource& read_labels, const GreySlabSource& read_grey,
-                                                int64_t core, const ParticleOptions& opt,
-                                                const std::function<void(int64_t, int64_t)>& progress) {
+MeasureChunkPlan plan_measure_chunks(const Shape& s, bool grey, int64_t limit) {
+  MeasureChunkPlan p;
+  const double per_voxel = kMeasureBytesPerVoxel + (grey ? 2.0 : 0.0);
+  p.estimate_bytes = int64_t(per_voxel * double(s.voxels())) + kMeasureFixedBytes;
+  if (limit <= 0 || p.estimate_bytes <= limit) {
+    p.core = s.nz;
+    return p;
+  }
+  p.in_memory = false;
+  if (std::max({s.nz, s.ny, s.nx}) > kPackedSide)
+    throw UsageError("measuring " + s.str() + " slab by slab (--memory-limit): sides of up to " +
+                     std::to_string(kPackedSide) + " voxels only");
+  p.list_bytes = int64_t(kMeasureListBytesPerVoxel * double(s.voxels()));
+  p.core = std::min(core_room(s, grey, limit, double(p.list_bytes)), s.nz);
+  if (p.core < 1) {
+    const double need = double(p.list_bytes) + 3 * slab_voxel_bytes(grey) * double(s.slice_voxels()) +
+                        double(kMeasureFixedBytes);
+    throw UsageError("--memory-limit " + human_bytes(double(limit)) + " is too small to measure " + s.str() +
+                     " slab by slab: the boundary voxels of its particles need about " +
+                     human_bytes(double(p.list_bytes)) + " beside a slab; give at least " + human_bytes(need));
+  }
+  return p;
+}
+
+ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geometry,
+                                         const LabelSlabSource& read_labels, const GreySlabSource& read_grey,
+                                         const ChunkedMeasureOptions& chunks, const ParticleOptions& opt,
+                                         const std::function<void(int64_t, int64_t)>& progress) {
   if (opt.surface)
     throw UsageError("surface areas need the whole label volume: measure without --memory-limit, or without --surface");
-  if (core < 1) throw UsageError("measure slab by slab: core slices must be >= 1, got " + std::to_string(core));
+  if (chunks.core < 0 || (chunks.core == 0 && chunks.memory_limit_bytes <= 0))
+    throw UsageError("measure slab by slab: give core slices >= 1 or a memory limit");
   if (!geometry.has_voxel_size()) throw UsageError("label_stats: the label volume has no voxel size (give --voxel-um)");
+  if (std::max({shape.nz, shape.ny, shape.nx}) > kPackedSide)
+    throw UsageError("measuring " + shape.str() + " slab by slab: sides of up to " + std::to_string(kPackedSide) +
+                     " voxels only");
   LabelStatsOptions so = opt.stats;
   so.collect_surface = true;
   so.threads = opt.threads;
   GreyVolumeOptions go = opt.grey_levels;
   go.threads = opt.threads;
+  const bool with_grey = bool(read_grey);
 
   // The whole volume's sums, by label in order of first appearance.
   std::unordered_map<uint32_t, size_t> where;
   std::vector<uint32_t> labels;
   std::vector<LabelMoments> moments;
-  std::vector<std::vector<SurfaceVoxel>> surface;
+  std::vector<std::vector<PackedSurfaceVoxel>> surface;
   std::unordered_map<uint32_t, int64_t> grey_sum;
+  int64_t points = 0;
   auto slot = [&](uint32_t l) {
     auto [it, fresh] = where.emplace(l, labels.size());
     if (fresh) {
@@ -90,23 +110,44 @@ std::vector<Particle> measure_particles_chunked(const Shape& shape, const Geomet
     return it->second;
   };
 
-  for (int64_t c0 = 0; c0 < shape.nz; c0 += core) {
+  ChunkedMeasure out;
+  for (int64_t c0 = 0; c0 < shape.nz;) {
+    int64_t core = chunks.core;
+    if (core == 0) {
+      // The lists at the end, projected from the slices read so far (the
+      // plan's rate before the first slab), and the tables beside them.
+      const double rate = c0 ? double(points) * double(sizeof(PackedSurfaceVoxel)) / double(c0 * shape.slice_voxels())
+                             : kMeasureListBytesPerVoxel;
+      const double lists = rate * double(shape.voxels()) + kPerLabelBytes * double(labels.size());
+      core = core_room(shape, with_grey, chunks.memory_limit_bytes, lists);
+      if (core < 1)
+        throw UsageError("--memory-limit " + human_bytes(double(chunks.memory_limit_bytes)) + " ran out at slice " +
+                         std::to_string(c0) + ": the boundary voxels of the particles will need about " +
+                         human_bytes(lists) + " beside a slab; give at least " +
+                         human_bytes(lists + 3 * slab_voxel_bytes(with_grey) * double(shape.slice_voxels()) +
+                                     double(kMeasureFixedBytes)));
+    }
     const int64_t c1 = std::min(shape.nz, c0 + core);
     const int64_t w0 = std::max<int64_t>(0, c0 - 1), w1 = std::min(shape.nz, c1 + 1);
-    const Volume<uint32_t> L = read_labels(w0, w1 - w0);
     const Shape ws{w1 - w0, shape.ny, shape.nx};
+    Volume<uint32_t> L = read_labels(w0, w1 - w0);
     if (!(L.shape() == ws))
       throw InputError("label slab of slices " + std::to_string(w0) + ".." + std::to_string(w1 - 1) + " is " +
                        L.shape().str() + ", expected " + ws.str());
-    LabelSums sums = label_sums(L.view(), c0 - w0, c1 - w0, w0, so);
-    for (size_t n = 0; n < sums.labels.size(); ++n) {
-      const size_t x = slot(sums.labels[n]);
-      moments[x].merge(sums.moments[n]);
-      auto& list = surface[x];
-      list.insert(list.end(), sums.surface.begin() + sums.surface_offset[n],
-                  sums.surface.begin() + sums.surface_offset[n + 1]);
+    {
+      LabelSums sums = label_sums(L.view(), c0 - w0, c1 - w0, w0, so);
+      for (size_t n = 0; n < sums.labels.size(); ++n) {
+        const size_t x = slot(sums.labels[n]);
+        moments[x].merge(sums.moments[n]);
+        auto& list = surface[x];
+        for (int64_t q = sums.surface_offset[n]; q < sums.surface_offset[n + 1]; ++q) {
+          const SurfaceVoxel& v = sums.surface[size_t(q)];
+          list.push_back({uint16_t(v.k), uint16_t(v.j), uint16_t(v.i), v.exposed});
+        }
+        points += sums.surface_offset[n + 1] - sums.surface_offset[n];
+      }
     }
-    if (read_grey) {
+    if (with_grey) {
       const Volume<uint16_t> G = read_grey(w0, w1 - w0);
       if (!(G.shape() == ws))
         throw InputError("grey slab of slices " + std::to_string(w0) + ".." + std::to_string(w1 - 1) + " is " +
@@ -118,33 +159,47 @@ std::vector<Particle> measure_particles_chunked(const Shape& shape, const Geomet
       for (size_t n = 0; n < ids.size(); ++n)
         if (s[n]) grey_sum[ids[n]] += s[n];
     }
+    ++out.slabs;
+    c0 = c1;
     if (progress) progress(c1, shape.nz);
   }
+  out.boundary_voxels = points;
 
-  // Ascending labels, as label_stats lists them.
+  // Ascending labels, as label_stats lists them. The particles are
+  // independent (particles_from_stats), so they are made in batches whose
+  // lists are unpacked at a time (16 B a voxel), the packed ones freed as
+  // they go: the end costs one batch, not a second copy of every list.
   std::vector<size_t> order(labels.size());
   for (size_t n = 0; n < order.size(); ++n) order[n] = n;
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return labels[a] < labels[b]; });
-  LabelSums all;
-  all.labels.reserve(order.size());
-  all.moments.reserve(order.size());
-  all.surface_offset.assign(order.size() + 1, 0);
-  for (size_t n = 0; n < order.size(); ++n)
-    all.surface_offset[n + 1] = all.surface_offset[n] + int64_t(surface[order[n]].size());
-  all.surface.reserve(size_t(all.surface_offset.back()));
-  std::vector<double> grey_vox;
-  for (const size_t x : order) {
-    all.labels.push_back(labels[x]);
-    all.moments.push_back(moments[x]);
-    all.surface.insert(all.surface.end(), surface[x].begin(), surface[x].end());
-    std::vector<SurfaceVoxel>().swap(surface[x]);
-    if (read_grey) {
-      const auto it = grey_sum.find(labels[x]);
-      grey_vox.push_back(it == grey_sum.end() ? 0.0 : double(it->second) / grey_volume_units);
+  constexpr int64_t kBatchPoints = int64_t(1) << 24;  // 256 MB unpacked
+  for (size_t first = 0; first < order.size();) {
+    size_t last = first;
+    int64_t batch_points = 0;
+    while (last < order.size() && (last == first || batch_points + int64_t(surface[order[last]].size()) <= kBatchPoints))
+      batch_points += int64_t(surface[order[last++]].size());
+    LabelSums part;
+    part.surface_offset.assign(last - first + 1, 0);
+    part.surface.reserve(size_t(batch_points));
+    std::vector<double> grey_vox;
+    for (size_t n = first; n < last; ++n) {
+      const size_t x = order[n];
+      part.labels.push_back(labels[x]);
+      part.moments.push_back(moments[x]);
+      for (const PackedSurfaceVoxel& v : surface[x]) part.surface.push_back({v.k, v.j, v.i, v.exposed});
+      part.surface_offset[n - first + 1] = int64_t(part.surface.size());
+      std::vector<PackedSurfaceVoxel>().swap(surface[x]);
+      if (with_grey) {
+        const auto it = grey_sum.find(labels[x]);
+        grey_vox.push_back(it == grey_sum.end() ? 0.0 : double(it->second) / grey_volume_units);
+      }
     }
+    const LabelStatsResult ls = label_stats_from_sums(std::move(part), geometry, so);
+    std::vector<Particle> ps = particles_from_stats(ls, grey_vox, geometry, opt);
+    out.particles.insert(out.particles.end(), std::make_move_iterator(ps.begin()), std::make_move_iterator(ps.end()));
+    first = last;
   }
-  const LabelStatsResult ls = label_stats_from_sums(std::move(all), geometry, so);
-  return particles_from_stats(ls, grey_vox, geometry, opt);
+  return out;
 }
 
 }  // namespace tg::measure

@@ -20,9 +20,14 @@
 // says so) and surface areas (UsageError).
 //
 // Memory: one slab of labels (4 B/voxel) and, with a grey scan, of grey
-// (2 B/voxel) at a time; the boundary voxels of every particle (16 B each;
-// a granular packing has ~0.05-0.1 boundary voxels per voxel at grain radii
-// of 20-40 voxels), kept until the end; per-label sums (~100 B a label).
+// (2 B/voxel) at a time; the boundary voxels of every particle, kept to the
+// end, packed in 8 B each (three 16-bit indices: volumes of up to 65535
+// voxels a side); per-label sums (~150 B a label). Boundary voxels are
+// 0.10-0.15 per voxel of a granular scan at grain radii of 8-22 voxels
+// (fragments add surface), ~0.04 at 55, so the lists take ~1 B/voxel of the
+// whole volume. With a memory limit, each slab is as thick as the limit
+// leaves room for beside the lists projected from the slices read so far
+// (the table does not depend on the slab thickness).
 // Cost: one read of the labels and of the grey scan (two of the grey scan
 // when the caller takes its histogram first), O(V).
 #pragma once
@@ -37,38 +42,51 @@ namespace tg::measure {
 
 // Bytes per voxel of measure_particles() on a whole volume held in memory
 // (labels 4 B, grey scan 2 B, boundary lists and tables ~1 B: 6.73 B/voxel
-// measured with the grey scan on a 1220^3 scan, bench/scale/RESULTS.md), and
-// the boundary lists' share of a slab-by-slab run, per voxel of the volume.
-inline constexpr double kMeasureBytesPerVoxel = 5.0;       // + 2 with a grey scan
-inline constexpr double kMeasureListBytesPerVoxel = 1.5;   // boundary voxels x 16 B, with slack
+// measured with the grey scan on a 1220^3 scan, bench/scale/RESULTS.md),
+// the planned share of the boundary lists in a slab-by-slab run before any
+// slab is read (per voxel of the volume: 0.15 boundary voxels x 8 B), and
+// the process's own.
+inline constexpr double kMeasureBytesPerVoxel = 5.0;  // + 2 with a grey scan
+inline constexpr double kMeasureListBytesPerVoxel = 1.2;
 inline constexpr int64_t kMeasureFixedBytes = int64_t(128) << 20;
 
 struct MeasureChunkPlan {
   bool in_memory = true;       // fits under the limit: measure_particles() on the whole volume
   int64_t estimate_bytes = 0;  // the whole-volume estimate
-  int64_t core = 0;            // core slices per slab
-  int64_t slabs = 0;
-  int64_t slab_bytes = 0;      // estimated peak of a slab run
+  int64_t core = 0;            // core slices of the first slab (later ones adapt)
+  int64_t list_bytes = 0;      // the boundary lists' planned size
 };
 
 // The plan for labels of shape s (with a grey scan when `grey`) under
-// memory_limit_bytes (<= 0: no limit). UsageError when even one-slice slabs
-// do not fit.
+// memory_limit_bytes (<= 0: no limit). UsageError when even a one-slice
+// slab does not fit beside the planned lists, or a side exceeds 65535.
 MeasureChunkPlan plan_measure_chunks(const Shape& s, bool grey, int64_t memory_limit_bytes);
 
 // Slices [z0, z0 + nz) of the label volume / of the grey scan.
 using LabelSlabSource = std::function<Volume<uint32_t>(int64_t z0, int64_t nz)>;
 using GreySlabSource = std::function<Volume<uint16_t>(int64_t z0, int64_t nz)>;
 
+struct ChunkedMeasureOptions {
+  int64_t core = 0;                // > 0: every slab has this many core slices
+  int64_t memory_limit_bytes = 0;  // core == 0: slabs as thick as this limit allows (header)
+};
+
+struct ChunkedMeasure {
+  std::vector<Particle> particles;
+  int64_t slabs = 0;
+  int64_t boundary_voxels = 0;  // in the lists (8 B each)
+};
+
 // The particles of the whole volume (shape, geometry: the whole volume's),
-// read in slabs of `core` slices (plus one slice of margin on each side).
+// read in slabs of core slices plus one slice of margin on each side.
 // `grey` may be empty (no grey volumes; opt.grey is not read, opt.grey_levels
 // is). opt.contacts is ignored (coordination stays -1); opt.surface is a
-// UsageError. `progress` (may be empty) is called after each slab with the
-// slices done.
-std::vector<Particle> measure_particles_chunked(const Shape& shape, const Geometry& geometry,
-                                                const LabelSlabSource& labels, const GreySlabSource& grey,
-                                                int64_t core, const ParticleOptions& opt,
-                                                const std::function<void(int64_t done, int64_t nz)>& progress = {});
+// UsageError, and so is a limit that leaves no room for a one-slice slab
+// beside the lists. `progress` (may be empty) is called after each slab with
+// the slices done.
+ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geometry, const LabelSlabSource& labels,
+                                         const GreySlabSource& grey, const ChunkedMeasureOptions& chunks,
+                                         const ParticleOptions& opt,
+                                         const std::function<void(int64_t done, int64_t nz)>& progress = {});
 
 }  // namespace tg::measure

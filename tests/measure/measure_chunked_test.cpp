@@ -111,12 +111,12 @@ TEST(MeasureChunked, SlabsGiveTheWholeVolumesTable) {
         for (int64_t i = 0; i < sh.nx; ++i) v(k, j, i) = s.grey(z0 + k, j, i);
     return v;
   };
-  const std::vector<std::pair<int64_t, int>> runs{{1, 1}, {2, 2}, {5, 1}, {36, 2}, {64, 1}};
+  const std::vector<std::pair<int64_t, int>> runs{{1, 2}, {5, 1}, {36, 2}, {64, 1}};
   for (const auto& [core, threads] : runs) {
     ParticleOptions o = chunk_options(true);
     o.threads = threads;
     int64_t calls = 0, last = 0;
-    const auto got = measure_particles_chunked(sh, s.labels.geometry(), labels, grey, core, o,
+    const auto got = measure_particles_chunked(sh, s.labels.geometry(), labels, grey, {core, 0}, o,
                                                [&](int64_t done, int64_t nz) {
                                                  ++calls;
                                                  EXPECT_GT(done, last);
@@ -124,46 +124,60 @@ TEST(MeasureChunked, SlabsGiveTheWholeVolumesTable) {
                                                  last = done;
                                                });
     EXPECT_EQ(calls, (sh.nz + core - 1) / core);
+    EXPECT_EQ(got.slabs, calls);
     EXPECT_EQ(last, sh.nz);
-    expect_same_tables(ref, got, "core " + std::to_string(core) + ", " + std::to_string(threads) + " threads");
+    expect_same_tables(ref, got.particles, "core " + std::to_string(core) + ", " + std::to_string(threads) + " threads");
   }
+  // Slabs as thick as a memory limit allows beside the projected lists.
+  const int64_t limit = kMeasureFixedBytes + 100000;
+  const auto adaptive = measure_particles_chunked(sh, s.labels.geometry(), labels, grey, {0, limit}, chunk_options(true));
+  EXPECT_GT(adaptive.slabs, 2);
+  EXPECT_GT(adaptive.boundary_voxels, 1000);
+  expect_same_tables(ref, adaptive.particles, "adaptive slabs");
+  EXPECT_THROW(measure_particles_chunked(sh, s.labels.geometry(), labels, grey, {0, kMeasureFixedBytes + 20000},
+                                         chunk_options(true)),
+               UsageError);
   // The oriented box sees the same points in the same order.
   ParticleOptions boxed = chunk_options(true, true);
   boxed.grey = &gv;
+  boxed.threads = 1;  // the box's cost varies 100-fold per particle: a second thread mostly waits
   const auto ref_box = measure_particles(s.labels.view(), boxed);
   boxed.grey = nullptr;
-  expect_same_tables(ref_box, measure_particles_chunked(sh, s.labels.geometry(), labels, grey, 3, boxed), "box");
+  expect_same_tables(ref_box, measure_particles_chunked(sh, s.labels.geometry(), labels, grey, {3, 0}, boxed).particles,
+                     "box");
   // Without the grey scan: the label volumes.
   const auto ref_plain = measure_particles(s.labels.view(), chunk_options(false));
-  const auto plain = measure_particles_chunked(sh, s.labels.geometry(), labels, {}, 3, chunk_options(false));
-  expect_same_tables(ref_plain, plain, "no grey scan");
-  EXPECT_LT(plain[0].grey_volume_m3, 0.0);
+  const auto plain = measure_particles_chunked(sh, s.labels.geometry(), labels, {}, {3, 0}, chunk_options(false));
+  expect_same_tables(ref_plain, plain.particles, "no grey scan");
+  EXPECT_LT(plain.particles[0].grey_volume_m3, 0.0);
 }
 
 TEST(MeasureChunked, PlanAndRefusals) {
   const Shape sh{2048, 2048, 2048};
   const MeasureChunkPlan none = plan_measure_chunks(sh, true, 0);
   EXPECT_TRUE(none.in_memory);
-  EXPECT_EQ(none.slabs, 1);
   const int64_t gib = int64_t(1) << 30;
   const MeasureChunkPlan p = plan_measure_chunks(sh, true, 16 * gib);
   EXPECT_FALSE(p.in_memory);
   EXPECT_GE(p.core, 1);
-  EXPECT_EQ(p.slabs, (sh.nz + p.core - 1) / p.core);
-  EXPECT_LE(p.slab_bytes, 16 * gib);
+  // The first slab and the planned lists fit under the limit.
+  EXPECT_LE(double(p.list_bytes) + double(p.core + 2) * 6.0 * double(sh.slice_voxels()) + double(kMeasureFixedBytes),
+            double(16 * gib));
   EXPECT_GT(double(p.estimate_bytes), 7.0 * double(sh.voxels()));  // labels + grey + lists
-  EXPECT_THROW(plan_measure_chunks(sh, true, gib), UsageError);     // the boundary lists alone need ~12 GiB
+  EXPECT_THROW(plan_measure_chunks(sh, true, 4 * gib), UsageError);  // the lists alone need ~10 GB
+  EXPECT_THROW(plan_measure_chunks({10, 10, 70000}, false, 1), UsageError);  // over 65535 a side
   const Shape small{10, 10, 10};
   auto none_read = [](int64_t, int64_t) -> Volume<uint32_t> { return {}; };
   ParticleOptions o;
   o.surface = true;
-  EXPECT_THROW(measure_particles_chunked(small, Geometry{}, none_read, {}, 2, o), UsageError);
-  o.surface = false;
   Geometry g;
   g.voxel_size_m = {1e-5, 1e-5, 1e-5};
-  EXPECT_THROW(measure_particles_chunked(small, g, none_read, {}, 0, o), UsageError);
+  EXPECT_THROW(measure_particles_chunked(small, g, none_read, {}, {2, 0}, o), UsageError);
+  o.surface = false;
+  EXPECT_THROW(measure_particles_chunked(small, g, none_read, {}, {0, 0}, o), UsageError);
+  EXPECT_THROW(measure_particles_chunked(small, Geometry{}, none_read, {}, {2, 0}, o), UsageError);
   // A reader that returns the wrong shape: InputError naming the slices.
-  EXPECT_THROW(measure_particles_chunked(small, g, none_read, {}, 4, o), InputError);
+  EXPECT_THROW(measure_particles_chunked(small, g, none_read, {}, {4, 0}, o), InputError);
 }
 
 }  // namespace

@@ -144,10 +144,12 @@ DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth
   write_mid_slices(v.labels, slices, stem + "_dem_ideal_labels");
   if (opt.imaged_path) {
     write_mid_slices(v.grey, slices, stem + "_dem_grey");
-    SegmentResult r = segment(std::move(v.grey), so);
+    // Measured as the XCT stages are: volumes from the grey levels.
+    SegmentResult r = segment(v.grey, so);
     d.imaged.info["segment"] = json::parse(summary_json(r, so), nullptr, false);
     write_mid_slices(r.labels, slices, stem + "_dem_imaged_labels");
-    measure_series(r.labels, opt.measure, d.imaged);
+    measure_series(r.labels, opt.measure, d.imaged, &v.grey);
+    v.grey = Volume<uint16_t>();
     if (keep_labels) d.imaged_labels = std::move(r.labels);
   }
   d.ideal.info["voxelise"] = voxelise_json(snapshot, vo, v, imaging_from);

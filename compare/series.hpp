@@ -42,6 +42,11 @@ inline double mean_interior_coordination(const Table& t) {
 // its grading sample, the mean interior coordination and, when po.contacts,
 // the contact series. The contacts are searched once: measure_particles runs
 // without them and its coordination column is filled from this search.
-void measure_series(const Volume<uint32_t>& labels, const measure::ParticleOptions& po, Series& s);
+// With `grey` (the scan the labels were segmented from) the volumes are the
+// grey-level estimates that `analyse` and `measure --grey` report
+// (measure/grey_volume.hpp; the phases' levels from the scan's histogram),
+// so a comparison reads the same volumes as an analysis of the same scan.
+void measure_series(const Volume<uint32_t>& labels, const measure::ParticleOptions& po, Series& s,
+                    const Volume<uint16_t>* grey = nullptr);
 
 }  // namespace tg::compare

@@ -78,7 +78,7 @@ XctStage load_xct_stage(const std::string& path, const CompareOptions& opt, doub
       x.grey = estimate_grey_levels(grey);
       const SegmentOptions so = segment_options(opt, median_r_m, x.geometry.voxel_size_m[0]);
       write_mid_slices(grey, slices, stem + "_experiment_grey");
-      SegmentResult r = segment(std::move(grey), so);
+      SegmentResult r = segment(grey, so);  // the scan stays for the grey-level volumes
       x.s.info["input"] = "grey scan, segmented";
       x.s.info["segment"] = json::parse(summary_json(r, so), nullptr, false);
       labels = std::move(r.labels);
@@ -86,7 +86,8 @@ XctStage load_xct_stage(const std::string& path, const CompareOptions& opt, doub
       x.s.info["input"] = "label volume";
     }
     write_mid_slices(labels, slices, stem + "_experiment_labels");
-    measure_series(labels, opt.measure, x.s);
+    measure_series(labels, opt.measure, x.s, grey.empty() ? nullptr : &grey);
+    grey = Volume<uint16_t>();
     x.labels = std::move(labels);
   }
   x.s.particles.source = path;

@@ -65,7 +65,7 @@ void print_measured(const MeasureJob& o, const std::vector<measure::Particle>& p
 
 // Labels (and grey scan) over --memory-limit: slab by slab from their HDF5
 // files (measure/measure_chunked.hpp), the same table. CSV output only (an
-// .h5 output would copy the labels), no contact search.
+// .h5 output would copy the labels).
 int run_measure_chunked(const MeasureJob& o, measure::ParticleOptions po, const std::string& lab_path,
                         const std::string& lab_ds, const Shape& shape, const Geometry& geom,
                         const measure::MeasureChunkPlan& plan, int64_t limit) {
@@ -79,10 +79,6 @@ int run_measure_chunked(const MeasureJob& o, measure::ParticleOptions po, const 
              "slices, then as the boundary lists leave room (planned {})\n",
              o.in, shape.str(), human_bytes(double(plan.estimate_bytes)), human_bytes(double(limit)), plan.core,
              human_bytes(double(plan.list_bytes)));
-  if (po.contacts)
-    fmt::print("  note: no coordination column: the contact search needs the whole label volume (run "
-               "`tomograin contacts` on a crop, or measure without --memory-limit)\n");
-  po.contacts = false;
   H5Reader lr(lab_path);
   measure::LabelSlabSource labels = [&](int64_t z0, int64_t nz) {
     AnyVolume v = lr.read_slab(lab_ds, z0, nz);
@@ -146,8 +142,9 @@ int run_measure_chunked(const MeasureJob& o, measure::ParticleOptions po, const 
     fmt::print("volumes from the grey levels of {} (partial volume: void {:.0f}, solid {:.0f})\n", o.grey,
                levels.void_level, levels.solid);
   print_measured(o, particles, po);
-  fmt::print("  {} slabs, {} boundary voxels ({:.3f} per voxel), peak memory {} ({:.2f} B/voxel)\n", res.slabs,
+  fmt::print("  {} slabs, {} boundary voxels ({:.3f} per voxel){}, peak memory {} ({:.2f} B/voxel)\n", res.slabs,
              res.boundary_voxels, double(res.boundary_voxels) / double(shape.voxels()),
+             po.contacts ? fmt::format("; {} contacts, normals in {} slabs", res.contacts, res.normal_slabs) : "",
              human_bytes(double(peak_rss_bytes())), double(peak_rss_bytes()) / double(shape.voxels()));
   for (const auto& out : o.out) fmt::print("wrote {}\n", out);
   return 0;
@@ -340,7 +337,7 @@ tg::app::Registrar reg_measure{{"measure", 40,
   sub->add_option("--memory-limit", o->memory_limit,
                   "Memory to stay under, e.g. 16GiB, 512MiB, 2G or a byte count. Labels (HDF5) whose measuring "
                   "needs more (~5 B/voxel, 7 with --grey) are measured slab by slab, with the same table; .csv "
-                  "output only, and no coordination column (the contact search needs the whole volume)");
+                  "output only");
   tg::app::add_threads_option(sub, o->threads);
   tg::app::add_voxel_option(sub, o->voxel_um);
   return [o] { return tg::app::run_measure(*o); };

@@ -71,6 +71,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -100,6 +101,37 @@ struct ContactResult {
 
 // All contacts of a label volume (needs its voxel size, UsageError otherwise).
 ContactResult find_contacts(const VolumeView<const uint32_t>& labels, const ContactOptions& opt = {});
+
+// The same contacts, found slab by slab (measure_chunked.hpp; find_contacts
+// is this on one slab). Step 1's crossings are integer sums: a slab records
+// the crossings that end in its core, for which its window must hold
+// kCrossingMarginBelow slices below the core (a z line's previous labelled
+// voxel is at most 4 slices lower for a run of <= 3 void voxels) unless the
+// core starts at the volume's first slice. Once every slab is added, each
+// pair's provisional point (step 2) is known, and a second pass over slabs
+// with ball_margin() slices below and above their core computes the normals
+// (step 3) of the pairs whose point lies in the core; steps 4-6 need no
+// voxels. Windows: slices k_offset .. k_offset + nz - 1 of the whole volume.
+inline constexpr int64_t kCrossingMarginBelow = 4;
+class ContactSearch {
+ public:
+  ContactSearch(const Shape& whole, const Geometry& geometry, const ContactOptions& opt);  // UsageError on bad options
+  ~ContactSearch();
+  ContactSearch(const ContactSearch&) = delete;
+  ContactSearch& operator=(const ContactSearch&) = delete;
+  // Pass 1: crossings ending in core slices [core_begin, core_end) of the window.
+  void add_crossings(const VolumeView<const uint32_t>& window, int64_t core_begin, int64_t core_end, int64_t k_offset);
+  // Slices a pass-2 window needs below and above its core.
+  int64_t ball_margin() const;
+  // Pass 2: the normals of the pairs whose provisional point lies in the core.
+  void add_normals(const VolumeView<const uint32_t>& window, int64_t core_begin, int64_t core_end, int64_t k_offset);
+  // The contacts, sorted by (a, b), once both passes covered the volume.
+  ContactResult result() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // Number of contacts of each label in `labels` (any order; labels absent
 // from every contact get 0).

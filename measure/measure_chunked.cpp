@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <memory>
 #include <string>
 #include <unordered_map>
 
 #include "core/errors.hpp"
 #include "core/memory.hpp"
+#include "measure/contacts.hpp"
 #include "measure/grey_volume.hpp"
 #include "measure/label_stats.hpp"
 
@@ -26,12 +28,15 @@ constexpr double kPerLabelBytes = 160;  // moments, list header, map entries
 
 double slab_voxel_bytes(bool grey) { return 4.0 + (grey ? 2.0 : 0.0); }
 
-// Core slices that fit beside `lists` bytes of boundary lists (+ margins).
-int64_t core_room(const Shape& s, bool grey, int64_t limit, double lists) {
+// Core slices that fit beside `lists` bytes (boundary lists, tables), with
+// `margins` slices of margin in all.
+int64_t core_room(const Shape& s, double voxel_bytes, int64_t limit, double lists, int64_t margins) {
   const double room = double(limit - kMeasureFixedBytes) - lists;
-  const double slice = slab_voxel_bytes(grey) * double(s.slice_voxels());
-  return room > 0 ? int64_t(room / slice) - 2 : -2;
+  const double slice = voxel_bytes * double(s.slice_voxels());
+  return room > 0 ? int64_t(room / slice) - margins : -margins;
 }
+// Pass 1's margins: the contact search's z lines look 4 slices below the core.
+int64_t pass1_margins(bool contacts) { return contacts ? kCrossingMarginBelow + 1 : 2; }
 
 // Ascending distinct non-zero labels of a volume.
 std::vector<uint32_t> chunk_distinct_labels(const Volume<uint32_t>& v) {
@@ -63,9 +68,10 @@ MeasureChunkPlan plan_measure_chunks(const Shape& s, bool grey, int64_t limit) {
     throw UsageError("measuring " + s.str() + " slab by slab (--memory-limit): sides of up to " +
                      std::to_string(kPackedSide) + " voxels only");
   p.list_bytes = int64_t(kMeasureListBytesPerVoxel * double(s.voxels()));
-  p.core = std::min(core_room(s, grey, limit, double(p.list_bytes)), s.nz);
+  p.core = std::min(core_room(s, slab_voxel_bytes(grey), limit, double(p.list_bytes), pass1_margins(true)), s.nz);
   if (p.core < 1) {
-    const double need = double(p.list_bytes) + 3 * slab_voxel_bytes(grey) * double(s.slice_voxels()) +
+    const double need = double(p.list_bytes) +
+                        double(1 + pass1_margins(true)) * slab_voxel_bytes(grey) * double(s.slice_voxels()) +
                         double(kMeasureFixedBytes);
     throw UsageError("--memory-limit " + human_bytes(double(limit)) + " is too small to measure " + s.str() +
                      " slab by slab: the boundary voxels of its particles need about " +
@@ -92,6 +98,16 @@ ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geo
   GreyVolumeOptions go = opt.grey_levels;
   go.threads = opt.threads;
   const bool with_grey = bool(read_grey);
+  std::unique_ptr<ContactSearch> search;
+  if (opt.contacts) {
+    ContactOptions co = opt.contact;
+    co.threads = opt.threads;
+    search = std::make_unique<ContactSearch>(shape, geometry, co);
+  }
+  // Bytes of the pass-1 candidates per pair (contacts.cpp's sums) and of the
+  // contacts (pass 2).
+  constexpr double kPairBytes = 600;
+  const int64_t margins = pass1_margins(opt.contacts);
 
   // The whole volume's sums, by label in order of first appearance.
   std::unordered_map<uint32_t, size_t> where;
@@ -118,17 +134,19 @@ ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geo
       // plan's rate before the first slab), and the tables beside them.
       const double rate = c0 ? double(points) * double(sizeof(PackedSurfaceVoxel)) / double(c0 * shape.slice_voxels())
                              : kMeasureListBytesPerVoxel;
-      const double lists = rate * double(shape.voxels()) + kPerLabelBytes * double(labels.size());
-      core = core_room(shape, with_grey, chunks.memory_limit_bytes, lists);
+      const double lists = rate * double(shape.voxels()) + kPerLabelBytes * double(labels.size()) +
+                           (search ? kPairBytes * 4.0 * double(labels.size()) : 0.0);
+      core = core_room(shape, slab_voxel_bytes(with_grey), chunks.memory_limit_bytes, lists, margins);
       if (core < 1)
         throw UsageError("--memory-limit " + human_bytes(double(chunks.memory_limit_bytes)) + " ran out at slice " +
                          std::to_string(c0) + ": the boundary voxels of the particles will need about " +
                          human_bytes(lists) + " beside a slab; give at least " +
-                         human_bytes(lists + 3 * slab_voxel_bytes(with_grey) * double(shape.slice_voxels()) +
+                         human_bytes(lists + double(1 + margins) * slab_voxel_bytes(with_grey) *
+                                                 double(shape.slice_voxels()) +
                                      double(kMeasureFixedBytes)));
     }
     const int64_t c1 = std::min(shape.nz, c0 + core);
-    const int64_t w0 = std::max<int64_t>(0, c0 - 1), w1 = std::min(shape.nz, c1 + 1);
+    const int64_t w0 = std::max<int64_t>(0, c0 - (search ? kCrossingMarginBelow : 1)), w1 = std::min(shape.nz, c1 + 1);
     const Shape ws{w1 - w0, shape.ny, shape.nx};
     Volume<uint32_t> L = read_labels(w0, w1 - w0);
     if (!(L.shape() == ws))
@@ -147,6 +165,7 @@ ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geo
         points += sums.surface_offset[n + 1] - sums.surface_offset[n];
       }
     }
+    if (search) search->add_crossings(L.view(), c0 - w0, c1 - w0, w0);
     if (with_grey) {
       const Volume<uint16_t> G = read_grey(w0, w1 - w0);
       if (!(G.shape() == ws))
@@ -164,6 +183,38 @@ ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geo
     if (progress) progress(c1, shape.nz);
   }
   out.boundary_voxels = points;
+
+  // The contacts' second pass: the normals, from slabs with the ball's
+  // margin (labels only), beside the lists.
+  std::vector<int> coordination_of;  // by label, in `labels` order
+  if (search) {
+    const int64_t m = search->ball_margin();
+    for (int64_t c0 = 0; c0 < shape.nz;) {
+      int64_t core = chunks.core;
+      if (core == 0) {
+        const double held = double(points) * double(sizeof(PackedSurfaceVoxel)) +
+                            (kPerLabelBytes + kPairBytes * 4.0) * double(labels.size());
+        core = core_room(shape, 4.0, chunks.memory_limit_bytes, held, 2 * m);
+        if (core < 1)
+          throw UsageError("--memory-limit " + human_bytes(double(chunks.memory_limit_bytes)) +
+                           " leaves no room for the contact normals' slabs (" + std::to_string(2 * m + 1) +
+                           " slices beside " + human_bytes(held) + " of boundary voxels and contacts)");
+      }
+      const int64_t c1 = std::min(shape.nz, c0 + core);
+      const int64_t w0 = std::max<int64_t>(0, c0 - m), w1 = std::min(shape.nz, c1 + m);
+      const Volume<uint32_t> L = read_labels(w0, w1 - w0);
+      if (!(L.shape() == Shape{w1 - w0, shape.ny, shape.nx}))
+        throw InputError("label slab of slices " + std::to_string(w0) + ".." + std::to_string(w1 - 1) + " is " +
+                         L.shape().str());
+      search->add_normals(L.view(), c0 - w0, c1 - w0, w0);
+      ++out.normal_slabs;
+      c0 = c1;
+    }
+    const ContactResult res = search->result();
+    search.reset();
+    out.contacts = int64_t(res.contacts.size());
+    coordination_of = coordination(res.contacts, labels);
+  }
 
   // Ascending labels, as label_stats lists them. The particles are
   // independent (particles_from_stats), so they are made in batches whose
@@ -196,6 +247,8 @@ ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geo
     }
     const LabelStatsResult ls = label_stats_from_sums(std::move(part), geometry, so);
     std::vector<Particle> ps = particles_from_stats(ls, grey_vox, geometry, opt);
+    if (!coordination_of.empty())
+      for (size_t n = first; n < last; ++n) ps[n - first].coordination = coordination_of[order[n]];
     out.particles.insert(out.particles.end(), std::make_move_iterator(ps.begin()), std::make_move_iterator(ps.end()));
     first = last;
   }

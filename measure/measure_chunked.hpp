@@ -15,9 +15,12 @@
 // calipers and the oriented box (measure/particles.hpp
 // particles_from_stats) see the same points in the same order.
 //
-// Not in slabs: the contact search (its normals read a ball of the volume
-// around every contact; the caller leaves the coordination column out and
-// says so) and surface areas (UsageError).
+// Contacts (the coordination column) in two passes (contacts.hpp
+// ContactSearch): the crossings, integer sums, with the slabs above (their
+// window reaches 4 slices below the core); then each contact's normal from
+// the ball around its provisional point, in slabs with the ball's margin
+// (~11 slices at the default 9-voxel radius), labels only. Surface areas
+// are not available in slabs (UsageError).
 //
 // Memory: one slab of labels (4 B/voxel) and, with a grey scan, of grey
 // (2 B/voxel) at a time; the boundary voxels of every particle, kept to the
@@ -75,14 +78,17 @@ struct ChunkedMeasure {
   std::vector<Particle> particles;
   int64_t slabs = 0;
   int64_t boundary_voxels = 0;  // in the lists (8 B each)
+  int64_t normal_slabs = 0;     // slabs of the contact normals' pass (opt.contacts)
+  int64_t contacts = 0;
 };
 
 // The particles of the whole volume (shape, geometry: the whole volume's),
-// read in slabs of core slices plus one slice of margin on each side.
+// read in slabs of core slices plus one slice of margin on each side (4
+// below with contacts).
 // `grey` may be empty (no grey volumes; opt.grey is not read, opt.grey_levels
-// is). opt.contacts is ignored (coordination stays -1); opt.surface is a
-// UsageError, and so is a limit that leaves no room for a one-slice slab
-// beside the lists. `progress` (may be empty) is called after each slab with
+// is). With opt.contacts the coordination column is filled (a second read of
+// the labels); opt.surface is a UsageError, and so is a limit that leaves no
+// room for a one-slice slab beside the lists. `progress` (may be empty) is called after each slab with
 // the slices done.
 ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geometry, const LabelSlabSource& labels,
                                          const GreySlabSource& grey, const ChunkedMeasureOptions& chunks,

@@ -2,6 +2,8 @@
 // volume's (measure_particles): every column equal, not close.
 #include "measure/measure_chunked.hpp"
 
+#include "measure/contacts.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -63,7 +65,7 @@ ChunkScene chunk_scene(unsigned seed) {
 
 ParticleOptions chunk_options(bool grey_levels, bool box = false) {
   ParticleOptions o;
-  o.contacts = false;
+  o.contacts = !box;  // the coordination column (contacts in two passes); the box run leaves it out
   o.oriented_box = box;  // CGAL's box: ~100x the calipers' cost, so in one run only
   o.convex = true;
   if (grey_levels) {
@@ -111,7 +113,7 @@ TEST(MeasureChunked, SlabsGiveTheWholeVolumesTable) {
         for (int64_t i = 0; i < sh.nx; ++i) v(k, j, i) = s.grey(z0 + k, j, i);
     return v;
   };
-  const std::vector<std::pair<int64_t, int>> runs{{1, 2}, {5, 1}, {36, 2}, {64, 1}};
+  const std::vector<std::pair<int64_t, int>> runs{{1, 2}, {5, 1}, {64, 1}};
   for (const auto& [core, threads] : runs) {
     ParticleOptions o = chunk_options(true);
     o.threads = threads;
@@ -125,17 +127,24 @@ TEST(MeasureChunked, SlabsGiveTheWholeVolumesTable) {
                                                });
     EXPECT_EQ(calls, (sh.nz + core - 1) / core);
     EXPECT_EQ(got.slabs, calls);
+    EXPECT_EQ(got.normal_slabs, (sh.nz + core - 1) / core);
+    EXPECT_GT(got.contacts, 10);
     EXPECT_EQ(last, sh.nz);
     expect_same_tables(ref, got.particles, "core " + std::to_string(core) + ", " + std::to_string(threads) + " threads");
   }
-  // Slabs as thick as a memory limit allows beside the projected lists.
+  // Slabs as thick as a memory limit allows beside the projected lists
+  // (without contacts: their normals' margin is most of this small volume).
+  ParticleOptions nc = chunk_options(true);
+  nc.contacts = false;
+  ParticleOptions nc_whole = nc;
+  nc_whole.grey = &gv;
+  const auto ref_nc = measure_particles(s.labels.view(), nc_whole);
   const int64_t limit = kMeasureFixedBytes + 100000;
-  const auto adaptive = measure_particles_chunked(sh, s.labels.geometry(), labels, grey, {0, limit}, chunk_options(true));
+  const auto adaptive = measure_particles_chunked(sh, s.labels.geometry(), labels, grey, {0, limit}, nc);
   EXPECT_GT(adaptive.slabs, 2);
   EXPECT_GT(adaptive.boundary_voxels, 1000);
-  expect_same_tables(ref, adaptive.particles, "adaptive slabs");
-  EXPECT_THROW(measure_particles_chunked(sh, s.labels.geometry(), labels, grey, {0, kMeasureFixedBytes + 20000},
-                                         chunk_options(true)),
+  expect_same_tables(ref_nc, adaptive.particles, "adaptive slabs");
+  EXPECT_THROW(measure_particles_chunked(sh, s.labels.geometry(), labels, grey, {0, kMeasureFixedBytes + 20000}, nc),
                UsageError);
   // The oriented box sees the same points in the same order.
   ParticleOptions boxed = chunk_options(true, true);
@@ -150,6 +159,58 @@ TEST(MeasureChunked, SlabsGiveTheWholeVolumesTable) {
   const auto plain = measure_particles_chunked(sh, s.labels.geometry(), labels, {}, {3, 0}, chunk_options(false));
   expect_same_tables(ref_plain, plain.particles, "no grey scan");
   EXPECT_LT(plain.particles[0].grey_volume_m3, 0.0);
+}
+
+// The contact search by slabs: every contact of find_contacts, every number
+// equal (crossings are integer sums; each normal's ball is read whole from a
+// slab with the ball's margin).
+TEST(MeasureChunked, ContactSearchBySlabsIsFindContacts) {
+  const ChunkScene s = chunk_scene(11);
+  const Shape sh = s.labels.shape();
+  ContactOptions co;
+  co.normal_radius_voxels = 4;  // a ball of a few slices: slabs thinner than it
+  const ContactResult ref = find_contacts(s.labels.view(), co);
+  ASSERT_GE(ref.contacts.size(), 10u);
+  auto window = [&](int64_t w0, int64_t w1) {
+    Volume<uint32_t> v = Volume<uint32_t>::filled({w1 - w0, sh.ny, sh.nx}, 0, s.labels.geometry());
+    for (int64_t k = w0; k < w1; ++k)
+      for (int64_t j = 0; j < sh.ny; ++j)
+        for (int64_t i = 0; i < sh.nx; ++i) v(k - w0, j, i) = s.labels(k, j, i);
+    return v;
+  };
+  for (const int64_t core : {int64_t(1), int64_t(7)}) {
+    ContactSearch search(sh, s.labels.geometry(), co);
+    for (int64_t c0 = 0; c0 < sh.nz; c0 += core) {
+      const int64_t c1 = std::min(sh.nz, c0 + core), w0 = std::max<int64_t>(0, c0 - kCrossingMarginBelow);
+      const Volume<uint32_t> v = window(w0, c1);
+      search.add_crossings(v.view(), c0 - w0, c1 - w0, w0);
+    }
+    EXPECT_THROW(search.result(), UsageError);  // no normals yet
+    const int64_t m = search.ball_margin();
+    for (int64_t c0 = 0; c0 < sh.nz; c0 += core) {
+      const int64_t c1 = std::min(sh.nz, c0 + core);
+      const int64_t w0 = std::max<int64_t>(0, c0 - m), w1 = std::min(sh.nz, c1 + m);
+      const Volume<uint32_t> v = window(w0, w1);
+      if (c0 == 0 && w1 > 1) {  // a window short of the ball's margin is refused
+        const Volume<uint32_t> thin = window(0, c1);
+        if (c1 < sh.nz) EXPECT_THROW(search.add_normals(thin.view(), 0, c1, 0), UsageError);
+      }
+      search.add_normals(v.view(), c0 - w0, c1 - w0, w0);
+    }
+    const ContactResult got = search.result();
+    ASSERT_EQ(got.contacts.size(), ref.contacts.size()) << "core " << core;
+    for (size_t c = 0; c < ref.contacts.size(); ++c) {
+      const Contact &a = ref.contacts[c], &b = got.contacts[c];
+      EXPECT_EQ(a.a, b.a);
+      EXPECT_EQ(a.b, b.b);
+      EXPECT_EQ(a.area_m2, b.area_m2);
+      EXPECT_EQ(a.normal, b.normal);
+      EXPECT_EQ(a.point_m, b.point_m);
+      EXPECT_EQ(a.crossings, b.crossings);
+      EXPECT_EQ(a.axis, b.axis);
+      EXPECT_EQ(a.face_to_face, b.face_to_face);
+    }
+  }
 }
 
 TEST(MeasureChunked, PlanAndRefusals) {

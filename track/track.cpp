@@ -374,9 +374,8 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
     for (size_t a = 0; a < absorbed.size(); ++a) {
       NeighbourTransfer& x = absorbed[a];
       const auto& pa = prev_rows_[a];
-      if (x.into < 0 || parent[x.into] < 0 ||
-          static_cast<double>(x.voxels) <= new_contact_voxels(static_cast<double>(pa.volume_vox), o_.surface_tolerance_vox))
-        continue;
+      const double floor_vox = new_contact_voxels(static_cast<double>(pa.volume_vox), o_.surface_tolerance_vox);
+      if (x.into < 0 || parent[x.into] < 0 || static_cast<double>(x.voxels) <= floor_vox) continue;
       const std::array<int64_t, 3> lo{pa.box_lo[0] - 1, pa.box_lo[1] - 1, pa.box_lo[2] - 1},
           hi{pa.box_hi[0] + 1, pa.box_hi[1] + 1, pa.box_hi[2] + 1};
       x.contact_faces = shared_faces(prev_, pa.label, prev_rows_[parent[x.into]].label, lo, hi);

@@ -20,7 +20,7 @@ namespace cmd_track {
 struct Opts {
   std::vector<std::string> in;
   std::string out;
-  bool any_order = false, no_refine = false;
+  bool any_order = false, no_refine = false, no_absorbed = false;
   double min_overlap = 0.2, chip_body = 0.7, surface_tol = 1.0, fallback_strain = 0;
   int threads = 0;
 };
@@ -60,7 +60,11 @@ static tg::app::Registrar reg{{"track", 47,
       "                 lost more counts as a split whose twin is unseen when it kept <= 70 %, else chipping)\n"
       "  split          two children of comparable size\n"
       "  fragmentation  three or more children\n"
-      "  chipping       a body keeping >= 70 % of the volume plus small pieces (each a `chip`)\n"
+      "  chipping       a body keeping >= 70 % of the volume plus small pieces (each a `chip`); also a\n"
+      "                 whole grain with one child whose chip a neighbour's label absorbed: more of its\n"
+      "                 moved voxels land in that label than a 1-voxel boundary shift moves (d x the faces\n"
+      "                 they shared + 2 pi r_eq d^2), and it lost, or the neighbour gained, half of that\n"
+      "                 (summary: chips_absorbed; events/lineage: absorbed_vox)\n"
       "  new            no parent (entered the field, or came up from below the detection limit)\n"
       "  lost           a particle with no child (left the field, merged, or fell below the limit)\n"
       "Fragments are tracked like grains and can break again. Stages given out of order are refused\n"
@@ -83,6 +87,7 @@ static tg::app::Registrar reg{{"track", 47,
   sub->add_option("-o,--output", o->out, "Output folder (lineage.csv, events.csv, summary.csv)")->required();
   sub->add_flag("--any-order", o->any_order, "Accept stages whose map lengthens the specimen");
   sub->add_flag("--no-refine", o->no_refine, "One overlap pass (no per-particle residual shift)");
+  sub->add_flag("--no-absorbed-chips", o->no_absorbed, "Never call chipping from voxels found in a neighbour's label");
   sub->add_option("--min-overlap", o->min_overlap, "Fraction of a child covered by its moved parent, at least")
       ->check(CLI::Range(0.0, 1.0))
       ->default_str("0.2");
@@ -101,6 +106,7 @@ static tg::app::Registrar reg{{"track", 47,
     tg::track::TrackOptions to;
     to.allow_extension = o->any_order;
     to.refine = !o->no_refine;
+    to.absorbed_chips = !o->no_absorbed;
     to.min_overlap_fraction = o->min_overlap;
     to.chip_body_fraction = o->chip_body;
     to.surface_tolerance_vox = o->surface_tol;
@@ -112,9 +118,11 @@ static tg::app::Registrar reg{{"track", 47,
     write_costs(r, o->out);
     for (const auto& s : r.summary)
       fmt::print("stage {}: {} particles, axial scale {:.4f} ({} {}), intact grains {}, broken {:.1f} %, "
-                 "split {}, fragmentation {}, chipping {}, lost {}, new {}, {:.2f} s\n",
+                 "split {}, fragmentation {}, chipping {} ({} chips absorbed by a neighbour), lost {}, new {}, "
+                 "{:.2f} s\n",
                  s.stage, s.particles, s.axial_scale, s.map_method, s.map_matches, s.grains_intact,
-                 s.pct_intact_broken, s.split, s.fragmentation, s.chipping, s.lost, s.new_particles,
+                 s.pct_intact_broken, s.split, s.fragmentation, s.chipping, s.chips_absorbed, s.lost,
+                 s.new_particles,
                  r.seconds[static_cast<size_t>(s.stage)]);
     const int64_t peak = r.peak_rss_bytes.empty() ? 0 : *std::max_element(r.peak_rss_bytes.begin(), r.peak_rss_bytes.end());
     fmt::print("peak memory {} ({:.2f} B/voxel of one stage)\n", tg::human_bytes(static_cast<double>(peak)),

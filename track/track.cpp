@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -69,6 +70,8 @@ std::vector<LineageRow> particles_of(const Volume<uint32_t>& labels, int stage, 
     r.volume_vox = s.voxels;
     r.centroid_vox = s.centroid_m;
     r.touches_border = s.touches_border;
+    r.box_lo = s.box_lo;
+    r.box_hi = s.box_hi;
     rows.push_back(r);
   }
   return rows;
@@ -91,10 +94,23 @@ std::vector<Overlap> overlaps(const Volume<uint32_t>& A, const LabelIndex& ia, c
     const int t = omp_get_thread_num(), n = omp_get_num_threads();
     auto& acc = part[static_cast<size_t>(t)];
     const int64_t z0 = sh.nz * t / n, z1 = sh.nz * (t + 1) / n;
+    const double nzd = static_cast<double>(sh.nz), nyd = static_cast<double>(sh.ny), nxd = static_cast<double>(sh.nx);
     uint64_t run_key = ~uint64_t{0};
     int64_t run = 0;
+    // Runs go through a small direct-mapped cache before the hash map: the same few (a, b)
+    // pairs recur row after row, and a hash-map update per run was ~1/5 of this pass's time.
+    constexpr size_t kCache = 256;
+    std::array<uint64_t, kCache> cache_key;
+    std::array<int64_t, kCache> cache_n{};
+    cache_key.fill(~uint64_t{0});
     auto flush = [&] {
-      if (run) acc[run_key] += run;
+      if (!run) return;
+      const size_t slot = static_cast<size_t>((run_key * 0x9E3779B97F4A7C15ull) >> 56);
+      if (cache_key[slot] != run_key) {
+        if (cache_n[slot]) acc[cache_key[slot]] += cache_n[slot];
+        cache_key[slot] = run_key, cache_n[slot] = 0;
+      }
+      cache_n[slot] += run;
       run = 0;
     };
     uint32_t last = 0;
@@ -115,9 +131,9 @@ std::vector<Overlap> overlaps(const Volume<uint32_t>& A, const LabelIndex& ia, c
           const double y0 = base[0] + M(0, 2) * static_cast<double>(i) + s[0];
           const double y1 = base[1] + M(1, 2) * static_cast<double>(i) + s[1];
           const double y2 = base[2] + M(2, 2) * static_cast<double>(i) + s[2];
-          const int64_t bk = static_cast<int64_t>(std::floor(y0)), bj = static_cast<int64_t>(std::floor(y1)),
-                        bi = static_cast<int64_t>(std::floor(y2));
-          if (bk < 0 || bj < 0 || bi < 0 || bk >= sh.nz || bj >= sh.ny || bi >= sh.nx) continue;
+          // Inside [0, n) in each axis, where truncation is the floor (no libm call per voxel).
+          if (!(y0 >= 0 && y1 >= 0 && y2 >= 0 && y0 < nzd && y1 < nyd && y2 < nxd)) continue;
+          const int64_t bk = static_cast<int64_t>(y0), bj = static_cast<int64_t>(y1), bi = static_cast<int64_t>(y2);
           const uint32_t b = B.data()[(bk * sh.ny + bj) * sh.nx + bi];
           if (!b) continue;
           const uint64_t key = (static_cast<uint64_t>(ai) << 32) | b;
@@ -129,6 +145,8 @@ std::vector<Overlap> overlaps(const Volume<uint32_t>& A, const LabelIndex& ia, c
         }
       }
     flush();
+    for (size_t q = 0; q < kCache; ++q)
+      if (cache_n[q]) acc[cache_key[q]] += cache_n[q];
   }
   std::unordered_map<uint64_t, int64_t> all;
   for (const auto& p : part)
@@ -154,7 +172,48 @@ void assign_parents(const std::vector<Overlap>& ov, const LabelIndex& ib, const 
     if (static_cast<double>(covered[q]) < min_fraction * static_cast<double>(b_rows[q].volume_vox)) parent[q] = -1;
 }
 
+// For every eligible A particle, the B particle of ANOTHER parent that received most of its moved
+// voxels, and how many (the larger of the overlap passes: the global map keeps a chip that drifted
+// off its body's refined shift).
+std::vector<NeighbourTransfer> transfers_to_neighbours(const std::vector<const std::vector<Overlap>*>& passes,
+                                                       const LabelIndex& ib, const std::vector<int32_t>& parent,
+                                                       const std::vector<char>& eligible) {
+  std::vector<NeighbourTransfer> out(eligible.size());
+  for (const auto* ov : passes)
+    for (const Overlap& o : *ov) {
+      const int32_t bi = ib(o.b);
+      if (!eligible[static_cast<size_t>(o.a)] || bi < 0 || parent[bi] < 0 || parent[bi] == o.a) continue;
+      NeighbourTransfer& x = out[static_cast<size_t>(o.a)];
+      if (o.n > x.voxels) x.into = bi, x.voxels = o.n;
+    }
+  return out;
+}
+
+// Voxel faces between labels a and n of `v`, within a's bounding box grown by one voxel.
+int64_t shared_faces(const Volume<uint32_t>& v, uint32_t a, uint32_t n, const std::array<int64_t, 3>& lo,
+                     const std::array<int64_t, 3>& hi) {
+  const Shape sh = v.shape();
+  const int64_t dims[3] = {sh.nz, sh.ny, sh.nx}, step[3] = {sh.ny * sh.nx, sh.nx, 1};
+  int64_t faces = 0;
+  for (int64_t k = std::max<int64_t>(lo[0], 0); k < std::min(hi[0], sh.nz); ++k)
+    for (int64_t j = std::max<int64_t>(lo[1], 0); j < std::min(hi[1], sh.ny); ++j)
+      for (int64_t i = std::max<int64_t>(lo[2], 0); i < std::min(hi[2], sh.nx); ++i) {
+        const int64_t at = (k * sh.ny + j) * sh.nx + i;
+        if (v.data()[at] != a) continue;
+        const int64_t idx[3] = {k, j, i};
+        for (int ax = 0; ax < 3; ++ax) {
+          if (idx[ax] > 0 && v.data()[at - step[ax]] == n) ++faces;
+          if (idx[ax] + 1 < dims[ax] && v.data()[at + step[ax]] == n) ++faces;
+        }
+      }
+  return faces;
+}
+
 }  // namespace
+
+double new_contact_voxels(double volume_vox, double d_vox) {
+  return 2 * std::numbers::pi * r_eq(volume_vox) * d_vox * d_vox;
+}
 
 const char* event_name(Event e) { return kEventNames[static_cast<int>(e)]; }
 
@@ -165,7 +224,11 @@ Event event_from_name(const std::string& name) {
 }
 
 void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& rows, const std::vector<int32_t>& parent,
-                const TrackOptions& o) {
+                const TrackOptions& o, const std::vector<NeighbourTransfer>& transfer) {
+  // Children's volume of every A particle (n's gain in the absorbed-chip rule).
+  std::vector<int64_t> kids_volume(prev.size(), 0);
+  for (size_t q = 0; q < rows.size(); ++q)
+    if (parent[q] >= 0) kids_volume[parent[q]] += rows[q].volume_vox;
   // Children of every A particle, largest first.
   std::vector<std::vector<int32_t>> kids(prev.size());
   for (size_t q = 0; q < rows.size(); ++q)
@@ -187,10 +250,24 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
     const double tol = std::max(o.min_volume_tolerance,
                                 3 * o.surface_tolerance_vox / std::max(1.0, r_eq(static_cast<double>(pr.volume_vox))));
     Event first = Event::intact, rest = Event::intact;
+    int64_t absorbed = 0;
     if (k.size() == 1) {
       const bool cut = pr.touches_border || rows[k[0]].touches_border;
       const double kept = static_cast<double>(after) / static_cast<double>(pr.volume_vox);
-      if (!cut && kept < 1 - tol) first = kept <= o.hidden_split_fraction ? Event::split : Event::chipping;
+      if (!cut && kept < 1 - tol) {
+        first = kept <= o.hidden_split_fraction ? Event::split : Event::chipping;
+      } else if (!cut && kept <= 1 + tol && a < transfer.size() && transfer[a].into >= 0) {
+        // A chip absorbed by a neighbour's label (track.hpp, step 5).
+        const NeighbourTransfer& x = transfer[a];
+        const int32_t n = parent[x.into];
+        const double t = static_cast<double>(x.voxels);
+        const double d = o.surface_tolerance_vox;
+        const double loss = static_cast<double>(pr.volume_vox - after);
+        const double gain = static_cast<double>(kids_volume[n] - prev[n].volume_vox);
+        if (t > d * static_cast<double>(x.contact_faces) + new_contact_voxels(static_cast<double>(pr.volume_vox), d) &&
+            std::max(loss, gain) >= o.absorbed_confirm_fraction * t)
+          first = Event::chipping, absorbed = x.voxels;
+      }
     } else if (f1 >= o.chip_body_fraction) {
       first = Event::chipping, rest = Event::chip;
     } else {
@@ -201,6 +278,7 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
       r.parent_label = pr.label;
       r.grain = pr.grain;
       r.event = n == 0 ? first : rest;
+      r.absorbed_vox = n == 0 ? absorbed : 0;
       for (int ax = 0; ax < 3; ++ax) r.displacement_vox[ax] = r.centroid_vox[ax] - pr.centroid_vox[ax];
     }
   }
@@ -245,6 +323,7 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
     std::vector<Eigen::Vector3d> shift(prev_rows_.size(), m.t);
     std::vector<int32_t> parent, parent1;
     std::vector<int64_t> covered, covered1;
+    std::vector<Overlap> ov1;
     auto ov = overlaps(prev_, ia, labels, m.M, shift, o_.threads);
     assign_parents(ov, ib, rows, o_.min_overlap_fraction, parent, covered);
     if (o_.refine) {
@@ -261,6 +340,7 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
         if (vol[a] > 0) shift[a] = m.t + sum[a] / vol[a] - m.apply(prev_rows_[a].centroid_vox);
       parent1.swap(parent);
       covered1.swap(covered);
+      ov1.swap(ov);
       ov = overlaps(prev_, ia, labels, m.M, shift, o_.threads);
       assign_parents(ov, ib, rows, o_.min_overlap_fraction, parent, covered);
       // A child missed by its parent's shift (a thin chip on the side the body's centroid moved
@@ -288,12 +368,33 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
       }
     }
 
-    link_stage(prev_rows_, rows, parent, o_);
+    auto absorbed = o_.absorbed_chips ? transfers_to_neighbours({&ov, &ov1}, ib, parent, prev_whole_)
+                                      : std::vector<NeighbourTransfer>{};
+    // S_an, only where T could pass the threshold at all (a few dozen particles per stage).
+    for (size_t a = 0; a < absorbed.size(); ++a) {
+      NeighbourTransfer& x = absorbed[a];
+      const auto& pa = prev_rows_[a];
+      const double floor_vox = new_contact_voxels(static_cast<double>(pa.volume_vox), o_.surface_tolerance_vox);
+      if (x.into < 0 || parent[x.into] < 0 || static_cast<double>(x.voxels) <= floor_vox) continue;
+      const std::array<int64_t, 3> lo{pa.box_lo[0] - 1, pa.box_lo[1] - 1, pa.box_lo[2] - 1},
+          hi{pa.box_hi[0] + 1, pa.box_hi[1] + 1, pa.box_hi[2] + 1};
+      x.contact_faces = shared_faces(prev_, pa.label, prev_rows_[parent[x.into]].label, lo, hi);
+    }
+    link_stage(prev_rows_, rows, parent, o_, absorbed);
     for (size_t q = 0; q < rows.size(); ++q)
       rows[q].quality = parent[q] < 0 ? 0.0 : static_cast<double>(covered[q]) / static_cast<double>(rows[q].volume_vox);
   }
+  std::vector<char> whole(rows.size(), s == 0);
+  if (s > 0) {
+    const LabelIndex ip(prev_rows_);
+    for (size_t q = 0; q < rows.size(); ++q) {
+      const int32_t a = rows[q].parent_label ? ip(rows[q].parent_label) : -1;
+      whole[q] = a >= 0 && prev_whole_[static_cast<size_t>(a)] && rows[q].event == Event::intact;
+    }
+  }
   lineage_.insert(lineage_.end(), rows.begin(), rows.end());
   prev_rows_ = std::move(rows);
+  prev_whole_ = std::move(whole);
   Volume<uint32_t> spent = std::move(prev_);
   prev_ = std::move(labels);
   names_.push_back(name);
@@ -366,6 +467,7 @@ std::vector<EventRow> derive_events(const std::vector<LineageRow>& lineage, int 
           e.children.push_back(c->label);
           e.volume_after_vox += c->volume_vox;
           if (is_break(c->event)) e.type = c->event;
+          e.absorbed_vox += c->absorbed_vox;
         }
         if (e.type == Event::intact) continue;  // a plain continuation is not an event
       }
@@ -418,6 +520,7 @@ std::vector<SummaryRow> summarise(const std::vector<LineageRow>& lineage, const 
       if (e.type == Event::split) ++row.split;
       if (e.type == Event::fragmentation) ++row.fragmentation;
       if (e.type == Event::chipping) ++row.chipping;
+      if (e.type == Event::chipping && e.absorbed_vox > 0) ++row.chips_absorbed;
       if (e.type == Event::lost) ++row.lost;
       if (is_break(e.type)) {
         ++row.breaks_band[e.band - 1];
@@ -478,18 +581,18 @@ TrackResult track_files(const std::vector<std::string>& paths, const TrackOption
 
 Table lineage_table(const TrackResult& r) {
   RowTable t({"stage", "label", "parent_label", "grain", "event", "volume_vox", "cz_vox", "cy_vox", "cx_vox", "dz_vox",
-              "dy_vox", "dx_vox", "quality", "border"});
+              "dy_vox", "dx_vox", "quality", "border", "absorbed_vox"});
   for (const LineageRow& x : r.lineage)
     t.row({x.stage, static_cast<int64_t>(x.label), static_cast<int64_t>(x.parent_label), static_cast<int64_t>(x.grain),
            event_name(x.event), x.volume_vox, x.centroid_vox[0], x.centroid_vox[1], x.centroid_vox[2],
            x.displacement_vox[0], x.displacement_vox[1], x.displacement_vox[2], x.quality,
-           static_cast<int>(x.touches_border)});
+           static_cast<int>(x.touches_border), x.absorbed_vox});
   return t.table();
 }
 
 Table events_table(const TrackResult& r) {
   RowTable t({"stage", "parent_label", "grain", "type", "children", "child_labels", "volume_before_vox",
-              "volume_after_vox", "cz_vox", "band"});
+              "volume_after_vox", "absorbed_vox", "cz_vox", "band"});
   for (const EventRow& e : r.events) {
     std::string kids;
     for (size_t c = 0; c < e.children.size(); ++c) {
@@ -497,7 +600,8 @@ Table events_table(const TrackResult& r) {
       kids += std::to_string(e.children[c]);
     }
     t.row({e.stage, static_cast<int64_t>(e.parent_label), static_cast<int64_t>(e.grain), event_name(e.type),
-           e.children.size(), kids.empty() ? "-" : kids, e.volume_before_vox, e.volume_after_vox, e.parent_z_vox,
+           e.children.size(), kids.empty() ? "-" : kids, e.volume_before_vox, e.volume_after_vox, e.absorbed_vox,
+           e.parent_z_vox,
            e.band});
   }
   return t.table();
@@ -521,6 +625,7 @@ Table summary_table(const TrackResult& r) {
   col("fragmentation", [](const SummaryRow& s) { return s.fragmentation; });
   col("chipping", [](const SummaryRow& s) { return s.chipping; });
   col("chips", [](const SummaryRow& s) { return s.chips; });
+  col("chips_absorbed", [](const SummaryRow& s) { return s.chips_absorbed; });
   col("lost", [](const SummaryRow& s) { return s.lost; });
   col("new", [](const SummaryRow& s) { return s.new_particles; });
   for (int b = 0; b < 5; ++b)
@@ -556,6 +661,7 @@ std::vector<LineageRow> read_lineage(const Table& t) {
     r.event = event_from_name(ev[i]);
     if (t.has("volume_vox")) r.volume_vox = static_cast<int64_t>(t.num("volume_vox")[i]);
     if (t.has("cz_vox")) r.centroid_vox = {t.num("cz_vox")[i], t.num("cy_vox")[i], t.num("cx_vox")[i]};
+    if (t.has("absorbed_vox")) r.absorbed_vox = static_cast<int64_t>(t.num("absorbed_vox")[i]);
   }
   return out;
 }

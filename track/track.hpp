@@ -39,6 +39,47 @@
 //                          volume (a half whose twin is unseen: merged into a
 //                          neighbour's label by the segmentation, or below
 //                          its size limit), else chipping with the chips unseen
+//                          ... and when it kept its volume within tol (either
+//                          way: one that grew by more merged with something), a
+//                          chip may have been absorbed by a NEIGHBOUR's
+//                          label (a chip drifts outwards, lands face to face
+//                          on the next grain, and no image method separates
+//                          the two): chipping, with the chip counted as
+//                          absorbed, when
+//                            - a is still a whole stage-0 grain (no break in
+//                              its chain: fragments' flat faces are re-cut
+//                              against their neighbours by the segmentation
+//                              from stage to stage, measured below),
+//                            - T, the most voxels of a (moved, either pass of
+//                              step 3/4) that land in one B label b whose
+//                              parent n is another A particle, exceeds what a
+//                              boundary shift by d between a and n moves: d
+//                              times the faces S_an the two labels share at
+//                              stage A (an existing contact), plus d times
+//                              the patch a new contact opens (a sphere pressed
+//                              by d: a cap of area 2 pi r_eq d), so
+//                              T > d S_an + 2 pi r_eq d^2 (the second term is
+//                              0.28 % of a grain of r_eq 23 voxels, 1.1 % at
+//                              r_eq 11.6, for d = 1 voxel),
+//                            - and the piece is seen to leave a or to arrive
+//                              in n: a's loss (volume minus its child's) or
+//                              n's gain (its children's volume minus its own)
+//                              is at least absorbed_confirm_fraction T (a
+//                              boundary that merely moved into a grain which
+//                              itself swelled by a merger confirms neither).
+//                          Measured (bench/track/RESULTS.md, 512^3 seed 11,
+//                          whole grains with one child, segmented): truly
+//                          intact ones have T <= 0.52 % of their volume
+//                          (99.5 % <= 0.17 %), those whose chip a neighbour
+//                          absorbed 0.41-6.8 % with S_an = 0 (the chip
+//                          drifted onto a grain it did not touch); on the
+//                          truth labels, intact grains pressed into a
+//                          neighbour move up to 0.8 % (400 voxels) across an
+//                          existing contact (S_an 56-377 faces), hence the
+//                          d S_an term. One-child fragments that are truly
+//                          intact reach T = 8 %, hence the first condition
+//                          (a fragment's chip absorbed by a neighbour is not
+//                          detected).
 //       two or more        chipping when f1 >= chip_body_fraction (the body
 //                          row says `chipping`, each small piece `chip`),
 //                          else split (2 children) or fragmentation (>= 3)
@@ -87,6 +128,8 @@ struct TrackOptions {
   double min_volume_tolerance = 0.1;
   double chip_body_fraction = 0.7;    // f1 at or above this: chipping
   double hidden_split_fraction = 0.7; // one child keeping at most this share of the volume: split
+  bool absorbed_chips = true;          // step 5: chips absorbed by a neighbour's label
+  double absorbed_confirm_fraction = 0.5;  // a's loss or n's gain, at least this share of T
   bool refine = true;                 // step 4
   bool allow_extension = false;       // accept stages whose map lengthens the specimen
   double extension_tolerance = 0.002;
@@ -101,9 +144,13 @@ struct LineageRow {
   Event event = Event::intact;
   int64_t volume_vox = 0;
   std::array<double, 3> centroid_vox{0, 0, 0};       // (z, y, x), voxel coordinates
+  std::array<int64_t, 3> box_lo{0, 0, 0}, box_hi{0, 0, 0};  // bounding box, voxel indices (hi one past; not in the CSV)
   std::array<double, 3> displacement_vox{0, 0, 0};   // centroid minus parent's (NaN without parent)
   double quality = 1;  // fraction of the particle's voxels covered by its moved parent (1 at stage 0, 0 if new)
   bool touches_border = false;
+  // Event chipping whose chip a neighbour's label absorbed (step 5): the voxels of the
+  // parent found in that label (T); 0 otherwise.
+  int64_t absorbed_vox = 0;
 };
 
 // One event per parent particle and stage (events.csv), lost included.
@@ -113,6 +160,7 @@ struct EventRow {
   Event type = Event::intact;
   std::vector<uint32_t> children;
   int64_t volume_before_vox = 0, volume_after_vox = 0;
+  int64_t absorbed_vox = 0;  // chipping: voxels of the chip a neighbour's label absorbed (0: none, or seen)
   double parent_z_vox = 0;
   int band = 0;  // height fifth of the parent in its stage (1 = bottom .. 5 = top)
 };
@@ -123,6 +171,7 @@ struct SummaryRow {
   int64_t particles = 0, grains_intact = 0, grains_broken = 0, grains_lost = 0;
   double pct_intact_broken = 0;  // 100 broken / (intact + broken); lost grains are in neither
   int64_t split = 0, fragmentation = 0, chipping = 0, chips = 0, lost = 0, new_particles = 0;
+  int64_t chips_absorbed = 0;  // chipping events whose chip a neighbour's label absorbed (not in `chips`)
   std::array<int64_t, 5> breaks_band{0, 0, 0, 0, 0};     // breakage events of this stage by parent height fifth
   std::array<double, 5> pct_broken_band{0, 0, 0, 0, 0};  // stage-0 grains of each fifth broken by now, %
   double axial_scale = 1;  // map from the previous stage (1 at stage 0)
@@ -151,8 +200,19 @@ struct TrackResult {
 // (volumes, border flags and the tolerances of `o`). Shared by the tracker and
 // by exact lineages built outside it (compare/dem_lineage.hpp), so an event
 // means the same everywhere.
+//
+// `transfer` (the tracker's; empty for exact lineages, which see every chip):
+// per A particle eligible for the absorbed-chip rule, the B particle of
+// another parent that received most of its moved voxels, and how many.
+struct NeighbourTransfer {
+  int32_t into = -1;  // index into rows; -1: none, or the A particle is not eligible
+  int64_t voxels = 0;
+  int64_t contact_faces = 0;  // S_an: faces the A particle shares with `into`'s parent at stage A
+};
+// The part of the threshold on T that does not depend on the contact: 2 pi r_eq d^2.
+double new_contact_voxels(double volume_vox, double d_vox);
 void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& rows, const std::vector<int32_t>& parent,
-                const TrackOptions& o);
+                const TrackOptions& o, const std::vector<NeighbourTransfer>& transfer = {});
 
 // Events and summary from a lineage (the tracker's or a truth lineage in the
 // same columns): events group each stage's rows by parent; a parent of the
@@ -179,6 +239,7 @@ class Tracker {
   std::vector<std::string> names_;
   Volume<uint32_t> prev_;
   std::vector<LineageRow> prev_rows_;
+  std::vector<char> prev_whole_;  // per prev_rows_: a stage-0 grain with no break in its chain
   std::vector<LineageRow> lineage_;
   std::vector<StageMap> maps_;
   std::vector<double> seconds_;

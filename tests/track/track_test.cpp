@@ -278,3 +278,75 @@ TEST(Track, DetectsStagesOutOfOrder) {
   any.add_stage(stage(0.0), "early.h5");
   EXPECT_NEAR(any.result().maps[1].axial_scale(), 1 / 0.95, 0.005);
 }
+
+// A grain chipped against a neighbour it touches: the chip (a cap 4.5 voxels high, past a
+// 1-voxel gap) is part of the neighbour's label at stage 1, so the grain has one child that kept
+// 81 % of its volume (within the tolerance 3 d / r_eq = 0.3 at r = 10): `chipping`, its chip
+// counted as absorbed, with T = the cap's voxels (the map is the identity: two grains).
+TEST(Track, ChipAbsorbedByANeighboursLabelIsChipping) {
+  const Shape sh{24, 24, 48};
+  const std::array<double, 3> ca{12, 12, 13}, cn{12, 12, 33};  // radius 10: touching
+  Volume<uint32_t> s0 = Volume<uint32_t>::filled(sh, 0, kGeom), s1 = Volume<uint32_t>::filled(sh, 0, kGeom);
+  paint(s0, 1, ca, 10);
+  paint(s0, 2, cn, 10);
+  paint(s1, 7, ca, 10, [](double, double, double x) { return x <= 4.5; });  // body
+  paint(s1, 9, cn, 10);
+  paint(s1, 9, ca, 10, [](double, double, double x) { return x >= 5.5; });  // chip, in n's label
+  int64_t cap = 0;
+  for (int64_t q = 0; q < sh.voxels(); ++q) cap += s0.data()[q] == 1 && s1.data()[q] == 9;
+  Tracker tr;
+  tr.add_stage(std::move(s0), "s0");
+  tr.add_stage(std::move(s1), "s1");
+  const auto r = tr.result();
+  EXPECT_EQ(row(r, 1, 7).parent_label, 1u);
+  EXPECT_EQ(row(r, 1, 7).event, Event::chipping);
+  EXPECT_EQ(row(r, 1, 7).absorbed_vox, cap);
+  EXPECT_EQ(row(r, 1, 9).parent_label, 2u);
+  EXPECT_EQ(row(r, 1, 9).event, Event::intact);
+  ASSERT_EQ(r.events.size(), 1u);
+  EXPECT_EQ(r.events[0].type, Event::chipping);
+  EXPECT_EQ(r.events[0].absorbed_vox, cap);
+  EXPECT_EQ(r.summary[1].chipping, 1);
+  EXPECT_EQ(r.summary[1].chips_absorbed, 1);
+  EXPECT_EQ(r.summary[1].chips, 0);
+  EXPECT_EQ(r.summary[1].grains_broken, 1);
+  // The same with the rule off: intact (the body's loss is within the volume tolerance).
+  TrackOptions o;
+  o.absorbed_chips = false;
+  Tracker off(o);
+  Volume<uint32_t> t0 = Volume<uint32_t>::filled(sh, 0, kGeom), t1 = Volume<uint32_t>::filled(sh, 0, kGeom);
+  paint(t0, 1, ca, 10);
+  paint(t0, 2, cn, 10);
+  paint(t1, 7, ca, 10, [](double, double, double x) { return x <= 4.5; });
+  paint(t1, 9, cn, 10);
+  paint(t1, 9, ca, 10, [](double, double, double x) { return x >= 5.5; });
+  off.add_stage(std::move(t0), "s0");
+  off.add_stage(std::move(t1), "s1");
+  EXPECT_EQ(row(off.result(), 1, 7).event, Event::intact);
+}
+
+// Two intact grains pressed together (centres 16 voxels apart, radius 10) whose shared boundary
+// moves by one voxel: the slab that changes label exceeds the new-contact term 2 pi r_eq d^2 alone,
+// but not d S_an plus it (S_an, the faces they already shared): both stay intact.
+TEST(Track, ContactBoundaryMovingByAVoxelIsNotChipping) {
+  const Shape sh{24, 24, 48};
+  const std::array<double, 3> ca{12, 12, 13}, cn{12, 12, 29};
+  Volume<uint32_t> s0 = Volume<uint32_t>::filled(sh, 0, kGeom), s1 = Volume<uint32_t>::filled(sh, 0, kGeom);
+  // Boundary plane at x = 21 (the midpoint), then at x = 20.
+  paint(s0, 1, ca, 10, [](double, double, double x) { return x + 13 < 21; });
+  paint(s0, 2, cn, 10, [](double, double, double x) { return x + 29 >= 21; });
+  paint(s1, 7, ca, 10, [](double, double, double x) { return x + 13 < 20; });
+  paint(s1, 9, cn, 10, [](double, double, double x) { return x + 29 >= 20; });
+  int64_t moved = 0, va = 0;
+  for (int64_t q = 0; q < sh.voxels(); ++q) moved += s0.data()[q] == 1 && s1.data()[q] == 9, va += s0.data()[q] == 1;
+  EXPECT_GT(static_cast<double>(moved), new_contact_voxels(static_cast<double>(va), 1.0));
+  Tracker tr;
+  tr.add_stage(std::move(s0), "s0");
+  tr.add_stage(std::move(s1), "s1");
+  const auto r = tr.result();
+  EXPECT_EQ(row(r, 1, 7).parent_label, 1u);
+  EXPECT_EQ(row(r, 1, 7).event, Event::intact);
+  EXPECT_EQ(row(r, 1, 9).event, Event::intact);
+  EXPECT_TRUE(r.events.empty());
+  EXPECT_EQ(r.summary[1].chips_absorbed, 0);
+}

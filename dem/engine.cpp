@@ -11,10 +11,6 @@
 namespace tg::dem {
 
 namespace {
-inline double* align64(double* p) {
-  return reinterpret_cast<double*>((reinterpret_cast<uintptr_t>(p) + 63) & ~uintptr_t(63));
-}
-
 // Runs body(i) for i in [0, n) and returns the OR of its results: on the
 // OpenMP team when `par`, else as a plain loop. Entering a parallel region
 // costs about 0.5 us even for a team of one (libgomp makes and frees a
@@ -92,9 +88,18 @@ void Engine::rebuild() {
     reff_[k] = p_.r[i] * p_.r[j] / (p_.r[i] + p_.r[j]);
     meff_[k] = p_.m[i] * p_.m[j] / (p_.m[i] + p_.m[j]);
   }
-  // Force slots only for a force hook (breakage reads them): 72 bytes a
-  // pair, about a sixth of the engine's memory, unused without one.
-  slot_.assign(force_hook_ ? np : 0, PairData{});
+  // Force slots: written by the contact loop, summed by the gather (and
+  // read by the force hook's model).
+  slot_.assign(np, PairData{});
+  // The transposed list by counting sort; ascending k within each sphere.
+  rev_offsets_.assign(n + 1, 0);
+  for (int64_t k = 0; k < np; ++k) ++rev_offsets_[list_.j[k] + 1];
+  for (int64_t s = 0; s < n; ++s) rev_offsets_[s + 1] += rev_offsets_[s];
+  rev_.resize(np);
+  {
+    std::vector<int64_t> fill(rev_offsets_.begin(), rev_offsets_.end() - 1);
+    for (int64_t k = 0; k < np; ++k) rev_[fill[list_.j[k]]++] = k * kForceParts + row_part(pi_[k]);
+  }
   touching_.assign(np, 0);
   for (int64_t k = 0; k < np; ++k)
     if (xi_[3 * k] != 0 || xi_[3 * k + 1] != 0 || xi_[3 * k + 2] != 0) touching_[k] = kHistoryOnly;
@@ -250,9 +255,6 @@ void Engine::advance(bool fuse_next) {
 }
 
 void Engine::compute_forces(bool kick, bool drift_next) {
-  // The pair slots are read by the force hook's model only (breakage:
-  // contact statistics); a scene without one does not write them.
-  keep_slots_ = static_cast<bool>(force_hook_);
   compute_pair_forces();
   // With a hook (bonds) and damping of the total force, the gather leaves
   // the forces undamped and the damping follows the hook's additions.
@@ -285,32 +287,29 @@ void Engine::set_time_step(double dt) {
 }
 
 // The contact loop: one pair, one slot; its body is the lane kernel of
-// dem/contact/kernels.hpp. A bond law (issue 7) adds its force and
-// torques into the same slot from the force hook.
+// dem/contact/kernels.hpp. The gather sums the slots per sphere in an order
+// fixed by the pairs' indices (the parts), so each thread takes one
+// contiguous range of the list: the spheres it reads are mostly the ones
+// it gathers and drifts (a range of rows and the rows just above).
 void Engine::compute_pair_forces() {
   const int64_t np = list_.pairs();
-  const int64_t n = p_.size();
-  // Each part of the pair list sums its forces and torques into its own
-  // per-sphere array (part 0 starts from the weights); the gather adds the
-  // parts in their order. A pair's part is fixed by its own i alone (rows
-  // of i in chunks of kRowChunk spheres, dealt out to the parts in turn),
-  // not by the list: the sums then do not depend on which pairs that do not
-  // touch the list holds (skin, rebuild times, a restart).
-  acc_.resize(size_t(kForceParts) * kAccStride * size_t(n) + 8);
-  double* const acc0 = align64(acc_.data());
-  const PairKernelArgs args{pi_.data(), list_.j.data(), list_.offsets.data(),
-                            static_cast<int64_t>(list_.offsets.size()) - 1, n,
+  const PairKernelArgs args{pi_.data(), list_.j.data(),
                             p_.x.data(), p_.y.data(), p_.z.data(), p_.r.data(),
                             p_.vx.data(), p_.vy.data(), p_.vz.data(),
-                            p_.wx.data(), p_.wy.data(), p_.wz.data(), p_.m.data(),
+                            p_.wx.data(), p_.wy.data(), p_.wz.data(),
                             reff_.data(), meff_.data(), xi_.data(), slot_.data(), touching_.data(), bad_.data(),
-                            law_pp_, opt_.time_step, opt_.overlap_limit, opt_.gravity_z, keep_slots_, kForceParts};
-  const PairPartKernel kernel = kernels_.pairs;
-  // One thread: the parts' chunks in list order in one sweep (the same sums:
-  // dem/contact/kernels.hpp, kAllParts).
-  const int bad = parallel(np) ? for_each_or(kForceParts, true, [&](int64_t part) __attribute__((always_inline)) {
-    return kernel(args, static_cast<int>(part), acc0 + part * kAccStride * n);
-  }) : kernel(args, kAllParts, acc0);
+                            law_pp_, opt_.time_step, opt_.overlap_limit};
+  const PairRangeKernel kernel = kernels_.pairs;
+  int bad = 0;
+  if (parallel(np)) {
+#pragma omp parallel reduction(| : bad)
+    {
+      const int64_t t = omp_get_thread_num(), team = omp_get_num_threads();
+      bad |= kernel(args, np * t / team, np * (t + 1) / team);
+    }
+  } else {
+    bad = kernel(args, 0, np);
+  }
   const double lim = opt_.overlap_limit;
   const Particles& p = p_;
   if (bad) {
@@ -334,7 +333,8 @@ void Engine::gather_forces(bool kick, bool drift_next, double alpha) {
   Particles& p = p_;
   const Walls& w = opt_.walls;
   const int64_t n_built = std::min<int64_t>(n, static_cast<int64_t>(x0_.size()));
-  const GatherArgs args{align64(acc_.data()), kForceParts,
+  const GatherArgs args{slot_.data(), touching_.data(), list_.offsets.data(), rev_offsets_.data(), rev_.data(),
+                        opt_.gravity_z,
                         p.x.data(), p.y.data(), p.z.data(), p.r.data(), p.m.data(), inv_m_.data(), inv_i_.data(),
                         p.vx.data(), p.vy.data(), p.vz.data(), p.wx.data(), p.wy.data(), p.wz.data(),
                         p.fx.data(), p.fy.data(), p.fz.data(), p.tx.data(), p.ty.data(), p.tz.data(),
@@ -346,7 +346,7 @@ void Engine::gather_forces(bool kick, bool drift_next, double alpha) {
                         drift_next, x0_.data(), y0_.data(), z0_.data(), n_built, 0.25 * opt_.skin * opt_.skin};
   const GatherKernel gather = kernels_.gather;
   // The kicks' blocks of spheres (kSphereBlock), so that each thread gathers
-  // the spheres it kicks: fewer of them change hands between the threads.
+  // the spheres it kicks (static: one contiguous range a thread).
   const int flags = for_each_or((n + kSphereBlock - 1) / kSphereBlock, parallel(n), [&](int64_t b) __attribute__((always_inline)) {
     return gather(args, b * kSphereBlock, std::min(n, (b + 1) * kSphereBlock));
   });

@@ -41,7 +41,7 @@
 // is neglected, as LIGGGHTS does) and their own friction coefficients.
 //
 // Extension points (breakage, issue 7):
-//  * contact loop: Engine::compute_pair_forces() is the single place where
+//  * contact loop: Engine::sweep_forces() is the single place where
 //    a pair's force is made. Each touching pair's force and torques are
 //    kept in its slot (PairData), which the gather sums and the hook's
 //    model reads (pair_force()).
@@ -201,14 +201,16 @@ class Engine {
   // Forces of this step; kick: each sphere also gets its closing half kick;
   // drift_next: and the next step's opening half kick and drift.
   void compute_forces(bool kick, bool drift_next);
-  void compute_pair_forces();
+  // The contact loop and the gather in one sweep (engine.cpp); kick and
+  // drift_next as compute_forces(); alpha: the local damping the gather
+  // applies (0 when it is applied to the total force after the hook).
+  void sweep_forces(bool kick, bool drift_next, double alpha);
+  // The threads' ranges of rows for a team of `team` (kept until a rebuild).
+  void refresh_ranges(int team);
   void update_inverse_masses();
   // Whether a loop over `items` runs on the OpenMP team (enough items, and
   // more than one thread).
   bool parallel(int64_t items) const;
-  // alpha: the local damping the gather applies (0 when it is applied to
-  // the total force after the hook instead).
-  void gather_forces(bool kick, bool drift_next, double alpha);
   // Local damping of the total force and torque of every sphere (after the hook).
   void damp_total_forces();
   [[noreturn]] void explode(const std::string& what) const;
@@ -231,8 +233,8 @@ class Engine {
   std::vector<double> reff_, meff_;  // R* and m* per pair, set by rebuild()
   std::vector<double> inv_m_, inv_i_;  // 1/m and 1/I per sphere (see step())
   std::vector<PairData> slot_;     // this step's force and torques per pair (zero when not touching)
-  // The transposed list: for sphere s, the pairs where it is j, ascending,
-  // as k * kForceParts + the part of k's row (the gather's order of sums).
+  // The transposed list: for sphere s, the pairs where it is j, by the part
+  // of their row, then ascending (the gather's order of sums).
   std::vector<int64_t> rev_offsets_, rev_;
   // Per pair: kTouching, kHistoryOnly or kNotTouching (contact/kernels.hpp).
   std::vector<uint8_t> touching_;
@@ -241,7 +243,12 @@ class Engine {
   std::vector<double> x0_, y0_, z0_;
   // Per-sphere wall reaction this step (bottom z, top z, cylinder radial).
   std::vector<double> wall_f_;
-  std::vector<uint8_t> bad_;  // per-pair / per-sphere failure flags
+  std::vector<uint8_t> bad_, bad_sphere_;  // per-pair, per-sphere failure flags
+  // Threads' rows: range r is [range_lo_[r], range_lo_[r + 1]), its spheres
+  // below range_band_[r] are reached by lower rows (gathered after the
+  // barrier); computed for the list of rebuild number range_rebuild_.
+  std::vector<int64_t> range_lo_, range_band_;
+  int64_t range_rebuild_ = -1;
 };
 
 }  // namespace tg::dem

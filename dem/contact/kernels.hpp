@@ -92,8 +92,9 @@ constexpr int64_t kSphereBlock = 64;
 // What the gather reads and writes; the engine's arrays and walls.
 struct GatherArgs {
   // The pairs' results and the two ways into them: each sphere's row of the
-  // list (offsets), and the pairs where it is j (rev_offsets, rev: pair
-  // index k times kForceParts plus the part of k's row, ascending k).
+  // list (offsets), and the pairs where it is j, by part (rev: pair indices,
+  // ascending within each; sphere s's of part p from rev_offsets[s
+  // kForceParts + p]), so that each part's sums stay in registers.
   const PairData* slot;
   const uint8_t* touching;
   const int64_t *offsets, *rev_offsets, *rev;
@@ -384,28 +385,26 @@ int gather_block(const GatherArgs& a, int64_t from, int64_t to) {
   int any_bad = 0, moved = 0;
   for (int64_t s = from; s < to; ++s) {
     const int q = static_cast<int>(s - from);
-    double sums[kForceParts][6] = {};
-    sums[0][2] = a.m[s] * a.gravity_z;
-    for (int64_t e = a.rev_offsets[s]; e < a.rev_offsets[s + 1]; ++e) {
-      const int64_t code = a.rev[e], k = code / kForceParts;
-      if (touching[k] != kTouching) continue;
-      double* c = sums[code % kForceParts];
-      const PairData& d = slot[k];
-      c[0] += d.fx, c[1] += d.fy, c[2] += d.fz;
-      c[3] += d.tjx, c[4] += d.tjy, c[5] += d.tjz;
-    }
-    double* const own = sums[row_part(s)];
-    for (int64_t k = a.offsets[s]; k < a.offsets[s + 1]; ++k) {
-      if (touching[k] != kTouching) continue;
-      const PairData& d = slot[k];
-      own[0] -= d.fx, own[1] -= d.fy, own[2] -= d.fz;
-      own[3] += d.tix, own[4] += d.tiy, own[5] += d.tiz;
-    }
+    const int own = row_part(s);
     Vec3 f, t;
     for (int part = 0; part < kForceParts; ++part) {
-      const double* c = sums[part];
-      f = f + Vec3{c[0], c[1], c[2]};
-      t = t + Vec3{c[3], c[4], c[5]};
+      Vec3 fp{0.0, 0.0, part == 0 ? a.m[s] * a.gravity_z : 0.0}, tp;
+      for (int64_t e = a.rev_offsets[s * kForceParts + part]; e < a.rev_offsets[s * kForceParts + part + 1]; ++e) {
+        const int64_t k = a.rev[e];
+        if (touching[k] != kTouching) continue;
+        const PairData& d = slot[k];
+        fp = fp + Vec3{d.fx, d.fy, d.fz};
+        tp = tp + Vec3{d.tjx, d.tjy, d.tjz};
+      }
+      if (part == own)
+        for (int64_t k = a.offsets[s]; k < a.offsets[s + 1]; ++k) {
+          if (touching[k] != kTouching) continue;
+          const PairData& d = slot[k];
+          fp = fp - Vec3{d.fx, d.fy, d.fz};
+          tp = tp + Vec3{d.tix, d.tiy, d.tiz};
+        }
+      f = f + fp;
+      t = t + tp;
     }
     double fw[3] = {0, 0, 0};
     const auto apply = [&](const WallList& w, int e, int slot, bool radial) __attribute__((always_inline)) {

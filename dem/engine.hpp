@@ -243,6 +243,7 @@ class Engine {
   std::vector<double> x0_, y0_, z0_;
   // Per-sphere wall reaction this step (bottom z, top z, cylinder radial).
   std::vector<double> wall_f_;
+  std::vector<uint8_t> wall_state_;  // per sphere: GatherArgs::wall_state
   std::vector<uint8_t> bad_, bad_sphere_;  // per-pair, per-sphere failure flags
   // Threads' rows: range r is [range_lo_[r], range_lo_[r + 1]), its spheres
   // below range_band_[r] are reached by lower rows (gathered after the

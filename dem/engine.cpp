@@ -11,9 +11,10 @@
 namespace tg::dem {
 
 namespace {
-// Rows of the pair list a sweep takes before gathering their spheres: a
-// few blocks, their pairs' slots still in the L2 cache.
-constexpr int64_t kSweepRows = 8 * kSphereBlock;
+inline double* align64(double* p) {
+  return reinterpret_cast<double*>((reinterpret_cast<uintptr_t>(p) + 63) & ~uintptr_t(63));
+}
+
 // Runs body(i) for i in [0, n) and returns the OR of its results: on the
 // OpenMP team when `par`, else as a plain loop. Entering a parallel region
 // costs about 0.5 us even for a team of one (libgomp makes and frees a
@@ -91,24 +92,13 @@ void Engine::rebuild() {
     reff_[k] = p_.r[i] * p_.r[j] / (p_.r[i] + p_.r[j]);
     meff_[k] = p_.m[i] * p_.m[j] / (p_.m[i] + p_.m[j]);
   }
-  // Force slots: written by the contact loop, summed by the gather (and
-  // read by the force hook's model).
-  slot_.assign(np, PairData{});
-  // The transposed list by counting sort on (j, part of i); ascending k
-  // within each.
-  rev_offsets_.assign(n * kForceParts + 1, 0);
-  for (int64_t k = 0; k < np; ++k) ++rev_offsets_[list_.j[k] * kForceParts + row_part(pi_[k]) + 1];
-  for (int64_t b = 0; b < n * kForceParts; ++b) rev_offsets_[b + 1] += rev_offsets_[b];
-  rev_.resize(np);
-  {
-    std::vector<int64_t> fill(rev_offsets_.begin(), rev_offsets_.end() - 1);
-    for (int64_t k = 0; k < np; ++k) rev_[fill[list_.j[k] * kForceParts + row_part(pi_[k])]++] = k;
-  }
+  // Force slots only for a force hook (breakage reads them): 72 bytes a
+  // pair, about a sixth of the engine's memory, unused without one.
+  slot_.assign(force_hook_ ? np : 0, PairData{});
   touching_.assign(np, 0);
   for (int64_t k = 0; k < np; ++k)
     if (xi_[3 * k] != 0 || xi_[3 * k + 1] != 0 || xi_[3 * k + 2] != 0) touching_[k] = kHistoryOnly;
-  bad_.assign(np, 0);
-  bad_sphere_.assign(n, 0);
+  bad_.assign(std::max(np, n), 0);
   wall_f_.assign(3 * n, 0.0);
   // Spheres whose wall histories are not all zero (restored, or kept over
   // the rebuild): their bits set, the gather clears the histories it ends.
@@ -269,10 +259,14 @@ void Engine::advance(bool fuse_next) {
 }
 
 void Engine::compute_forces(bool kick, bool drift_next) {
+  // The pair slots are read by the force hook's model only (breakage:
+  // contact statistics); a scene without one does not write them.
+  keep_slots_ = static_cast<bool>(force_hook_);
+  compute_pair_forces();
   // With a hook (bonds) and damping of the total force, the gather leaves
   // the forces undamped and the damping follows the hook's additions.
   const bool damp_after = force_hook_ && opt_.local_damping_total && opt_.local_damping > 0;
-  sweep_forces(kick, drift_next, damp_after ? 0.0 : opt_.local_damping);
+  gather_forces(kick, drift_next, damp_after ? 0.0 : opt_.local_damping);
   if (force_hook_) force_hook_(*this);
   if (damp_after) damp_total_forces();
 }
@@ -299,100 +293,36 @@ void Engine::set_time_step(double dt) {
   opt_.time_step = dt;
 }
 
-// The contact loop and the gather in one sweep over the rows of the pair
-// list (a chunk of kSphereBlock rows: its pairs' slots, then the gather of
-// its spheres), so that a step reads the spheres and pairs once from memory
-// instead of once in each loop. Gathering sphere s early is safe: its sums
-// are complete once the rows up to s are done (the pairs where it is j
-// have i < s), and no later row reads it (their spheres are above their
-// row). The order of every sum is fixed by the pairs' indices (the parts,
-// contact/kernels.hpp), not by this sweep: the same bits as two loops.
-// Threads: contiguous ranges of rows (balanced by pairs); the spheres of a
-// range that rows of earlier ranges reach (its band: the lowest layer of
-// it) are gathered after a barrier, the rest as the sweep goes.
-void Engine::refresh_ranges(int team) {
-  if (range_rebuild_ == rebuilds_ && static_cast<int>(range_lo_.size()) == team + 1) return;
-  const int64_t n = p_.size(), np = list_.pairs();
-  range_lo_.assign(team + 1, n);
-  range_band_.assign(team + 1, n);
-  range_lo_[0] = 0;
-  int64_t row = 0, jmax = -1;  // jmax: the highest j of the rows below `row`
-  for (int r = 1; r < team; ++r) {
-    const int64_t target = np * r / team;
-    while (row < n && (list_.offsets[row] < target || row % kSphereBlock != 0)) {
-      if (list_.offsets[row + 1] > list_.offsets[row]) jmax = std::max(jmax, list_.j[list_.offsets[row + 1] - 1]);
-      ++row;
-    }
-    range_lo_[r] = row;
-    range_band_[r] = std::max(row, jmax + 1);
-  }
-  range_band_[0] = 0;
-  for (int r = 0; r < team; ++r) range_band_[r] = std::min(range_band_[r], range_lo_[r + 1]);
-  range_rebuild_ = rebuilds_;
-}
-
-void Engine::sweep_forces(bool kick, bool drift_next, double alpha) {
-  const int64_t n = p_.size(), np = list_.pairs();
-  Particles& p = p_;
-  const Walls& w = opt_.walls;
-  const int64_t n_built = std::min<int64_t>(n, static_cast<int64_t>(x0_.size()));
-  const PairKernelArgs pa{pi_.data(), list_.j.data(),
-                          p.x.data(), p.y.data(), p.z.data(), p.r.data(),
-                          p.vx.data(), p.vy.data(), p.vz.data(),
-                          p.wx.data(), p.wy.data(), p.wz.data(),
-                          reff_.data(), meff_.data(), xi_.data(), slot_.data(), touching_.data(), bad_.data(),
-                          law_pp_, opt_.time_step, opt_.overlap_limit};
-  const GatherArgs ga{slot_.data(), touching_.data(), list_.offsets.data(), rev_offsets_.data(), rev_.data(),
-                      opt_.gravity_z,
-                      p.x.data(), p.y.data(), p.z.data(), p.r.data(), p.m.data(), inv_m_.data(), inv_i_.data(),
-                      p.vx.data(), p.vy.data(), p.vz.data(), p.wx.data(), p.wy.data(), p.wz.data(),
-                      p.fx.data(), p.fy.data(), p.fz.data(), p.tx.data(), p.ty.data(), p.tz.data(),
-                      p.hbx.data(), p.hby.data(), p.hbz.data(), p.htx.data(), p.hty.data(), p.htz.data(),
-                      p.hcx.data(), p.hcy.data(), p.hcz.data(),
-                      p.flags.data(), kFlagFixed, wall_f_.data(), wall_state_.data(), bad_sphere_.data(),
-                      law_platen_, law_cyl_, w.bottom, w.top, w.cylinder, w.top_z, w.top_vz, w.cylinder_radius,
-                      opt_.time_step, opt_.overlap_limit, alpha, n, kick,
-                      drift_next, x0_.data(), y0_.data(), z0_.data(), n_built, 0.25 * opt_.skin * opt_.skin};
-  const PairRangeKernel pairs = kernels_.pairs;
-  const GatherKernel gather = kernels_.gather;
-  const int64_t* offsets = list_.offsets.data();
-  // Rows [lo, hi): each chunk's pairs, then its spheres from `band` on. A
-  // chunk whose pairs fail is not gathered (the report reads the positions
-  // the pairs saw).
-  const auto rows = [&](int64_t lo, int64_t hi, int64_t band, int& pair_bad) {
-    int flags = 0;
-    for (int64_t c = lo; c < hi; c += kSweepRows) {
-      const int64_t e = std::min(hi, c + kSweepRows);
-      if (pairs(pa, offsets[c], offsets[e])) {
-        pair_bad = 1;
-        break;
-      }
-      for (int64_t g = std::max(c, band); g < e; g += kSphereBlock) flags |= gather(ga, g, std::min(e, g + kSphereBlock));
-    }
-    return flags;
-  };
-  const auto spheres = [&](int64_t lo, int64_t hi) {
-    int flags = 0;
-    for (int64_t c = lo; c < hi; c += kSphereBlock) flags |= gather(ga, c, std::min(hi, c + kSphereBlock));
-    return flags;
-  };
-  int flags = 0, pair_bad = 0;
-  if (parallel(std::max(n, np))) {
-    const int team = omp_get_max_threads();
-    refresh_ranges(team);
-#pragma omp parallel num_threads(team) reduction(| : flags, pair_bad)
-    {
-      // A smaller team than asked takes the ranges in turn.
-      const int t = omp_get_thread_num(), size = omp_get_num_threads();
-      for (int r = t; r < team; r += size) flags |= rows(range_lo_[r], range_lo_[r + 1], range_band_[r], pair_bad);
-#pragma omp barrier
-      for (int r = t; r < team; r += size) flags |= spheres(range_lo_[r], range_band_[r]);
-    }
-  } else {
-    flags = rows(0, n, 0, pair_bad);
-  }
-  if (pair_bad) {
-    const double lim = opt_.overlap_limit;
+// The contact loop: one pair, one slot; its body is the lane kernel of
+// dem/contact/kernels.hpp. A bond law (issue 7) adds its force and
+// torques into the same slot from the force hook.
+void Engine::compute_pair_forces() {
+  const int64_t np = list_.pairs();
+  const int64_t n = p_.size();
+  // Each part of the pair list sums its forces and torques into its own
+  // per-sphere array (part 0 starts from the weights); the gather adds the
+  // parts in their order. A pair's part is fixed by its own i alone (rows
+  // of i in chunks of kRowChunk spheres, dealt out to the parts in turn),
+  // not by the list: the sums then do not depend on which pairs that do not
+  // touch the list holds (skin, rebuild times, a restart).
+  acc_.resize(size_t(kForceParts) * kAccStride * size_t(n) + 8);
+  double* const acc0 = align64(acc_.data());
+  const PairKernelArgs args{pi_.data(), list_.j.data(), list_.offsets.data(),
+                            static_cast<int64_t>(list_.offsets.size()) - 1, n,
+                            p_.x.data(), p_.y.data(), p_.z.data(), p_.r.data(),
+                            p_.vx.data(), p_.vy.data(), p_.vz.data(),
+                            p_.wx.data(), p_.wy.data(), p_.wz.data(), p_.m.data(),
+                            reff_.data(), meff_.data(), xi_.data(), slot_.data(), touching_.data(), bad_.data(),
+                            law_pp_, opt_.time_step, opt_.overlap_limit, opt_.gravity_z, keep_slots_, kForceParts};
+  const PairPartKernel kernel = kernels_.pairs;
+  // One thread: the parts' chunks in list order in one sweep (the same sums:
+  // dem/contact/kernels.hpp, kAllParts).
+  const int bad = parallel(np) ? for_each_or(kForceParts, true, [&](int64_t part) __attribute__((always_inline)) {
+    return kernel(args, static_cast<int>(part), acc0 + part * kAccStride * n);
+  }) : kernel(args, kAllParts, acc0);
+  const double lim = opt_.overlap_limit;
+  const Particles& p = p_;
+  if (bad) {
     for (int64_t k = 0; k < np; ++k)
       if (bad_[k]) {
         const int64_t i = pi_[k], j = list_.j[k];
@@ -403,12 +333,38 @@ void Engine::sweep_forces(bool kick, bool drift_next, double alpha) {
         explode(os.str());
       }
   }
+}
+
+// The gather's body is the lane kernel of dem/contact/kernels.hpp: per
+// block of spheres, the parts' sums, then the wall contacts W a time, then
+// damping and (kick) the closing half kick.
+void Engine::gather_forces(bool kick, bool drift_next, double alpha) {
+  const int64_t n = p_.size();
+  Particles& p = p_;
+  const Walls& w = opt_.walls;
+  const int64_t n_built = std::min<int64_t>(n, static_cast<int64_t>(x0_.size()));
+  const GatherArgs args{align64(acc_.data()), kForceParts,
+                        p.x.data(), p.y.data(), p.z.data(), p.r.data(), p.m.data(), inv_m_.data(), inv_i_.data(),
+                        p.vx.data(), p.vy.data(), p.vz.data(), p.wx.data(), p.wy.data(), p.wz.data(),
+                        p.fx.data(), p.fy.data(), p.fz.data(), p.tx.data(), p.ty.data(), p.tz.data(),
+                        p.hbx.data(), p.hby.data(), p.hbz.data(), p.htx.data(), p.hty.data(), p.htz.data(),
+                        p.hcx.data(), p.hcy.data(), p.hcz.data(),
+                        p.flags.data(), kFlagFixed, wall_f_.data(), wall_state_.data(), bad_.data(),
+                        law_platen_, law_cyl_, w.bottom, w.top, w.cylinder, w.top_z, w.top_vz, w.cylinder_radius,
+                        opt_.time_step, opt_.overlap_limit, alpha, n, kick,
+                        drift_next, x0_.data(), y0_.data(), z0_.data(), n_built, 0.25 * opt_.skin * opt_.skin};
+  const GatherKernel gather = kernels_.gather;
+  // The kicks' blocks of spheres (kSphereBlock), so that each thread gathers
+  // the spheres it kicks: fewer of them change hands between the threads.
+  const int flags = for_each_or((n + kSphereBlock - 1) / kSphereBlock, parallel(n), [&](int64_t b) __attribute__((always_inline)) {
+    return gather(args, b * kSphereBlock, std::min(n, (b + 1) * kSphereBlock));
+  });
   pending_moved_ = flags >> 1;
   if (flags & 1) {
     for (int64_t s = 0; s < n; ++s)
-      if (bad_sphere_[s])
+      if (bad_[s])
         explode("sphere " + std::to_string(s) +
-                (bad_sphere_[s] == 2 ? " has a non-finite force" : " overlaps a wall by more than the limit"));
+                (bad_[s] == 2 ? " has a non-finite force" : " overlaps a wall by more than the limit"));
   }
   // Serial, fixed order: the wall reactions do not depend on threads. The
   // spheres off the walls add exact zeros (the sum, from +0, is unchanged).

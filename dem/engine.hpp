@@ -12,21 +12,19 @@
 // as LAMMPS/LIGGGHTS do.
 //
 // Determinism with threads: forces are never summed in an order that the
-// thread count can change. (1) The contact loop computes each touching
-// pair's force and torques (and updates its tangential history) into the
-// pair's slot; the pair list is split into contiguous ranges, one an
-// OpenMP thread (pairs are independent). (2) A parallel loop over spheres
-// (contiguous ranges again) sums each sphere's slots in a fixed order: the
-// pairs are cut into kForceParts parts by their rows (i in chunks of 64
-// spheres, dealt to the parts in turn), each part summed in ascending pair
-// order, part 0 starting from the weight, the parts added in order
-// (contact/kernels.hpp, "Sums"); then its wall contacts. (3) Wall reaction
-// forces are summed serially over spheres. Every sum therefore has the same
-// operands in the same order for any thread count; as the order depends on
-// the pairs' indices only, not on which non-touching pairs the neighbour
-// list holds, the sums do not depend on the skin or on when the list was
-// rebuilt either (a restart continues bit for bit). Tests compare 1- and
-// 2-thread histories and runs with different skins byte for byte.
+// thread count can change. (1) The pair list is cut into kForceParts parts
+// by the pairs' rows (i in chunks of 64 spheres, dealt to the parts in
+// turn); each part computes its pairs' forces and torques (and updates
+// their tangential histories) and sums them, in ascending pair order, into
+// a per-sphere array of its own, part 0 starting from the weights. The
+// parts run on the OpenMP team. (2) A parallel loop over spheres adds the
+// parts in order, then its wall contacts. (3) Wall reaction forces are
+// summed serially over spheres. Every sum therefore has the same operands
+// in the same order for any thread count; as the parts depend on the pairs'
+// indices only, not on which non-touching pairs the neighbour list holds,
+// the sums do not depend on the skin or on when the list was rebuilt either
+// (a restart continues bit for bit). Tests compare 1- and 2-thread histories
+// and runs with different skins byte for byte.
 //
 // The contact law runs on 2, 4 or 8 contacts at once (SSE2, AVX2 or AVX-512
 // lanes, chosen at run time: dem/contact/kernels.hpp), pairs filled from a
@@ -41,10 +39,11 @@
 // is neglected, as LIGGGHTS does) and their own friction coefficients.
 //
 // Extension points (breakage, issue 7):
-//  * contact loop: Engine::sweep_forces() is the single place where
-//    a pair's force is made. Each touching pair's force and torques are
-//    kept in its slot (PairData), which the gather sums and the hook's
-//    model reads (pair_force()).
+//  * contact loop: Engine::compute_pair_forces() is the single place where
+//    a pair's force is made. With a force hook installed (breakage), each
+//    touching pair's force and torques are also kept in its slot (PairData)
+//    for the hook's model to read (pair_force()); without one they are not
+//    written.
 //  * per-sphere contact statistics (max contact force, average stress tensor
 //    σ_ij = 1/V Σ (x^c - x^p)_i F_j) are computed by the hook's model from
 //    the kept slots (dem/breakage/breakage.cpp).
@@ -162,6 +161,7 @@ class Engine {
   // closing kick: the bond law adds its forces there. No hook: one branch.
   void set_force_hook(std::function<void(Engine&)> hook) {
     force_hook_ = std::move(hook);
+    slot_.assign(force_hook_ ? static_cast<size_t>(list_.pairs()) : 0, PairData{});  // kept only with a hook
   }
   // Replaces the time step (> 0): breakage creates smaller spheres.
   void set_time_step(double dt);
@@ -170,7 +170,8 @@ class Engine {
   int64_t pair_i(int64_t k) const { return pi_[k]; }
   int64_t pair_j(int64_t k) const { return list_.j[k]; }
   bool pair_touching(int64_t k) const { return touching_[k] == kTouching; }
-  // The last force evaluation's (zero for a pair that does not touch).
+  // Valid inside the force hook and after a step of an engine that has one:
+  // without a hook the slots are not kept.
   const PairData& pair_force(int64_t k) const { return slot_[k]; }
   // Sphere s's wall reactions: force on the bottom platen (z), on the top
   // platen (z) and outward radial force on the cylinder, N.
@@ -201,16 +202,14 @@ class Engine {
   // Forces of this step; kick: each sphere also gets its closing half kick;
   // drift_next: and the next step's opening half kick and drift.
   void compute_forces(bool kick, bool drift_next);
-  // The contact loop and the gather in one sweep (engine.cpp); kick and
-  // drift_next as compute_forces(); alpha: the local damping the gather
-  // applies (0 when it is applied to the total force after the hook).
-  void sweep_forces(bool kick, bool drift_next, double alpha);
-  // The threads' ranges of rows for a team of `team` (kept until a rebuild).
-  void refresh_ranges(int team);
+  void compute_pair_forces();
   void update_inverse_masses();
   // Whether a loop over `items` runs on the OpenMP team (enough items, and
   // more than one thread).
   bool parallel(int64_t items) const;
+  // alpha: the local damping the gather applies (0 when it is applied to
+  // the total force after the hook instead).
+  void gather_forces(bool kick, bool drift_next, double alpha);
   // Local damping of the total force and torque of every sphere (after the hook).
   void damp_total_forces();
   [[noreturn]] void explode(const std::string& what) const;
@@ -232,10 +231,12 @@ class Engine {
   std::vector<double> xi_;         // tangential history, 3 per pair
   std::vector<double> reff_, meff_;  // R* and m* per pair, set by rebuild()
   std::vector<double> inv_m_, inv_i_;  // 1/m and 1/I per sphere (see step())
-  std::vector<PairData> slot_;     // this step's force and torques per pair (zero when not touching)
-  // The transposed list: for sphere s, the pairs where it is j, by the part
-  // of their row, then ascending (the gather's order of sums).
-  std::vector<int64_t> rev_offsets_, rev_;
+  bool keep_slots_ = true;             // slot_ written this step (see compute_forces())
+  // The pair list's parts, each summed into its own per-sphere array (f then
+  // t): two threads share the contact loop and nothing else of each other's.
+  static constexpr int kForceParts = 2;
+  std::vector<double> acc_;            // per part and sphere: f, t in a 64-byte line (engine.cpp kAccStride)
+  std::vector<PairData> slot_;     // this step's force
   // Per pair: kTouching, kHistoryOnly or kNotTouching (contact/kernels.hpp).
   std::vector<uint8_t> touching_;
   ContactKernels kernels_;  // the contact loop of one part and the gather
@@ -244,12 +245,7 @@ class Engine {
   // Per-sphere wall reaction this step (bottom z, top z, cylinder radial).
   std::vector<double> wall_f_;
   std::vector<uint8_t> wall_state_;  // per sphere: GatherArgs::wall_state
-  std::vector<uint8_t> bad_, bad_sphere_;  // per-pair, per-sphere failure flags
-  // Threads' rows: range r is [range_lo_[r], range_lo_[r + 1]), its spheres
-  // below range_band_[r] are reached by lower rows (gathered after the
-  // barrier); computed for the list of rebuild number range_rebuild_.
-  std::vector<int64_t> range_lo_, range_band_;
-  int64_t range_rebuild_ = -1;
+  std::vector<uint8_t> bad_;  // per-pair / per-sphere failure flags
 };
 
 }  // namespace tg::dem

@@ -1,25 +1,11 @@
 // The two hot loops of a DEM step, written once for any lane width and
 // compiled once per instruction set: SSE2 (2 lanes, every x86-64), AVX2 (4
 // lanes) and AVX-512 (8 lanes), chosen at run time from what the CPU has.
-//  * pair_range: the sphere–sphere contacts of a range of the pair list,
-//    each touching pair's force and torques into its slot (PairData);
-//  * gather_block: for a block of spheres, the sums of their pairs' slots
-//    (see "Sums" below), the sphere–wall contacts (bottom and top platen,
-//    cylinder), local damping and the closing half kick.
-//
-// Sums: each sphere's contact force and torque are the sums of kForceParts
-// parts, added in part order, part 0 starting from the weight; a pair
-// belongs to the part of its row i (rows in chunks of kRowChunk spheres,
-// dealt to the parts in turn) and each part takes its pairs in ascending
-// pair order. The gather pulls them per sphere from the slots: first the
-// pairs where the sphere is j (rows below it, by the transposed list, in
-// ascending order), then its own row. Every sum has the same operands in
-// the same order whichever thread computed which pair, so the contact loop
-// and the gather split the lists into contiguous ranges, one a thread
-// (session 14: the parts were summed by pushing into a per-part array of
-// 64 bytes a sphere, each part on its own thread, so that a sphere's sums
-// were written by both cores and read by one; the order, hence the bits,
-// are those of that scheme).
+//  * pair_part: the sphere–sphere contacts of one part of the pair list,
+//    summed into the part's per-sphere array (see dem/engine.hpp);
+//  * gather_block: for a block of spheres, the parts' sums, the sphere–wall
+//    contacts (bottom and top platen, cylinder), local damping and the
+//    closing half kick.
 //
 // Why lanes: the Hertz–Mindlin law is a chain of dependent square roots and
 // divisions whose latency, not the arithmetic, bounds the loop; W contacts
@@ -60,45 +46,47 @@ struct PairData {
 // stored (a separated pair costs one test).
 enum : uint8_t { kNotTouching = 0, kTouching = 1, kHistoryOnly = 2 };
 
-// The parts of each sphere's sums (see "Sums" above). Rows (i) of the pair
-// list in chunks of kRowChunk spheres, dealt out to the parts in turn: a
-// pair's part depends on its i alone, not on the list or the threads.
-constexpr int kForceParts = 2;
+// A sphere's force and torque sums of one part (6 doubles) in a 64-byte
+// line of its own.
+constexpr int64_t kAccStride = 8;
+// Rows (i) of the pair list in chunks of this many spheres, dealt out to
+// the parts in turn: a pair's part depends on its i alone.
 constexpr int64_t kRowChunk = 64;
-[[gnu::always_inline]] inline int row_part(int64_t i) { return static_cast<int>((i / kRowChunk) % kForceParts); }
 
 // What the contact loop reads and writes; the engine's arrays.
 struct PairKernelArgs {
-  const int64_t *pi, *pj;  // pair (i, j)
-  const double *x, *y, *z, *r, *vx, *vy, *vz, *wx, *wy, *wz;
+  const int64_t *pi, *pj, *offsets;  // pair (i, j), CSR row offsets
+  int64_t rows, n;                   // rows of the list, spheres
+  const double *x, *y, *z, *r, *vx, *vy, *vz, *wx, *wy, *wz, *m;
   const double *reff, *meff;  // R*, m* per pair
   double* xi;                 // tangential history, 3 per pair
-  PairData* slot;             // per pair: written when it touches, zeroed when it separates
+  PairData* slot;             // written only when `keep` (null or empty otherwise)
   uint8_t *touching, *bad;    // per pair
   HertzMindlin law;
-  double dt, overlap_limit;
+  double dt, overlap_limit, gravity_z;
+  bool keep;
+  int parts;
 };
 
-// Pairs [kb, ke) of the list: each touching pair's force and torques into
-// its slot, touching[k] = kTouching exactly for the pairs whose slot the
-// gather is to add. Returns 1 if some pair overlapped beyond the limit or
-// was not finite (its bad flag set). Pairs are independent: any split of
-// the list among threads gives the same slots.
-using PairRangeKernel = int (*)(const PairKernelArgs&, int64_t kb, int64_t ke);
+// Part `part` of the pair list: fills acc (kAccStride doubles per sphere,
+// 64-byte aligned) with the weights (part 0) or zeros, then adds the part's
+// contact forces and torques. Returns 1 if some pair overlapped beyond the
+// limit or was not finite (its bad flag set). part = kAllParts: every part
+// on this thread, acc = part 0's array (the parts' arrays follow it, n
+// spheres apart), the row chunks taken in list order, each into its own
+// part's array: the same sums in the same order as part by part, but each
+// chunk's spheres are read once a step, not once per part (at 10^5 spheres
+// and more they no longer stay in cache between the parts' sweeps).
+using PairPartKernel = int (*)(const PairKernelArgs&, int part, double* acc);
+constexpr int kAllParts = -1;
 
 // Spheres per block of the gather (and of the kicks in the engine).
 constexpr int64_t kSphereBlock = 64;
 
 // What the gather reads and writes; the engine's arrays and walls.
 struct GatherArgs {
-  // The pairs' results and the two ways into them: each sphere's row of the
-  // list (offsets), and the pairs where it is j, by part (rev: pair indices,
-  // ascending within each; sphere s's of part p from rev_offsets[s
-  // kForceParts + p]), so that each part's sums stay in registers.
-  const PairData* slot;
-  const uint8_t* touching;
-  const int64_t *offsets, *rev_offsets, *rev;
-  double gravity_z;  // the weight starts part 0's sums
+  const double* acc;  // the parts' sums: part p, sphere s at (p n + s) kAccStride
+  int parts;
   double *x, *y, *z;
   const double *r, *m, *inv_m, *inv_i;
   double *vx, *vy, *vz, *wx, *wy, *wz;
@@ -132,7 +120,7 @@ struct GatherArgs {
 using GatherKernel = int (*)(const GatherArgs&, int64_t from, int64_t to);
 
 struct ContactKernels {
-  PairRangeKernel pairs = nullptr;
+  PairPartKernel pairs = nullptr;
   GatherKernel gather = nullptr;
 };
 
@@ -168,9 +156,89 @@ constexpr int64_t kPairBlock = 256;
 template <class V>
 using LaneIndex = decltype(V{} < V{});
 
+// Adds W pairs' forces and torques to their spheres' sums, lane by lane in
+// order (lanes `on` among the first `used`): -f and ti to sphere i, f and tj
+// to sphere j.
+template <class V, class M>
+[[gnu::always_inline]] inline void add_pair_sums(double* __restrict acc, const int64_t* i, const int64_t* j, int used,
+                                                 M on, const Vec3T<V>& f, const Vec3T<V>& ti, const Vec3T<V>& tj) {
+  for (int l = 0; l < used; ++l) {
+    if (!on[l]) continue;
+    double *a = acc + kAccStride * i[l], *c = acc + kAccStride * j[l];
+    a[0] -= f.x[l];
+    a[1] -= f.y[l];
+    a[2] -= f.z[l];
+    a[3] += ti.x[l];
+    a[4] += ti.y[l];
+    a[5] += ti.z[l];
+    c[0] += f.x[l];
+    c[1] += f.y[l];
+    c[2] += f.z[l];
+    c[3] += tj.x[l];
+    c[4] += tj.y[l];
+    c[5] += tj.z[l];
+  }
+}
+
+#if defined(__AVX512F__)
+// On 8 lanes: the lanes' sums transposed into one 64-byte line a sphere
+// (f, t, 0, 0: the accumulator's layout), each added to its sphere's line
+// with one vector add, in lane order. a - f and a + (-f) are the same IEEE
+// result, and the padding entries gain zeros: the same bits as above.
+// (The generic shuffles of GCC >= 12 and Clang: the unpack and shuffle
+// intrinsics start from an "undefined" vector that GCC 12 reports as maybe
+// uninitialised.)
+[[gnu::always_inline]] inline void transpose8(Lanes8 r[8]) {
+#define TG_LO(a, b) __builtin_shufflevector(a, b, 0, 8, 2, 10, 4, 12, 6, 14)
+#define TG_HI(a, b) __builtin_shufflevector(a, b, 1, 9, 3, 11, 5, 13, 7, 15)
+#define TG_EVEN(a, b) __builtin_shufflevector(a, b, 0, 1, 4, 5, 8, 9, 12, 13)  // 128-bit chunks 0, 2 of a, then of b
+#define TG_ODD(a, b) __builtin_shufflevector(a, b, 2, 3, 6, 7, 10, 11, 14, 15)  // chunks 1, 3
+  Lanes8 t[8], u[8];
+  for (int q = 0; q < 4; ++q) {
+    t[2 * q] = TG_LO(r[2 * q], r[2 * q + 1]);
+    t[2 * q + 1] = TG_HI(r[2 * q], r[2 * q + 1]);
+  }
+  for (int h = 0; h < 2; ++h) {  // rows 0-3, then 4-7
+    u[4 * h] = TG_EVEN(t[4 * h], t[4 * h + 2]);          // columns 0, 4
+    u[4 * h + 1] = TG_ODD(t[4 * h], t[4 * h + 2]);       // 2, 6
+    u[4 * h + 2] = TG_EVEN(t[4 * h + 1], t[4 * h + 3]);  // 1, 5
+    u[4 * h + 3] = TG_ODD(t[4 * h + 1], t[4 * h + 3]);   // 3, 7
+  }
+  r[0] = TG_EVEN(u[0], u[4]);
+  r[4] = TG_ODD(u[0], u[4]);
+  r[2] = TG_EVEN(u[1], u[5]);
+  r[6] = TG_ODD(u[1], u[5]);
+  r[1] = TG_EVEN(u[2], u[6]);
+  r[5] = TG_ODD(u[2], u[6]);
+  r[3] = TG_EVEN(u[3], u[7]);
+  r[7] = TG_ODD(u[3], u[7]);
+#undef TG_LO
+#undef TG_HI
+#undef TG_EVEN
+#undef TG_ODD
+}
+
+[[gnu::always_inline]] inline void add_pair_sums(double* __restrict acc, const int64_t* i, const int64_t* j, int used,
+                                                 Mask8 on, const Vec3T<Lanes8>& f, const Vec3T<Lanes8>& ti,
+                                                 const Vec3T<Lanes8>& tj) {
+  static_assert(kAccStride == 8);
+  const Lanes8 zero{};
+  Lanes8 ri[8] = {-f.x, -f.y, -f.z, ti.x, ti.y, ti.z, zero, zero};
+  Lanes8 rj[8] = {f.x, f.y, f.z, tj.x, tj.y, tj.z, zero, zero};
+  transpose8(ri);
+  transpose8(rj);
+  for (int l = 0; l < used; ++l) {
+    if (!on[l]) continue;
+    double *a = acc + kAccStride * i[l], *c = acc + kAccStride * j[l];
+    _mm512_store_pd(a, _mm512_add_pd(_mm512_load_pd(a), __m512d(ri[l])));
+    _mm512_store_pd(c, _mm512_add_pd(_mm512_load_pd(c), __m512d(rj[l])));
+  }
+}
+#endif
+
 // The body of every kernel; V is Lanes2, Lanes4 or Lanes8.
 template <class V, class IV = LaneIndex<V>>
-int pair_range(const PairKernelArgs& a, int64_t first, int64_t end) {
+int pair_part(const PairKernelArgs& a, int part, double* acc_base) {
   static constexpr int W = sizeof(V) / sizeof(double);
   // Local, non-aliased views: the compiler keeps them in registers instead
   // of reloading them after every store into the pair arrays.
@@ -186,18 +254,23 @@ int pair_range(const PairKernelArgs& a, int64_t first, int64_t end) {
   uint8_t* __restrict badk = a.bad;
   const HertzMindlin law = a.law;
   const double dt = a.dt, lim = a.overlap_limit;
+  const bool keep = a.keep;
+  double* __restrict acc = acc_base;  // the current chunk's part's sums
 
   // W listed pairs kk[0] < ... < kk[used-1]; lanes from `used` on repeat
   // the last pair and are dropped. A lane whose pair does not touch
   // computes on stand-in values and is dropped; that pair has its state
-  // reset if it touched before.
+  // reset if it touched before. Results are written lane 0 first, so the
+  // part's sums take its pairs in ascending order.
   const auto lanes = [&](const int64_t* kk, int used) __attribute__((always_inline)) {
     // kk holds W entries (the list is padded with its last pair).
     IV kv;
     std::memcpy(&kv, kk, sizeof kv);
     const IV iv = lane_gather(pi, kv), jv = lane_gather(pj, kv), k3 = 3 * kv;
-    int64_t k[W];
+    int64_t k[W], i[W], j[W];
     std::memcpy(k, &kv, sizeof k);
+    std::memcpy(i, &iv, sizeof i);
+    std::memcpy(j, &jv, sizeof j);
     const auto L = [](const double* __restrict v, IV u) __attribute__((always_inline)) { return lane_gather(v, u); };
     const auto H = [&](int c) __attribute__((always_inline)) { return lane_gather(xi + c, k3); };
     const Vec3T<V> d{L(x, jv) - L(x, iv), L(y, jv) - L(y, iv), L(z, jv) - L(z, iv)};
@@ -213,7 +286,7 @@ int pair_range(const PairKernelArgs& a, int64_t first, int64_t end) {
       if (!on[l] && touching[k[l]]) {
         touching[k[l]] = kNotTouching;
         xi[3 * k[l]] = xi[3 * k[l] + 1] = xi[3 * k[l] + 2] = 0;
-        slot[k[l]] = PairData{};
+        if (keep) slot[k[l]] = PairData{};  // slots exist only with a force hook
       }
     }
     if (!any(on)) return 0;
@@ -227,7 +300,7 @@ int pair_range(const PairKernelArgs& a, int64_t first, int64_t end) {
       if (on[l] && (!(dist[l] > 0) || delta[l] > lim * rmin)) {
         badk[k[l]] = 1;
         touching[k[l]] = kNotTouching;
-        slot[k[l]] = PairData{};
+        if (keep) slot[k[l]] = PairData{};
         on[l] = 0;
         failed = 1;
       }
@@ -250,10 +323,12 @@ int pair_range(const PairKernelArgs& a, int64_t first, int64_t end) {
     for (int l = 0; l < used; ++l) {
       if (!on[l]) continue;
       const int64_t kl = k[l];
-      slot[kl] = PairData{cf.force_on_j.x[l], cf.force_on_j.y[l], cf.force_on_j.z[l], ti.x[l], ti.y[l], ti.z[l],
-                          tj.x[l], tj.y[l], tj.z[l]};
+      if (keep)
+        slot[kl] = PairData{cf.force_on_j.x[l], cf.force_on_j.y[l], cf.force_on_j.z[l], ti.x[l], ti.y[l], ti.z[l],
+                            tj.x[l], tj.y[l], tj.z[l]};
       touching[kl] = kTouching;
     }
+    add_pair_sums(acc, i, j, used, on, cf.force_on_j, ti, tj);
     return failed;
   };
 
@@ -287,8 +362,24 @@ int pair_range(const PairKernelArgs& a, int64_t first, int64_t end) {
     return failed;
   };
 
+  const int64_t n = a.n;
+  const bool all = part == kAllParts;
+  for (int q = all ? 0 : part; q <= (all ? a.parts - 1 : part); ++q) {
+    double* const ap = all ? acc_base + q * kAccStride * n : acc_base;
+    for (int64_t s = 0; s < n; ++s) {
+      double* c = ap + kAccStride * s;
+      c[0] = c[1] = 0;
+      c[2] = q == 0 ? a.m[s] * a.gravity_z : 0.0;
+      c[3] = c[4] = c[5] = c[6] = c[7] = 0;  // 6, 7: padding (the AVX-512 kernel adds whole lines)
+    }
+  }
   int failed = 0;
-  for (int64_t kb = first; kb < end; kb += kPairBlock) failed |= block(kb, end - kb < kPairBlock ? end : kb + kPairBlock);
+  for (int64_t c = all ? 0 : part; c * kRowChunk < a.rows; c += all ? 1 : a.parts) {
+    if (all) acc = acc_base + (c % a.parts) * kAccStride * n;
+    const int64_t lo = a.offsets[c * kRowChunk];
+    const int64_t hi = a.offsets[(c + 1) * kRowChunk < a.rows ? (c + 1) * kRowChunk : a.rows];
+    for (int64_t kb = lo; kb < hi; kb += kPairBlock) failed |= block(kb, hi - kb < kPairBlock ? hi : kb + kPairBlock);
+  }
   return failed;
 }
 
@@ -346,6 +437,7 @@ void wall_lanes(const GatherArgs& a, const HertzMindlin& law, WallList& w) {
 template <class V>
 int gather_block(const GatherArgs& a, int64_t from, int64_t to) {
   const double lim = a.overlap_limit;
+  const int64_t n = a.n;
   WallList platen, cyl;
   int eb[kSphereBlock], et[kSphereBlock], ec[kSphereBlock];  // each sphere's contacts (-1: none)
   // 1. Which spheres touch which wall; histories of the others forgotten.
@@ -382,34 +474,16 @@ int gather_block(const GatherArgs& a, int64_t from, int64_t to) {
   // 2. The wall contacts, W a time.
   wall_lanes<V>(a, a.law_platen, platen);
   wall_lanes<V>(a, a.law_cyl, cyl);
-  // 3. Each sphere: its parts (the pairs where it is j, then its row), then
-  // its bottom, top and cylinder contacts.
+  // 3. Each sphere: its parts, then its bottom, top and cylinder contacts.
   const double half = 0.5 * a.dt, alpha = a.local_damping;
-  const PairData* __restrict slot = a.slot;
-  const uint8_t* __restrict touching = a.touching;
   int any_bad = 0, moved = 0;
   for (int64_t s = from; s < to; ++s) {
     const int q = static_cast<int>(s - from);
-    const int own = row_part(s);
     Vec3 f, t;
-    for (int part = 0; part < kForceParts; ++part) {
-      Vec3 fp{0.0, 0.0, part == 0 ? a.m[s] * a.gravity_z : 0.0}, tp;
-      for (int64_t e = a.rev_offsets[s * kForceParts + part]; e < a.rev_offsets[s * kForceParts + part + 1]; ++e) {
-        const int64_t k = a.rev[e];
-        if (touching[k] != kTouching) continue;
-        const PairData& d = slot[k];
-        fp = fp + Vec3{d.fx, d.fy, d.fz};
-        tp = tp + Vec3{d.tjx, d.tjy, d.tjz};
-      }
-      if (part == own)
-        for (int64_t k = a.offsets[s]; k < a.offsets[s + 1]; ++k) {
-          if (touching[k] != kTouching) continue;
-          const PairData& d = slot[k];
-          fp = fp - Vec3{d.fx, d.fy, d.fz};
-          tp = tp + Vec3{d.tix, d.tiy, d.tiz};
-        }
-      f = f + fp;
-      t = t + tp;
+    for (int part = 0; part < a.parts; ++part) {
+      const double* c = a.acc + (part * n + s) * kAccStride;
+      f = f + Vec3{c[0], c[1], c[2]};
+      t = t + Vec3{c[3], c[4], c[5]};
     }
     double fw[3] = {0, 0, 0};
     const auto apply = [&](const WallList& w, int e, int slot, bool radial) __attribute__((always_inline)) {
@@ -469,7 +543,7 @@ int gather_block(const GatherArgs& a, int64_t from, int64_t to) {
 
 template <class V>
 ContactKernels kernels_for() {
-  return {pair_range<V>, gather_block<V>};
+  return {pair_part<V>, gather_block<V>};
 }
 
 }  // namespace

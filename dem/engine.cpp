@@ -83,15 +83,6 @@ void Engine::rebuild() {
   list_ = std::move(fresh);
   xi_ = std::move(xi);
   pi_ = std::move(pi);
-  // R* and m* of each pair, read by the contact loop every step (radii and
-  // masses change only with a rebuild: see request_rebuild()).
-  reff_.resize(np);
-  meff_.resize(np);
-  for (int64_t k = 0; k < np; ++k) {
-    const int64_t i = pi_[k], j = list_.j[k];
-    reff_[k] = p_.r[i] * p_.r[j] / (p_.r[i] + p_.r[j]);
-    meff_[k] = p_.m[i] * p_.m[j] / (p_.m[i] + p_.m[j]);
-  }
   // Force slots only for a force hook (breakage reads them): 72 bytes a
   // pair, about a sixth of the engine's memory, unused without one.
   slot_.assign(force_hook_ ? np : 0, PairData{});
@@ -312,7 +303,7 @@ void Engine::compute_pair_forces() {
                             p_.x.data(), p_.y.data(), p_.z.data(), p_.r.data(),
                             p_.vx.data(), p_.vy.data(), p_.vz.data(),
                             p_.wx.data(), p_.wy.data(), p_.wz.data(), p_.m.data(),
-                            reff_.data(), meff_.data(), xi_.data(), slot_.data(), touching_.data(), bad_.data(),
+                            xi_.data(), slot_.data(), touching_.data(), bad_.data(),
                             law_pp_, opt_.time_step, opt_.overlap_limit, opt_.gravity_z, keep_slots_, kForceParts};
   const PairPartKernel kernel = kernels_.pairs;
   // One thread: the parts' chunks in list order in one sweep (the same sums:

@@ -229,7 +229,6 @@ class Engine {
   PairListCSR list_;
   std::vector<int64_t> pi_;        // i of each pair
   std::vector<double> xi_;         // tangential history, 3 per pair
-  std::vector<double> reff_, meff_;  // R* and m* per pair, set by rebuild()
   std::vector<double> inv_m_, inv_i_;  // 1/m and 1/I per sphere (see step())
   bool keep_slots_ = true;             // slot_ written this step (see compute_forces())
   // The pair list's parts, each summed into its own per-sphere array (f then

@@ -83,15 +83,6 @@ void Engine::rebuild() {
   list_ = std::move(fresh);
   xi_ = std::move(xi);
   pi_ = std::move(pi);
-  // R* and m* of each pair, read by the contact loop every step (radii and
-  // masses change only with a rebuild: see request_rebuild()).
-  reff_.resize(np);
-  meff_.resize(np);
-  for (int64_t k = 0; k < np; ++k) {
-    const int64_t i = pi_[k], j = list_.j[k];
-    reff_[k] = p_.r[i] * p_.r[j] / (p_.r[i] + p_.r[j]);
-    meff_[k] = p_.m[i] * p_.m[j] / (p_.m[i] + p_.m[j]);
-  }
   // Force slots only for a force hook (breakage reads them): 72 bytes a
   // pair, about a sixth of the engine's memory, unused without one.
   slot_.assign(force_hook_ ? np : 0, PairData{});
@@ -100,6 +91,15 @@ void Engine::rebuild() {
     if (xi_[3 * k] != 0 || xi_[3 * k + 1] != 0 || xi_[3 * k + 2] != 0) touching_[k] = kHistoryOnly;
   bad_.assign(std::max(np, n), 0);
   wall_f_.assign(3 * n, 0.0);
+  // Spheres whose wall histories are not all zero (restored, or kept over
+  // the rebuild): their bits set, the gather clears the histories it ends.
+  wall_state_.assign(n, 0);
+  for (int64_t s = 0; s < n; ++s) {
+    const Particles& p = p_;
+    wall_state_[s] = uint8_t((p.hbx[s] != 0 || p.hby[s] != 0 || p.hbz[s] != 0) |
+                             (p.htx[s] != 0 || p.hty[s] != 0 || p.htz[s] != 0) << 1 |
+                             (p.hcx[s] != 0 || p.hcy[s] != 0 || p.hcz[s] != 0) << 2);
+  }
   x0_ = p_.x;
   y0_ = p_.y;
   z0_ = p_.z;
@@ -303,7 +303,7 @@ void Engine::compute_pair_forces() {
                             p_.x.data(), p_.y.data(), p_.z.data(), p_.r.data(),
                             p_.vx.data(), p_.vy.data(), p_.vz.data(),
                             p_.wx.data(), p_.wy.data(), p_.wz.data(), p_.m.data(),
-                            reff_.data(), meff_.data(), xi_.data(), slot_.data(), touching_.data(), bad_.data(),
+                            xi_.data(), slot_.data(), touching_.data(), bad_.data(),
                             law_pp_, opt_.time_step, opt_.overlap_limit, opt_.gravity_z, keep_slots_, kForceParts};
   const PairPartKernel kernel = kernels_.pairs;
   // One thread: the parts' chunks in list order in one sweep (the same sums:
@@ -340,7 +340,7 @@ void Engine::gather_forces(bool kick, bool drift_next, double alpha) {
                         p.fx.data(), p.fy.data(), p.fz.data(), p.tx.data(), p.ty.data(), p.tz.data(),
                         p.hbx.data(), p.hby.data(), p.hbz.data(), p.htx.data(), p.hty.data(), p.htz.data(),
                         p.hcx.data(), p.hcy.data(), p.hcz.data(),
-                        p.flags.data(), kFlagFixed, wall_f_.data(), bad_.data(),
+                        p.flags.data(), kFlagFixed, wall_f_.data(), wall_state_.data(), bad_.data(),
                         law_platen_, law_cyl_, w.bottom, w.top, w.cylinder, w.top_z, w.top_vz, w.cylinder_radius,
                         opt_.time_step, opt_.overlap_limit, alpha, n, kick,
                         drift_next, x0_.data(), y0_.data(), z0_.data(), n_built, 0.25 * opt_.skin * opt_.skin};
@@ -357,9 +357,11 @@ void Engine::gather_forces(bool kick, bool drift_next, double alpha) {
         explode("sphere " + std::to_string(s) +
                 (bad_[s] == 2 ? " has a non-finite force" : " overlaps a wall by more than the limit"));
   }
-  // Serial, fixed order: the wall reactions do not depend on threads.
+  // Serial, fixed order: the wall reactions do not depend on threads. The
+  // spheres off the walls add exact zeros (the sum, from +0, is unchanged).
   WallForces sum;
   for (int64_t s = 0; s < n; ++s) {
+    if (!wall_state_[s]) continue;
     sum.bottom_z += wall_f_[3 * s];
     sum.top_z += wall_f_[3 * s + 1];
     sum.cylinder_radial += wall_f_[3 * s + 2];

@@ -229,7 +229,6 @@ class Engine {
   PairListCSR list_;
   std::vector<int64_t> pi_;        // i of each pair
   std::vector<double> xi_;         // tangential history, 3 per pair
-  std::vector<double> reff_, meff_;  // R* and m* per pair, set by rebuild()
   std::vector<double> inv_m_, inv_i_;  // 1/m and 1/I per sphere (see step())
   bool keep_slots_ = true;             // slot_ written this step (see compute_forces())
   // The pair list's parts, each summed into its own per-sphere array (f then
@@ -244,6 +243,7 @@ class Engine {
   std::vector<double> x0_, y0_, z0_;
   // Per-sphere wall reaction this step (bottom z, top z, cylinder radial).
   std::vector<double> wall_f_;
+  std::vector<uint8_t> wall_state_;  // per sphere: GatherArgs::wall_state
   std::vector<uint8_t> bad_;  // per-pair / per-sphere failure flags
 };
 

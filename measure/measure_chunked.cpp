@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "core/errors.hpp"
 #include "core/memory.hpp"
@@ -38,20 +39,26 @@ int64_t core_room(const Shape& s, double voxel_bytes, int64_t limit, double list
 // Pass 1's margins: the contact search's z lines look 4 slices below the core.
 int64_t pass1_margins(bool contacts) { return contacts ? kCrossingMarginBelow + 1 : 2; }
 
-// Ascending distinct non-zero labels of a volume.
+// Ascending distinct non-zero labels of a volume (a set, not a list of
+// every run: a slab has tens of millions of runs).
 std::vector<uint32_t> chunk_distinct_labels(const Volume<uint32_t>& v) {
-  std::vector<uint32_t> out;
+  std::unordered_set<uint32_t> seen;
   uint32_t last = 0;
   const uint32_t* d = v.data();
   for (int64_t i = 0; i < v.size(); ++i)
     if (d[i] != last) {
       last = d[i];
-      if (last) out.push_back(last);
+      if (last) seen.insert(last);
     }
+  std::vector<uint32_t> out(seen.begin(), seen.end());
   std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
 }
+
+// label_sums lists a slab's boundary voxels twice on the way (per thread,
+// then by label: ~40 B each) before they are packed: the core is summed in
+// parts of this many slices, so that the transient lists stay small.
+constexpr int64_t kSumSlices = 16;
 
 }  // namespace
 
@@ -134,8 +141,10 @@ ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geo
       // plan's rate before the first slab), and the tables beside them.
       const double rate = c0 ? double(points) * double(sizeof(PackedSurfaceVoxel)) / double(c0 * shape.slice_voxels())
                              : kMeasureListBytesPerVoxel;
+      const double transient = rate / double(sizeof(PackedSurfaceVoxel)) * 40.0 * double(kSumSlices) *
+                               double(shape.slice_voxels());
       const double lists = rate * double(shape.voxels()) + kPerLabelBytes * double(labels.size()) +
-                           (search ? kPairBytes * 4.0 * double(labels.size()) : 0.0);
+                           (search ? kPairBytes * 4.0 * double(labels.size()) : 0.0) + transient;
       core = core_room(shape, slab_voxel_bytes(with_grey), chunks.memory_limit_bytes, lists, margins);
       if (core < 1)
         throw UsageError("--memory-limit " + human_bytes(double(chunks.memory_limit_bytes)) + " ran out at slice " +
@@ -152,8 +161,9 @@ ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geo
     if (!(L.shape() == ws))
       throw InputError("label slab of slices " + std::to_string(w0) + ".." + std::to_string(w1 - 1) + " is " +
                        L.shape().str() + ", expected " + ws.str());
-    {
-      LabelSums sums = label_sums(L.view(), c0 - w0, c1 - w0, w0, so);
+    for (int64_t p0 = c0; p0 < c1; p0 += kSumSlices) {
+      const int64_t p1 = std::min(c1, p0 + kSumSlices);
+      LabelSums sums = label_sums(L.view(), p0 - w0, p1 - w0, w0, so);
       for (size_t n = 0; n < sums.labels.size(); ++n) {
         const size_t x = slot(sums.labels[n]);
         moments[x].merge(sums.moments[n]);

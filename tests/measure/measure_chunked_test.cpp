@@ -139,7 +139,7 @@ TEST(MeasureChunked, SlabsGiveTheWholeVolumesTable) {
   ParticleOptions nc_whole = nc;
   nc_whole.grey = &gv;
   const auto ref_nc = measure_particles(s.labels.view(), nc_whole);
-  const int64_t limit = kMeasureFixedBytes + 100000;
+  const int64_t limit = kMeasureFixedBytes + 200000;
   const auto adaptive = measure_particles_chunked(sh, s.labels.geometry(), labels, grey, {0, limit}, nc);
   EXPECT_GT(adaptive.slabs, 2);
   EXPECT_GT(adaptive.boundary_voxels, 1000);

@@ -32,7 +32,9 @@ double slab_voxel_bytes(bool grey) { return 4.0 + (grey ? 2.0 : 0.0); }
 // Core slices that fit beside `lists` bytes (boundary lists, tables), with
 // `margins` slices of margin in all.
 int64_t core_room(const Shape& s, double voxel_bytes, int64_t limit, double lists, int64_t margins) {
-  const double room = double(limit - kMeasureFixedBytes) - lists;
+  // 10 % of the room left for what is not counted (the HDF5 reader's
+  // compressed chunks, allocator slack).
+  const double room = 0.9 * (double(limit - kMeasureFixedBytes) - lists);
   const double slice = voxel_bytes * double(s.slice_voxels());
   return room > 0 ? int64_t(room / slice) - margins : -margins;
 }
@@ -168,6 +170,9 @@ ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geo
         const size_t x = slot(sums.labels[n]);
         moments[x].merge(sums.moments[n]);
         auto& list = surface[x];
+        // Exactly as large as needed: a vector left to double would hold up
+        // to twice the lists, the largest memory of the run.
+        list.reserve(list.size() + size_t(sums.surface_offset[n + 1] - sums.surface_offset[n]));
         for (int64_t q = sums.surface_offset[n]; q < sums.surface_offset[n + 1]; ++q) {
           const SurfaceVoxel& v = sums.surface[size_t(q)];
           list.push_back({uint16_t(v.k), uint16_t(v.j), uint16_t(v.i), v.exposed});

@@ -63,6 +63,17 @@ ChunkScene chunk_scene(unsigned seed) {
   return s;
 }
 
+// Slices [z0, z0 + nz) of a volume: what an HDF5 slab reader returns.
+template <class T>
+Volume<T> chunk_slices(const Volume<T>& whole, int64_t z0, int64_t nz) {
+  const Shape sh = whole.shape();
+  Volume<T> v = Volume<T>::filled({nz, sh.ny, sh.nx}, 0, whole.geometry());
+  for (int64_t k = 0; k < nz; ++k)
+    for (int64_t j = 0; j < sh.ny; ++j)
+      for (int64_t i = 0; i < sh.nx; ++i) v(k, j, i) = whole(z0 + k, j, i);
+  return v;
+}
+
 ParticleOptions chunk_options(bool grey_levels, bool box = false) {
   ParticleOptions o;
   o.contacts = !box;  // the coordination column (contacts in two passes); the box run leaves it out
@@ -99,20 +110,8 @@ TEST(MeasureChunked, SlabsGiveTheWholeVolumesTable) {
   const auto ref = measure_particles(s.labels.view(), whole);
   ASSERT_GE(ref.size(), 20u);
   const Shape sh = s.labels.shape();
-  auto labels = [&](int64_t z0, int64_t nz) {
-    Volume<uint32_t> v = Volume<uint32_t>::filled({nz, sh.ny, sh.nx}, 0, s.labels.geometry());
-    for (int64_t k = 0; k < nz; ++k)
-      for (int64_t j = 0; j < sh.ny; ++j)
-        for (int64_t i = 0; i < sh.nx; ++i) v(k, j, i) = s.labels(z0 + k, j, i);
-    return v;
-  };
-  auto grey = [&](int64_t z0, int64_t nz) {
-    Volume<uint16_t> v = Volume<uint16_t>::filled({nz, sh.ny, sh.nx}, 0, s.grey.geometry());
-    for (int64_t k = 0; k < nz; ++k)
-      for (int64_t j = 0; j < sh.ny; ++j)
-        for (int64_t i = 0; i < sh.nx; ++i) v(k, j, i) = s.grey(z0 + k, j, i);
-    return v;
-  };
+  auto labels = [&](int64_t z0, int64_t nz) { return chunk_slices(s.labels, z0, nz); };
+  auto grey = [&](int64_t z0, int64_t nz) { return chunk_slices(s.grey, z0, nz); };
   const std::vector<std::pair<int64_t, int>> runs{{1, 2}, {5, 1}, {64, 1}};
   for (const auto& [core, threads] : runs) {
     ParticleOptions o = chunk_options(true);
@@ -171,13 +170,7 @@ TEST(MeasureChunked, ContactSearchBySlabsIsFindContacts) {
   co.normal_radius_voxels = 4;  // a ball of a few slices: slabs thinner than it
   const ContactResult ref = find_contacts(s.labels.view(), co);
   ASSERT_GE(ref.contacts.size(), 10u);
-  auto window = [&](int64_t w0, int64_t w1) {
-    Volume<uint32_t> v = Volume<uint32_t>::filled({w1 - w0, sh.ny, sh.nx}, 0, s.labels.geometry());
-    for (int64_t k = w0; k < w1; ++k)
-      for (int64_t j = 0; j < sh.ny; ++j)
-        for (int64_t i = 0; i < sh.nx; ++i) v(k - w0, j, i) = s.labels(k, j, i);
-    return v;
-  };
+  auto window = [&](int64_t w0, int64_t w1) { return chunk_slices(s.labels, w0, w1 - w0); };
   for (const int64_t core : {int64_t(1), int64_t(7)}) {
     ContactSearch search(sh, s.labels.geometry(), co);
     for (int64_t c0 = 0; c0 < sh.nz; c0 += core) {

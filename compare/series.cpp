@@ -20,13 +20,11 @@ void measure_series(const Volume<uint32_t>& labels, const measure::ParticleOptio
     }
   }
   if (levels_found) {
-    {
-      grey_view = grey->view();
-      without.grey = &grey_view;
-      without.grey_levels.void_grey = levels.void_level;
-      without.grey_levels.solid_grey = levels.solid;
-      s.info["volume_from"] = "grey";
-    }
+    grey_view = grey->view();
+    without.grey = &grey_view;
+    without.grey_levels.void_grey = levels.void_level;
+    without.grey_levels.solid_grey = levels.solid;
+    s.info["volume_from"] = "grey";
   }
   std::vector<measure::Particle> ps = measure::measure_particles(labels.view(), without);
   if (po.contacts) {  // what measure_particles does with contacts on, keeping the contacts themselves

@@ -316,7 +316,7 @@ void ContactSearch::add_normals(const VolumeView<const uint32_t>& v, int64_t c0,
   }
 }
 
-ContactResult ContactSearch::result() const {
+ContactResult ContactSearch::result() {
   Impl& I = *impl_;
   I.freeze();
   for (size_t p = 0; p < I.done.size(); ++p)

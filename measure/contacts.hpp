@@ -126,7 +126,7 @@ class ContactSearch {
   // Pass 2: the normals of the pairs whose provisional point lies in the core.
   void add_normals(const VolumeView<const uint32_t>& window, int64_t core_begin, int64_t core_end, int64_t k_offset);
   // The contacts, sorted by (a, b), once both passes covered the volume.
-  ContactResult result() const;
+  ContactResult result();
 
  private:
   struct Impl;

@@ -69,6 +69,43 @@ TEST(CalibrationObjective, HandComputedMisfits) {
   EXPECT_TRUE(std::isnan(cal::score_run(t, h, 100).objective));
 }
 
+TEST(CalibrationObjective, BrokenAtStressHandComputed) {
+  cal::Target t;
+  t.broken_stress_Pa = {2e6, 4e6};
+  t.broken_fraction_at_stress = {0.05, 0.3};
+  t.w_broken_stress = 2;
+  tg::Table h;
+  h.add("strain", {0.0, 0.02, 0.04, 0.06});
+  h.add("top_stress_Pa", {0.0, 2.5e6, 1.9e6, 4.0e6});
+  h.add("grains_broken", {0, 4, 12, 25});
+  // 2 MPa is first reached at row 1 (4 / 100 = 0.04 vs 0.05), 4 MPa at row 3
+  // (exactly: 0.25 vs 0.3): RMS of (-0.01, -0.05).
+  const cal::RunScore s = cal::score_run(t, h, 100);
+  EXPECT_NEAR(s.broken_stress_misfit, std::sqrt((0.01 * 0.01 + 0.05 * 0.05) / 2), 1e-12);
+  EXPECT_NEAR(s.objective, 2 * s.broken_stress_misfit, 1e-12);
+  // A stress the run never reaches misses by 1.
+  t.broken_stress_Pa = {5e6};
+  t.broken_fraction_at_stress = {0.3};
+  EXPECT_NEAR(cal::score_run(t, h, 100).broken_stress_misfit, 1.0, 1e-12);
+}
+
+TEST(CalibrationObjective, ReadsBrokenAtStressTarget) {
+  TmpDir d;
+  const cal::Target t = cal::read_target(d.write(
+      "s.toml", "[target]\nbroken_at_stress_Pa = [2e6, 4e6]\nbroken_fraction_at_stress = [0.022, 0.31]\n"
+                "[weights]\nbroken_at_stress = 0.5\n"));
+  ASSERT_EQ(t.broken_stress_Pa.size(), 2u);
+  EXPECT_DOUBLE_EQ(t.broken_stress_Pa[1], 4e6);
+  EXPECT_DOUBLE_EQ(t.broken_fraction_at_stress[0], 0.022);
+  EXPECT_DOUBLE_EQ(t.w_broken_stress, 0.5);
+  EXPECT_NE(error_of(d.write("u.toml", "[target]\nbroken_at_stress_Pa = [2e6]\nbroken_fraction_at_stress = []\n"))
+                .find("one value per target.broken_at_stress_Pa"),
+            std::string::npos);
+  EXPECT_NE(error_of(d.write("v.toml", "[target]\nbroken_at_stress_Pa = [-1.0]\nbroken_fraction_at_stress = [0.1]\n"))
+                .find("stresses > 0"),
+            std::string::npos);
+}
+
 TEST(CalibrationObjective, CrushTermHandComputed) {
   cal::Target t;
   t.curve_strain = {0.03};

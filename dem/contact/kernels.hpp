@@ -128,8 +128,13 @@ struct ContactKernels {
 // The gather's damping of the contact force and the engine's damping of the
 // total force (EngineOptions::local_damping_total) both call this one;
 // always inlined, as the kernels' other helpers (see the note above).
+// Written without branches: velocity signs are random from sphere to sphere,
+// and the branches' mispredictions made the engine's total-force damping 11 %
+// of a breakage run's profile. Same bits as the branches: sign ±1 times
+// α|f| is exact, and 0 (v = 0) takes nothing from f (not even a -0).
 [[gnu::always_inline]] inline double local_damping(double f, double v, double alpha) {
-  return v > 0 ? f - alpha * __builtin_fabs(f) : v < 0 ? f + alpha * __builtin_fabs(f) : f;
+  const double sign = static_cast<double>(v > 0) - static_cast<double>(v < 0);
+  return f - sign * (alpha * __builtin_fabs(f));
 }
 
 enum class KernelIsa { kAuto, kSse2, kAvx2, kAvx512 };

@@ -239,7 +239,7 @@ TEST(Oedometer, ConfigDefaultsAreTheStudysAndUnknownKeysFail) {
 TEST(Oedometer, ExampleConfigsParse) {
   const char* src = std::getenv("TOMOGRAIN_SOURCE_DIR");
   const fs::path root = src ? fs::path(src) : fs::path(TOMOGRAIN_TEST_SOURCE_DIR);
-  for (const char* f : {"dem/examples/oedometer.toml", "dem/examples/demo.toml"}) {
+  for (const char* f : {"dem/examples/oedometer.toml", "dem/examples/demo.toml", "dem/examples/oedometer_calibrated.toml"}) {
     Config cfg = Config::from_file(root / f);
     EXPECT_NO_THROW(read_oedometer_config(cfg, root / "dem/examples")) << f;
   }

@@ -6,6 +6,10 @@ Usage:
   breakage_options.py small TOMOGRAIN OUTDIR [VARIANT ...]   # demo cell (126 grains, Ø8 mm)
   breakage_options.py full  TOMOGRAIN OUTDIR PACKING VARIANT ...  # the 910-grain pressed specimen
   breakage_options.py table OUTDIR                            # the table of finished runs
+  breakage_options.py config KIND PACKING VARIANT             # print a variant's config (e.g. for calibrate)
+
+A VARIANT is a name below, optionally followed by keys of its own:
+"study,breakage.min_time_step_s=5e-8,breakage.sigma_t0_Pa=16e6" (TOML values).
 
 small: tests/apps/data/crash_pack.csv (the demo cell's packing) with
 dem/examples/oedometer.toml's keys (Table 1, sigma_t0 12 MPa, splits down to
@@ -66,8 +70,27 @@ VARIANTS = {
                                                     "breakage.split_bonded": "false",
                                                     "breakage.sublimit_policy": '"keep_unbreakable"'},
     "min": {"breakage.bond_radius_rule": '"min"'},
+    # The study's reading (dem/breakage/README.md, "The model chosen"): PEEK cell walls without
+    # friction, PFC's default local damping 0.7 on the unbalanced force, replacement for grains and
+    # bond breakage for fragments, spheres under 0.2 mm kept and never broken.
+    "study": {**FRICTIONLESS, **TOTAL07, "breakage.split_bonded": "false",
+              "breakage.sublimit_policy": '"keep_unbreakable"'},
     "nosplitbonded": {"breakage.split_bonded": "false"},
 }
+
+
+def variant_keys(name):
+    """Keys of "NAME[,table.key=value,...]": NAME's keys with the extra ones on top."""
+    base, *extra = name.split(",")
+    if base not in VARIANTS:
+        raise SystemExit(f"breakage_options.py: unknown variant {base!r}; known: {list(VARIANTS)}")
+    keys = dict(VARIANTS[base])
+    for kv in extra:
+        k, _, v = kv.partition("=")
+        if not v or "." not in k:
+            raise SystemExit(f"breakage_options.py: {kv!r} in {name!r} is not table.key=value")
+        keys[k] = v
+    return keys
 
 
 def config_text(kind, packing, keys):
@@ -106,7 +129,7 @@ def run_one(binary, outdir, kind, packing, name):
     if os.path.exists(cfg):
         return name
     with open(cfg, "w") as f:
-        f.write(config_text(kind, packing, VARIANTS[name]))
+        f.write(config_text(kind, packing, variant_keys(name)))
     env = dict(os.environ, OMP_NUM_THREADS="1", OMP_WAIT_POLICY="passive", TOMOGRAIN_QUIET="1")
     t0 = time.time()
     p = subprocess.run(["nice", "/usr/bin/time", "-f", "%e %U %S", binary, "dem", "oedometer", cfg, "-o", run],
@@ -161,6 +184,11 @@ def figures(outdir, name, kind):
             if g == 0:
                 bins[min(4, max(0, int(z / (h0 - 0.1 * tt) * 5)))] += 1
     row["fifths"] = bins
+    # Wall friction shows as a bottom stress below the top one: their ratio,
+    # mean over the rows past 5 % strain (loaded, not seating).
+    ratios = [b / t for b, t, e in zip(h["bottom_stress_Pa"], sig, eps) if e > 0.05 and t > 0]
+    row["bottom_top"] = statistics.mean(ratios) if ratios else float("nan")
+    row["added_mass"] = float(h["added_mass_fraction"][last])
     if kind == "small":
         ke, steps = h["kinetic_energy_J"], [int(s) for s in h["step"]]
         jumps = []
@@ -179,16 +207,17 @@ def table(outdir, kind):
         history = os.path.join(outdir, n, "history.csv")
         return os.path.exists(os.path.join(outdir, n + ".time")) or (os.path.exists(history) and os.path.getsize(history) > 0)
 
-    names = [n for n in VARIANTS if started(n)]
+    names = sorted((f[:-5] for f in os.listdir(outdir) if f.endswith(".toml")), key=lambda n: os.path.getmtime(os.path.join(outdir, n + ".toml")))
+    names = [n for n in names if started(n)]
     rows = [figures(outdir, n, kind) for n in names]
     fmt = lambda p: "-" if p is None else f"{p[0]} / {p[1]}"
     print("| variant | yield MPa | σ at 10 / 15.48 % MPa (max) | grains / bonds broken at yield | at 4 MPa | at end "
-          "| intact broken % | per fifth, bottom → top | gen ≥ 1 splits / fines / spheres | KE ×, median / max "
-          "| wall / CPU s |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+          "| intact broken % | per fifth, bottom → top | σ_bottom / σ_top | gen ≥ 1 splits / fines / spheres "
+          "| added mass % | KE ×, median / max | wall / CPU s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         if "stopped" in r:
-            print(f"| {r['variant']} | stopped: {r['stopped']} | | | | | | | | | {r['wall_s']:.0f} / {r['cpu_s']:.0f} |")
+            print(f"| {r['variant']} | stopped: {r['stopped']} | | | | | | | | | | | {r['wall_s']:.0f} / {r['cpu_s']:.0f} |")
             continue
         ke = (f"{r['ke_jump_median']:.2f} / {r['ke_jump_max']:.1f}" if "ke_jump_median" in r else "-")
         end = "" if r["end_strain"] >= 0.1547 else f" (at {100 * r['end_strain']:.2f} %)"
@@ -197,7 +226,8 @@ def table(outdir, kind):
             r["yield_MPa"], r["at_yield"] = float("nan"), None
         print(f"| {r['variant']} | {r['yield_MPa']:.2f} | {r['s10']:.2f} / {r['s1548']:.2f} ({r['smax']:.2f}) "
               f"| {fmt(r['at_yield'])} | {fmt(r['at_4'])} | {fmt(r['at_end'])}{end} | {r['intact_pct']:.1f} "
-              f"| {', '.join(map(str, r['fifths']))} | {r['gen1plus']} / {r['fines']} / {r['spheres']} | {ke} "
+              f"| {', '.join(map(str, r['fifths']))} | {r['bottom_top']:.2f} | {r['gen1plus']} / {r['fines']} / {r['spheres']} "
+              f"| {100 * r['added_mass']:.1f} | {ke} "
               f"| {times} |")
 
 
@@ -205,6 +235,9 @@ def main():
     if len(sys.argv) < 3:
         raise SystemExit(__doc__)
     kind = sys.argv[1]
+    if kind == "config" and len(sys.argv) == 5:
+        sys.stdout.write(config_text(sys.argv[2], os.path.abspath(sys.argv[3]), variant_keys(sys.argv[4])))
+        return
     if kind == "table":
         outdir = sys.argv[2]
         table(outdir, json.load(open(os.path.join(outdir, "kind.json")))["kind"])
@@ -220,9 +253,8 @@ def main():
         packing, names = args[2], args[3:]
     else:
         raise SystemExit(__doc__)
-    unknown = [n for n in names if n not in VARIANTS]
-    if unknown:
-        raise SystemExit(f"breakage_options.py: unknown variants {unknown}; known: {list(VARIANTS)}")
+    for n in names:
+        variant_keys(n)  # unknown names and malformed keys stop here, before any run
     os.makedirs(outdir, exist_ok=True)
     json.dump({"kind": kind}, open(os.path.join(outdir, "kind.json"), "w"))
     with ThreadPoolExecutor(jobs) as ex:

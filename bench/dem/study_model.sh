@@ -52,8 +52,8 @@ if [ "$STEP" = all ] || [ "$STEP" = calibrate ]; then
 fi
 if [ "$STEP" = all ] || [ "$STEP" = check ]; then
   for t in 1 2; do
-    sed -e "s|^packing_csv = \"\"|packing_csv = \"$PACK\"|" -e "s|^threads = 0 |threads = $t |" \
-      "$ROOT/dem/examples/oedometer_calibrated.toml" > "$OUT/calibrated_t$t.toml"
+    { cat "$ROOT/dem/examples/oedometer_calibrated.toml"; printf '\n[specimen]\npacking_csv = "%s"\n' "$PACK"; } \
+      > "$OUT/calibrated_t$t.toml"
     rm -rf "$OUT/calibrated_t$t"
     OMP_NUM_THREADS=$t /usr/bin/time -f "threads $t: %e s wall, %U s user" \
       "$BIN" dem oedometer "$OUT/calibrated_t$t.toml" -o "$OUT/calibrated_t$t" 2>&1 | tail -1

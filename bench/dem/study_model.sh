@@ -14,6 +14,10 @@
 #            (calibration/study_target.toml), 12 runs, two at a time.
 # check:     dem/examples/oedometer_calibrated.toml itself on 1 and 2 threads
 #            (same bits; wall times).
+# shapes:    FR and AR classes of check's run at 15.48 %, imaged at 24.6 um
+#            (`compare`'s dem_ideal series, particles >= 0.2 mm). compare needs an
+#            XCT stage: a synthetic sphere scan stands in for it and its rows are
+#            not read (no DEM-only shape command yet).
 # Without a step: all three. Long: each run takes 3-8 min of one core.
 # JOBS (default 2): runs of the table at a time.
 set -euo pipefail
@@ -60,4 +64,14 @@ if [ "$STEP" = all ] || [ "$STEP" = check ]; then
   done
   cmp "$OUT/calibrated_t1/history.csv" "$OUT/calibrated_t2/history.csv" && echo "1 and 2 threads: same history.csv"
   python3 "$HERE/breakage_analysis.py" "$OUT/calibrated_t1"
+fi
+if [ "$STEP" = all ] || [ "$STEP" = shapes ]; then
+  S="$OUT/shapes"
+  mkdir -p "$S"
+  "$BIN" synth --preset spheres -o "$S/stand_in.h5" > /dev/null
+  "$BIN" measure "$S/stand_in.h5:/labels" -o "$S/stand_in.csv" > /dev/null
+  rm -rf "$S/report"
+  "$BIN" compare --xct "$S/stand_in.csv" --xct-strains 0.1548 --voxel-um 24.6 --dem "$OUT/calibrated_t1" \
+    --no-imaged --no-track --no-plots -o "$S/report" > /dev/null
+  grep dem_ideal "$S/report/shape_classes.csv"
 fi

@@ -3,7 +3,7 @@
 # (issue 21): the figures of bench/dem/RESULTS.md, "The study's oedometer:
 # model chosen and calibrated".
 #
-#   bench/dem/study_model.sh TOMOGRAIN OUTDIR [table|calibrate|check]
+#   bench/dem/study_model.sh TOMOGRAIN OUTDIR [table|calibrate|check|shapes]
 #
 # table:     the experiment table: each modelling choice as config keys on
 #            top of the shipped dem/examples/oedometer.toml (Table 1), on the
@@ -18,7 +18,7 @@
 #            (`compare`'s dem_ideal series, particles >= 0.2 mm). compare needs an
 #            XCT stage: a synthetic sphere scan stands in for it and its rows are
 #            not read (no DEM-only shape command yet).
-# Without a step: all three. Long: each run takes 3-8 min of one core.
+# Without a step: all four. Long: each run takes 3-8 min of one core.
 # JOBS (default 2): runs of the table at a time.
 set -euo pipefail
 BIN=$(realpath "${1:?path to the tomograin binary}")

@@ -12,7 +12,7 @@ pkgs=(
   build-essential cmake pkg-config
   # libraries (see docs/architecture.md for what each is used for)
   libopencv-dev libcgal-dev libeigen3-dev libhdf5-dev zlib1g-dev libtiff-dev libgmp-dev libmpfr-dev
-  libgtest-dev libbenchmark-dev libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev libxxhash-dev
+  libgtest-dev libbenchmark-dev libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev libxxhash-dev libdeflate-dev
   # sanitizer + fuzzing toolchain (tests/fuzz)
   clang libclang-rt-14-dev
   # file checks in tests (tiffinfo) and the Python side of tests, reports and benches

@@ -8,7 +8,7 @@
 //
 // Method: HDF5's direct chunk I/O (H5Dwrite_chunk / H5Dread_chunk, 1.10.3
 // and later) moves a chunk's stored (filtered) bytes; the filters are
-// applied here with zlib, each chunk of a row of chunks on its own OpenMP
+// applied here with libdeflate, each chunk of a row of chunks on its own OpenMP
 // thread, in the byte format of HDF5's own filters, so that any HDF5
 // reader (h5py, h5dump, HDF5's own filter path) reads the result:
 //   * shuffle (H5Z_FILTER_SHUFFLE, H5Zshuffle.c): the chunk's bytes in
@@ -17,14 +17,14 @@
 //     (shuffled) chunk at the dataset's level.
 // Edge chunks are stored whole (padded with 0, the fill value), as HDF5
 // stores them. Every HDF5 call stays on the calling thread (the library is
-// not thread-safe); only zlib and the copies run on threads. Output does
+// not thread-safe); only libdeflate and the copies run on threads. Output does
 // not depend on the thread count (each chunk's bytes are its own).
 //
 // Only datasets whose pipeline is exactly [deflate] or [shuffle, deflate]
 // (what tomograin writes with compression > 0) take this path; any other
 // pipeline, and chunks stored with a filter skipped, go through libhdf5.
 //
-// Corrupt input: a stored chunk larger than zlib's bound for the chunk, or
+// Corrupt input: a stored chunk larger than a deflate bound for the chunk, or
 // one that does not inflate to exactly the chunk's bytes, is an InputError
 // naming the chunk (libhdf5 itself over-reads on some corrupt chunks: see
 // hdf5.cpp check_chunk_sizes).

@@ -55,8 +55,8 @@ def main():
         made = 80 * len(splits)
         print(f"## {run}\n\n{len(splits)} splits ({made} fragment bonds made), {len(breaks)} bonds broken by stress "
               f"({100 * len(breaks) / max(1, made):.1f} %); lambda {lam} ({rule}), sigma_c {sigma_c / 1e6:.2f} MPa; dt at end {dt_end:.2g} s\n")
-        ages = [int(r["age_steps"]) for r in breaks if int(r["age_steps"]) >= 0]
-        ages_us = [1e6 * float(r["age_s"]) for r in breaks if int(r["age_steps"]) >= 0]
+        ages = [int(float(r["age_steps"])) for r in breaks if int(float(r["age_steps"])) >= 0]
+        ages_us = [1e6 * float(r["age_s"]) for r in breaks if int(float(r["age_steps"])) >= 0]
         edges = [1, 10, 100, 1000, 10000, 100000, 10 ** 9]
         print("| age (steps since the split) | bonds broken | share of broken | share of bonds made | cumulative share of made |")
         print("|---|---|---|---|---|")
@@ -69,10 +69,10 @@ def main():
             lo = hi
         print(f"\nage: median {q(ages, 0.5)} steps = {q(ages_us, 0.5):.2f} us; 10 % {q(ages, 0.1)} steps "
               f"({q(ages_us, 0.1):.2f} us); 90 % {q(ages, 0.9)} steps ({q(ages_us, 0.9):.1f} us); "
-              f"tensile {100 * sum(int(r['tensile']) for r in breaks) / max(1, len(breaks)):.0f} %")
+              f"tensile {100 * sum(int(float(r['tensile'])) for r in breaks) / max(1, len(breaks)):.0f} %")
         by_gen = {}
         for r in breaks:
-            by_gen.setdefault(int(r["generation"]), []).append(int(r["age_steps"]))
+            by_gen.setdefault(int(float(r["generation"])), []).append(int(float(r["age_steps"])))
         print("by generation of the bond's spheres: " + "; ".join(
             f"gen {g}: {len(v)} broken, median age {q(v, 0.5)} steps, {100 * sum(1 for a in v if a <= 100) / len(v):.0f} % within 100"
             for g, v in sorted(by_gen.items())))
@@ -80,8 +80,8 @@ def main():
               "born touching | Hertz force at birth, median (90 %) N | capacity sigma_c A of the weakest bond, median N | force > capacity |")
         print("|---|---|---|---|---|---|---|---|")
         cap = {}
-        for g in sorted({int(s["generation"]) for s in splits}):
-            ss = [s for s in splits if int(s["generation"]) == g]
+        for g in sorted({int(float(s["generation"])) for s in splits}):
+            ss = [s for s in splits if int(float(s["generation"])) == g]
             mo = [float(s["mother_overlap_ratio"]) for s in ss]
             fo = [float(s["fragment_overlap_ratio"]) for s in ss]
             ff = [float(s["fragment_force_N"]) for s in ss]
@@ -92,26 +92,26 @@ def main():
                 c = sigma_c * math.pi * rbar * rbar
                 caps.append(c)
                 cap[id(s)] = c
-            touch = sum(1 for s in ss if int(s["fragment_contacts"]) > 0)
+            touch = sum(1 for s in ss if int(float(s["fragment_contacts"])) > 0)
             over = sum(1 for f, c in zip(ff, caps) if f > c)
             print(f"| {g} | {len(ss)} | {q(mo, .5):.3f} ({q(mo, .1):.3f}-{q(mo, .9):.3f}) | {q(fo, .5):.3f} ({q(fo, .1):.3f}-{q(fo, .9):.3f}) "
                   f"| {100 * touch / len(ss):.0f} % | {q(ff, .5):.2f} ({q(ff, .9):.2f}) | {q(caps, .5):.2f} | {100 * over / len(ss):.0f} % |")
         # Splits alone in their check: their bonds are the ones born at that step.
         count = {}
         for s in splits:
-            count[int(s["step"])] = count.get(int(s["step"]), 0) + 1
+            count[int(float(s["step"]))] = count.get(int(float(s["step"])), 0) + 1
         early = {}
         for r in breaks:
-            if int(r["age_steps"]) >= 0 and int(r["age_steps"]) <= 100:
-                early[int(r["born_step"])] = early.get(int(r["born_step"]), 0) + 1
+            if int(float(r["age_steps"])) >= 0 and int(float(r["age_steps"])) <= 100:
+                early[int(float(r["born_step"]))] = early.get(int(float(r["born_step"])), 0) + 1
         groups = {"born with F > capacity": [], "born touching, F <= capacity": [], "born untouched": []}
         for s in splits:
-            st = int(s["step"])
+            st = int(float(s["step"]))
             if count[st] != 1:
                 continue
             share = early.get(st, 0) / 80
             f = float(s["fragment_force_N"])
-            key = ("born untouched" if int(s["fragment_contacts"]) == 0 else
+            key = ("born untouched" if int(float(s["fragment_contacts"])) == 0 else
                    "born with F > capacity" if f > cap[id(s)] else "born touching, F <= capacity")
             groups[key].append(share)
         print("\nsplits alone in their check, share of their 80 bonds broken within 100 steps: " + "; ".join(

@@ -59,7 +59,8 @@ static tg::app::Registrar reg{{"dem", 60,
       ".xmf, apply Glyph scaled by r_m), checkpoint.bin (for --restart).\n"
       "Breakage ([breakage], on by default, Table 1): history.csv gains grains broken, splits per\n"
       "generation, bonds broken, spheres, volume lost, fines removed, added mass (density scaling keeps\n"
-      "dt >= breakage.min_time_step_s, 1e-8 s); splits.csv lists every split; snapshots get bond CSVs.\n\n"
+      "dt >= breakage.min_time_step_s, 1e-8 s); splits.csv lists every split; snapshots get bond CSVs;\n"
+      "breakage.log_bond_breaks = true adds bond_breaks.csv (every bond broken, with its age in steps and s).\n\n"
       "Example:\n  tomograin dem oedometer dem/examples/demo.toml -o runs/demo");
   oed->add_option("config", o->config, "TOML config (unknown keys are errors)")->required();
   oed->add_option("-o,--output", o->out, "Run folder (created)")->required();

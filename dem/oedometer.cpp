@@ -101,6 +101,13 @@ OedometerSetup read_oedometer_config(Config& cfg, const std::filesystem::path& b
                : policy == "keep_unbreakable" ? breakage::SublimitPolicy::kKeepUnbreakable
                                               : breakage::SublimitPolicy::kRemove;
   b.fines_overlap = cfg.get("breakage.fines_overlap", b.fines_overlap);
+  const std::string birth = cfg.get("breakage.birth_overlap", std::string("inherit"));
+  cfg.require(birth == "inherit" || birth == "mother" || birth == "none", "breakage.birth_overlap",
+              "must be \"inherit\", \"mother\" or \"none\"");
+  b.birth_overlap = birth == "none"     ? breakage::BirthOverlap::kNone
+                    : birth == "mother" ? breakage::BirthOverlap::kMotherRatio
+                                        : breakage::BirthOverlap::kInherit;
+  s.log_bond_breaks = cfg.get("breakage.log_bond_breaks", s.log_bond_breaks);
   cfg.require(b.min_time_step_s >= 0, "breakage.min_time_step_s", "must be >= 0 (0 = no density scaling)");
   cfg.require(b.fines_overlap > 0 && b.fines_overlap < e.overlap_limit, "breakage.fines_overlap",
               "must be in (0, run.overlap_limit)");
@@ -229,7 +236,10 @@ void write_run_record(const std::filesystem::path& rundir, const OedometerSetup&
                        {"fines_overlap", b.fines_overlap},
                        {"split_bonded", b.split_bonded},
                        {"bond_radius_rule", b.bond.radius_rule == breakage::BondRadiusRule::kMin ? "min" : "mean"},
-                       {"bond_damping", b.bond.damping_ratio}};
+                       {"bond_damping", b.bond.damping_ratio},
+                       {"birth_overlap", b.birth_overlap == breakage::BirthOverlap::kNone          ? "none"
+                                         : b.birth_overlap == breakage::BirthOverlap::kMotherRatio ? "mother"
+                                                                                                   : "inherit"}};
   }
   write_file_atomic(rundir / "run.json", rec.dump(2) + "\n");
 }
@@ -351,6 +361,8 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
     hist.write(rundir / "history.csv");
     if (brk)  // one row per split of this process (a restart starts a new list)
       write_splits_csv(brk->events(), rundir / (c.restart ? "splits_after_restart.csv" : "splits.csv"));
+    if (brk && s.log_bond_breaks)
+      write_bond_breaks_csv(brk->bond_break_log(), rundir / (c.restart ? "bond_breaks_after_restart.csv" : "bond_breaks.csv"));
     save_checkpoint(e, brk ? scene.encode() + " " + brk->encode() : scene.encode(), ckpt);
   };
 

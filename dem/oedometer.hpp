@@ -20,7 +20,9 @@
 // lost volume; every snapshot gets a bonds CSV beside it
 // (snapshots/strain_X_bonds.csv: sphere_a, sphere_b, normal_force_N, ...);
 // particle ids in the snapshot are connected bonded sets; the breakage state
-// (bonds with forces, sphere keys) travels in the checkpoint.
+// (bonds with forces and birth steps, sphere keys) travels in the checkpoint.
+// breakage.log_bond_breaks adds bond_breaks.csv (a per-process log, like
+// splits.csv: bond_breaks_after_restart.csv after a restart).
 #pragma once
 #include <filesystem>
 #include <string>
@@ -51,6 +53,9 @@ struct OedometerSetup {
   // strength.d0_m = 0 means "the mean grain diameter of the packing"; the
   // bond moduli are taken from the material.
   bool breakage = true;
+  // breakage.log_bond_breaks: RUNDIR/bond_breaks.csv, one row per bond broken
+  // by stress with its age (dem/run_folder.hpp); off by default.
+  bool log_bond_breaks = false;
   breakage::BreakageOptions breakage_options = [] {
     breakage::BreakageOptions b;
     b.strength.d0_m = 0;

@@ -58,10 +58,20 @@ void write_bonds_csv(const breakage::BreakageModel& brk, const fs::path& path) {
 
 void write_splits_csv(const std::vector<breakage::SplitEvent>& events, const fs::path& path) {
   RowTable t({"step", "time_s", "generation", "diameter_m", "x_m", "y_m", "z_m", "f_max_N", "stress_Pa", "strength_Pa",
-              "volume_retained_m3"});
+              "volume_retained_m3", "mother_overlap_ratio", "fragment_overlap_ratio", "fragment_contacts",
+              "fragment_force_N"});
   for (const breakage::SplitEvent& ev : events)
     t.row({ev.step, ev.time_s, ev.generation, ev.diameter_m, ev.position.x, ev.position.y, ev.position.z, ev.f_max_N,
-           ev.stress_Pa, ev.strength_Pa, ev.volume_retained_m3});
+           ev.stress_Pa, ev.strength_Pa, ev.volume_retained_m3, ev.mother_overlap_ratio, ev.fragment_overlap_ratio,
+           ev.fragment_contacts, ev.fragment_force_N});
+  write_csv(t.table(), path);
+}
+
+void write_bond_breaks_csv(const std::vector<breakage::BondBreak>& breaks, const fs::path& path) {
+  RowTable t({"step", "time_s", "born_step", "age_steps", "age_s", "generation", "radius_a_m", "radius_b_m", "tensile"});
+  for (const breakage::BondBreak& b : breaks)
+    t.row({b.step, b.time_s, b.born_step, b.age_steps, b.age_s, b.generation, b.radius_a_m, b.radius_b_m,
+           b.tensile ? 1 : 0});
   write_csv(t.table(), path);
 }
 

@@ -19,6 +19,8 @@
 //                                   normal_force_N, shear_force_N, twist_moment_Nm,
 //                                   bending_moment_Nm; sphere = row of the snapshot)
 //   RUNDIR/splits.csv             one row per grain split (step, generation, …)
+//   RUNDIR/bond_breaks.csv        with breakage.log_bond_breaks: one row per bond
+//                                 broken by stress (step, its age, …)
 //   RUNDIR/checkpoint.bin         restart state (dem/checkpoint.hpp)
 //
 // Strain is axial: (h0 − platen height) / h0, h0 the initial specimen height.
@@ -35,6 +37,7 @@ namespace tg::dem {
 namespace breakage {
 class BreakageModel;
 struct SplitEvent;
+struct BondBreak;
 }  // namespace breakage
 
 struct SnapshotEntry {
@@ -73,8 +76,15 @@ class HistoryTable {
 // The bonds sidecar of a snapshot (columns in the header above).
 void write_bonds_csv(const breakage::BreakageModel& model, const std::filesystem::path& path);
 // splits.csv: one row per split (step, time_s, generation, diameter_m, x_m,
-// y_m, z_m, f_max_N, stress_Pa, strength_Pa, volume_retained_m3).
+// y_m, z_m, f_max_N, stress_Pa, strength_Pa, volume_retained_m3
+// + mother_overlap_ratio, fragment_overlap_ratio, fragment_contacts,
+// fragment_force_N: the birth figures of breakage::SplitEvent).
 void write_splits_csv(const std::vector<breakage::SplitEvent>& events, const std::filesystem::path& path);
+// bond_breaks.csv: one row per bond broken by stress (breakage::BondBreak):
+// step, time_s, born_step, age_steps, age_s (-1: made before a restart from
+// an older checkpoint), generation, radius_a_m, radius_b_m, tensile (1: the
+// normal stress reached its strength first, 0: the shear stress).
+void write_bond_breaks_csv(const std::vector<breakage::BondBreak>& breaks, const std::filesystem::path& path);
 
 // Writes RUNDIR/snapshots.csv (atomically) from `entries`.
 void write_snapshot_index(const std::filesystem::path& rundir, const std::vector<SnapshotEntry>& entries);

@@ -6,6 +6,7 @@ Usage:
   breakage_options.py small TOMOGRAIN OUTDIR [VARIANT ...]   # demo cell (126 grains, Ø8 mm)
   breakage_options.py full  TOMOGRAIN OUTDIR PACKING VARIANT ...  # the 910-grain pressed specimen
   breakage_options.py table OUTDIR                            # the table of finished runs
+  breakage_options.py stress_table OUTDIR                     # the same runs by stress level (issue 21's targets)
   breakage_options.py config KIND PACKING VARIANT             # print a variant's config (e.g. for calibrate)
 
 A VARIANT is a name below, optionally followed by keys of its own:
@@ -77,6 +78,11 @@ VARIANTS = {
               "breakage.sublimit_policy": '"keep_unbreakable"'},
     "nosplitbonded": {"breakage.split_bonded": "false"},
 }
+# dem/examples/oedometer_calibrated.toml as a variant (same keys: the study's reading, the speed
+# knobs, sigma_t0 and lambda calibrated), so that its remedies and seeds are rows: e.g.
+# 'calibrated,breakage.seed=2,breakage.birth_overlap="none"'.
+VARIANTS["calibrated"] = {**VARIANTS["study"], "breakage.min_time_step_s": "5.0e-8", "run.neighbour_skin_m": "1.0e-4",
+                          "breakage.sigma_t0_Pa": "17.3e6", "breakage.bond_radius_multiplier": "1.35"}
 
 
 def variant_keys(name):
@@ -132,7 +138,7 @@ def run_one(binary, outdir, kind, packing, name):
         f.write(config_text(kind, packing, variant_keys(name)))
     env = dict(os.environ, OMP_NUM_THREADS="1", OMP_WAIT_POLICY="passive", TOMOGRAIN_QUIET="1")
     t0 = time.time()
-    p = subprocess.run(["nice", "/usr/bin/time", "-f", "%e %U %S", binary, "dem", "oedometer", cfg, "-o", run],
+    p = subprocess.run(["nice", "-n", "19", "/usr/bin/time", "-f", "%e %U %S", binary, "dem", "oedometer", cfg, "-o", run],
                        env=env, capture_output=True, text=True)
     wall, user, sys_ = (float(x) for x in p.stderr.strip().splitlines()[-1].split())
     with open(run + ".time", "w") as f:
@@ -170,6 +176,7 @@ def figures(outdir, name, kind):
         return None if i is None else (int(h["grains_broken"][i]), int(h["bonds_broken"][i]))
 
     last = len(sig) - 1
+    row["at_2"] = broken(first(lambda i: sig[i] >= 2e6))
     row.update(yield_MPa=sy / 1e6, s10=mean_sigma(0.10), s1548=mean_sigma(0.1548), smax=max(sig) / 1e6,
                at_yield=broken(first(lambda i: sig[i] >= sy)), at_4=broken(first(lambda i: sig[i] >= 4e6)),
                at_end=broken(last), intact_pct=100 * h["grains_broken"][last] / n0,
@@ -231,12 +238,35 @@ def table(outdir, kind):
               f"| {times} |")
 
 
+def stress_table(outdir):
+    """Rows by the issue's targets: yield, peak, grains / bonds broken when the stress first
+    reaches 2 and 4 MPa, bonds per broken grain there, % intact broken at the end, fifths, CPU."""
+    names = sorted((f[:-5] for f in os.listdir(outdir) if f.endswith(".toml") and os.path.exists(os.path.join(outdir, f[:-5] + ".time"))),
+                   key=lambda n: os.path.getmtime(os.path.join(outdir, n + ".toml")))
+    fmt = lambda p: "never" if p is None else f"{p[0]} / {p[1]}"
+    per = lambda p: "-" if p is None or p[0] == 0 else f"{p[1] / p[0]:.0f}"
+    print("| run | yield MPa | σ peak MPa | grains / bonds at 2 MPa | at 4 MPa | bonds per broken grain at 4 MPa "
+          "| intact broken at 15.48 % | per fifth, bottom → top | CPU s |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for n in names:
+        r = figures(outdir, n, "full")
+        if "stopped" in r:
+            print(f"| {n} | stopped: {r['stopped']} | | | | | | | {r['cpu_s']:.0f} |")
+            continue
+        end = "" if r["end_strain"] >= 0.1547 else f" (at {100 * r['end_strain']:.2f} %)"
+        print(f"| {n} | {r['yield_MPa']:.2f} | {r['smax']:.2f} | {fmt(r['at_2'])} | {fmt(r['at_4'])} | {per(r['at_4'])} "
+              f"| {r['intact_pct']:.1f} %{end} | {', '.join(map(str, r['fifths']))} | {r['cpu_s']:.0f} |")
+
+
 def main():
     if len(sys.argv) < 3:
         raise SystemExit(__doc__)
     kind = sys.argv[1]
     if kind == "config" and len(sys.argv) == 5:
         sys.stdout.write(config_text(sys.argv[2], os.path.abspath(sys.argv[3]), variant_keys(sys.argv[4])))
+        return
+    if kind == "stress_table":
+        stress_table(sys.argv[2])
         return
     if kind == "table":
         outdir = sys.argv[2]

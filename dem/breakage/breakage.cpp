@@ -92,7 +92,7 @@ void BreakageModel::add_bond_forces(Engine& e) {
     p.ty[j] += l.torque_on_b.y;
     p.tz[j] += l.torque_on_b.z;
   }
-  if (any_broken) compact_bonds(&rec_.bonds_broken);
+  if (any_broken) compact_bonds(&rec_.bonds_broken, true);
 }
 
 void BreakageModel::drop_bonds_of(const std::vector<uint8_t>& marked) {
@@ -105,12 +105,27 @@ void BreakageModel::drop_bonds_of(const std::vector<uint8_t>& marked) {
   if (dropped) compact_bonds(&rec_.bonds_dropped);
 }
 
-void BreakageModel::compact_bonds(int64_t* counter) {
+void BreakageModel::compact_bonds(int64_t* counter, bool log) {
   int64_t w = 0;
   const int64_t nb = static_cast<int64_t>(ba_.size());
+  const Particles& p = eng_.particles();
   for (int64_t b = 0; b < nb; ++b) {
     if (broken_[b]) {
       ++*counter;
+      if (log) {  // in the force hook: the step being made is step_count() + 1
+        BondBreak r;
+        r.step = eng_.step_count() + 1;
+        r.time_s = eng_.time() + eng_.options().time_step;
+        r.born_step = born_step_[b];
+        r.age_steps = born_step_[b] >= 0 ? r.step - born_step_[b] : -1;
+        r.age_s = born_step_[b] >= 0 ? r.time_s - born_time_[b] : -1.0;
+        r.generation = std::max(generation_[ba_[b]], generation_[bb_[b]]);
+        r.radius_a_m = p.r[ba_[b]];
+        r.radius_b_m = p.r[bb_[b]];
+        const BondStress st = bond_stress(section_[b], state_[b]);
+        r.tensile = st.sigma_max / opt_.bond.tensile_strength_Pa >= st.tau_max / opt_.bond.shear_strength_Pa;
+        bond_breaks_.push_back(r);
+      }
       continue;
     }
     for_each_bond_field([&](auto& v) { v[w] = v[b]; });  // broken_[b] is 0 here
@@ -245,9 +260,12 @@ int BreakageModel::check() {
     drop_bonds_of(mother);
   }
   // Spheres touching each mother (before any split): the only ones a
-  // fragment sphere can overlap, since it lies inside its mother.
+  // fragment sphere can overlap, since it lies inside its mother (with the
+  // fragments of a neighbour split earlier in this check, added below).
   std::vector<std::vector<int64_t>> near(todo.size());
-  if (remove && !todo.empty()) {
+  std::vector<int64_t> first_new_of;  // mother index -> her first appended sphere (this check)
+  if (!todo.empty()) {
+    first_new_of.assign(static_cast<size_t>(n), -1);
     std::vector<int64_t> which(n, -1);
     for (size_t q = 0; q < todo.size(); ++q) which[todo[q].sphere] = static_cast<int64_t>(q);
     for (int64_t k = 0; k < eng_.pair_count(); ++k) {
@@ -257,25 +275,38 @@ int BreakageModel::check() {
       if (which[j] >= 0) near[which[j]].push_back(i);
     }
   }
+  // The mothers' overlaps, before any of them is replaced.
+  for (size_t q = 0; q < todo.size(); ++q) {
+    const int64_t s = todo[q].sphere;
+    double o = wall_overlap(s);
+    for (int64_t u : near[q]) o = std::max(o, p.r[s] + p.r[u] - norm(pos(p, u) - pos(p, s)));
+    todo[q].mother_overlap_ratio = std::max(0.0, o) / p.r[s];
+  }
+  std::vector<int64_t> reach;
+  std::vector<double> born_overlap;
   for (size_t q = 0; q < todo.size(); ++q) {
     SplitEvent& ev = todo[q];
     const int64_t first_new = p.size();
-    const Replacement rep = split(ev.sphere, ev.plane);
+    // The new spheres may also overlap the fragments of a neighbour split
+    // earlier in this check (her first sphere has her index, in near[q]).
+    reach = near[q];
+    for (int64_t u : near[q])
+      if (first_new_of[u] >= 0)
+        for (int64_t t = first_new_of[u]; t < first_new_of[u] + 33; ++t) reach.push_back(t);
+    const Replacement rep = split(ev.sphere, ev.plane, reach, near[q], ev, born_overlap);
+    first_new_of[ev.sphere] = first_new;
     ev.volume_mother_m3 = rep.volume_mother;
-    ev.volume_retained_m3 = rep.volume_retained;
     events_.push_back(ev);
     if (!remove) continue;
     // A fragment sphere at the mother's contact inherits the mother's overlap
     // there, which can be a large fraction of its own small radius (a 17 µm
     // sphere of a 0.22 mm mother overlapped by 10 µm: 0.6 r, past the
     // engine's limit). That material is the crushed zone at the contact:
-    // such spheres are not kept, they are fines.
-    std::vector<int64_t> born{ev.sphere};
-    for (int64_t t = first_new; t < p.size(); ++t) born.push_back(t);
-    for (int64_t t : born) {
-      double o = wall_overlap(t);
-      for (int64_t u : near[q]) o = std::max(o, p.r[t] + p.r[u] - norm(pos(p, u) - pos(p, t)));
-      if (o > opt_.fines_overlap * p.r[t]) fines.push_back(t);
+    // such spheres are not kept, they are fines (judged as placed, with the
+    // mother's neighbours: the same rule whatever birth_overlap does).
+    for (size_t k = 0; k < born_overlap.size(); ++k) {
+      const int64_t t = k == 0 ? ev.sphere : first_new + static_cast<int64_t>(k) - 1;
+      if (born_overlap[k] > opt_.fines_overlap * rep.spheres[k].r) fines.push_back(t);
     }
   }
   std::sort(fines.begin(), fines.end());
@@ -293,7 +324,9 @@ int BreakageModel::check() {
   return static_cast<int>(todo.size());
 }
 
-Replacement BreakageModel::split(int64_t s, const SplittingPlane& plane) {
+Replacement BreakageModel::split(int64_t s, const SplittingPlane& plane, const std::vector<int64_t>& neighbours,
+                                 const std::vector<int64_t>& fines_neighbours, SplitEvent& ev,
+                                 std::vector<double>& born_overlap) {
   Particles& p = eng_.particles();
   const Mother mother{pos(p, s), p.r[s], vel(p, s), spin(p, s)};
   const Replacement rep = replace_sphere(mother, plane.normal, plane.n_f);
@@ -301,7 +334,38 @@ Replacement BreakageModel::split(int64_t s, const SplittingPlane& plane) {
   if (g == 0) ++rec_.grains_broken;
   if (static_cast<int>(rec_.splits_by_generation.size()) <= g) rec_.splits_by_generation.resize(g + 1, 0);
   ++rec_.splits_by_generation[g];
+
+  // Birth overlaps of the new spheres (the mother still stands at s and is
+  // no neighbour of her own fragments) and the radii they are born with.
+  const size_t nnew = rep.spheres.size();
+  born_overlap.assign(nnew, 0.0);
+  std::vector<double> radius(nnew);
+  const double qm = ev.mother_overlap_ratio;
+  double shaved = 0, worst = 0;
+  for (size_t k = 0; k < nnew; ++k) {
+    const NewSphere& ns = rep.spheres[k];
+    double o = wall_overlap(ns.x, ns.r);  // the fines rule's overlap: walls and the mother's neighbours
+    for (int64_t u : fines_neighbours) o = std::max(o, ns.r + p.r[u] - norm(pos(p, u) - ns.x));
+    born_overlap[k] = o;
+    for (int64_t u : neighbours) o = std::max(o, ns.r + p.r[u] - norm(pos(p, u) - ns.x));
+    worst = std::max(worst, o / ns.r);
+    double cut = 0;  // radius shaved off (centre kept)
+    if (opt_.birth_overlap == BirthOverlap::kNone) cut = o;
+    else if (opt_.birth_overlap == BirthOverlap::kMotherRatio) cut = (o - qm * ns.r) / (1 - qm);  // (o − cut)/(r − cut) = qm
+    cut = std::clamp(cut, 0.0, 0.5 * ns.r);
+    radius[k] = ns.r;
+    if (cut > 0) {
+      radius[k] = ns.r - cut;
+      shaved += 4.0 / 3.0 * std::numbers::pi * (ns.r * ns.r * ns.r - radius[k] * radius[k] * radius[k]);
+    }
+  }
+  ev.fragment_overlap_ratio = worst;
   rec_.volume_lost_m3 += rep.volume_lost;
+  ev.volume_retained_m3 = rep.volume_retained;
+  if (shaved > 0) {
+    rec_.volume_lost_m3 += shaved;
+    ev.volume_retained_m3 -= shaved;
+  }
 
   // The mother has no bonds left: check() dropped them before the splits.
 
@@ -324,18 +388,33 @@ Replacement BreakageModel::split(int64_t s, const SplittingPlane& plane) {
     p.wx[t] = ns.w.x, p.wy[t] = ns.w.y, p.wz[t] = ns.w.z;
     p.fx[t] = p.fy[t] = p.fz[t] = 0;  // forces of the next evaluation start afresh
     p.tx[t] = p.ty[t] = p.tz[t] = 0;
-    p.r[t] = ns.r;
-    const double q = ns.r / r_mother;
+    p.r[t] = radius[k];
+    const double q = radius[k] / r_mother;
     p.m[t] = m_mother * q * q * q;  // keeps any mass scaling of the mother
-    p.inertia[t] = 0.4 * p.m[t] * ns.r * ns.r;
+    p.inertia[t] = 0.4 * p.m[t] * radius[k] * radius[k];
     p.flags[t] |= kFlagClusterElement;
     p.hbx[t] = p.hby[t] = p.hbz[t] = 0;
     p.htx[t] = p.hty[t] = p.htz[t] = 0;
     p.hcx[t] = p.hcy[t] = p.hcz[t] = 0;
     key_[t] = fragment_key(mother_key, ns.slot);
     generation_[t] = g + 1;
-    strength_[t] = sphere_strength(opt_.strength, key_[t], 2 * ns.r);
+    strength_[t] = sphere_strength(opt_.strength, key_[t], 2 * radius[k]);
     mass_factor_[t] = factor_mother;
+  }
+  // As born: touching contacts with the neighbours and walls, largest Hertz force.
+  for (int64_t k = 0; k < count; ++k) {
+    const Vec3 x = pos(p, idx[k]);
+    const double r = p.r[idx[k]];
+    auto touch = [&](double delta, double r_eff) {
+      if (delta <= 1e-9 * r) return;
+      ++ev.fragment_contacts;
+      ev.fragment_force_N = std::max(ev.fragment_force_N, law_.normal_force(delta, r_eff));
+    };
+    const Walls& w = eng_.options().walls;
+    if (w.bottom) touch(r - x.z, r);
+    if (w.top) touch(x.z + r - w.top_z, r);
+    if (w.cylinder) touch(std::hypot(x.x, x.y) + r - w.cylinder_radius, r);
+    for (int64_t u : neighbours) touch(r + p.r[u] - norm(pos(p, u) - x), r * p.r[u] / (r + p.r[u]));
   }
   for (auto b : rep.bonds) add_bond(idx[b[0]], idx[b[1]]);
   if (opt_.min_time_step_s > 0) {
@@ -375,6 +454,8 @@ void BreakageModel::add_bond(int64_t a, int64_t b) {
   section_.push_back(bond_section(opt_.bond, p.r[a], p.r[b]));
   state_.push_back(BondState{});
   broken_.push_back(0);
+  born_step_.push_back(eng_.step_count());
+  born_time_.push_back(eng_.time());
   bonds_changed_ = true;
 }
 
@@ -427,12 +508,15 @@ std::vector<double> BreakageModel::max_overlap_ratios() const {
 
 double BreakageModel::wall_overlap(int64_t s) const {
   const Particles& p = eng_.particles();
+  return wall_overlap(pos(p, s), p.r[s]);
+}
+
+double BreakageModel::wall_overlap(Vec3 x, double r) const {
   const Walls& w = eng_.options().walls;
-  const double r = p.r[s];
   double d = 0;
-  if (w.bottom) d = std::max(d, r - p.z[s]);
-  if (w.top) d = std::max(d, p.z[s] + r - w.top_z);
-  if (w.cylinder) d = std::max(d, std::hypot(p.x[s], p.y[s]) + r - w.cylinder_radius);
+  if (w.bottom) d = std::max(d, r - x.z);
+  if (w.top) d = std::max(d, x.z + r - w.top_z);
+  if (w.cylinder) d = std::max(d, std::hypot(x.x, x.y) + r - w.cylinder_radius);
   return d;
 }
 
@@ -510,7 +594,7 @@ std::string g17(double v) {
 std::string BreakageModel::encode() const {
   std::ostringstream os;
   const int64_t n = static_cast<int64_t>(key_.size());
-  os << "breakage2 " << g17(eng_.options().time_step) << ' ' << n;
+  os << "breakage3 " << g17(eng_.options().time_step) << ' ' << n;
   for (int64_t s = 0; s < n; ++s) os << ' ' << key_[s] << ' ' << generation_[s] << ' ' << g17(mass_factor_[s]);
   os << ' ' << rec_.grains_broken << ' ' << rec_.bonds_broken << ' ' << rec_.bonds_dropped << ' ' << g17(rec_.volume_lost_m3)
      << ' ' << rec_.fines_removed << ' ' << g17(rec_.fines_volume_m3) << ' ' << rec_.splits_by_generation.size();
@@ -519,7 +603,8 @@ std::string BreakageModel::encode() const {
   for (size_t b = 0; b < ba_.size(); ++b) {
     const BondState& st = state_[b];
     os << ' ' << ba_[b] << ' ' << bb_[b] << ' ' << g17(st.fn) << ' ' << g17(st.fs.x) << ' ' << g17(st.fs.y) << ' '
-       << g17(st.fs.z) << ' ' << g17(st.mt) << ' ' << g17(st.mb.x) << ' ' << g17(st.mb.y) << ' ' << g17(st.mb.z);
+       << g17(st.fs.z) << ' ' << g17(st.mt) << ' ' << g17(st.mb.x) << ' ' << g17(st.mb.y) << ' ' << g17(st.mb.z)
+       << ' ' << born_step_[b] << ' ' << g17(born_time_[b]);
   }
   return os.str();
 }
@@ -530,7 +615,9 @@ void BreakageModel::restore(const std::string& state) {
   std::string tag;
   double dt = 0;
   int64_t n = 0;
-  if (!(is >> tag >> dt >> n) || tag != "breakage2") fail("missing or of an unknown version");
+  // breakage2 (before bond birth steps were kept): ages unknown (-1).
+  if (!(is >> tag >> dt >> n) || (tag != "breakage2" && tag != "breakage3")) fail("missing or of an unknown version");
+  const bool births = tag == "breakage3";
   const Particles& p = eng_.particles();
   if (n != p.size()) fail("has " + std::to_string(n) + " spheres, the checkpoint " + std::to_string(p.size()));
   for_each_sphere_field([&](auto& v) { v.resize(n); });
@@ -552,6 +639,8 @@ void BreakageModel::restore(const std::string& state) {
     BondState& st = state_[b];
     if (!(is >> ba_[b] >> bb_[b] >> st.fn >> st.fs.x >> st.fs.y >> st.fs.z >> st.mt >> st.mb.x >> st.mb.y >> st.mb.z))
       fail("truncated (bond " + std::to_string(b) + ")");
+    born_step_[b] = -1;
+    if (births && !(is >> born_step_[b] >> born_time_[b])) fail("truncated (bond " + std::to_string(b) + ")");
     if (ba_[b] < 0 || bb_[b] >= n || ba_[b] >= bb_[b]) fail("names a bond between spheres out of range");
     section_[b] = bond_section(opt_.bond, p.r[ba_[b]], p.r[bb_[b]]);
   }

@@ -69,6 +69,22 @@ enum class SublimitPolicy {
   kKeepUnbreakable,
 };
 
+// What a new fragment sphere does with the overlap it is born with (issue 21,
+// frag21). Fragment spheres lie inside their mother, so none overlaps a
+// neighbour or wall by more than the mother did (triangle inequality); but
+// an outer sphere at the mother's contact can inherit a large part of that
+// overlap, i.e. a Hertz force of several N on a sphere whose bonds hold ~1 N
+// (README: "Fragments born loaded").
+enum class BirthOverlap {
+  kInherit,  // placed as the template says (today)
+  // A sphere overlapping a neighbour or wall by more, relative to its own
+  // radius, than the mother did (δ/r > δm/R, δm the mother's largest
+  // overlap) is shrunk (centre fixed) to δ/r = δm/R: it is born no more
+  // strained than the mother was.
+  kMotherRatio,
+  kNone,  // shrunk until it only touches (δ = 0): fragments are born unloaded
+};
+
 struct BreakageOptions {
   int64_t check_interval = 10;       // steps between grain checks (the study: 10)
   double min_split_diameter_m = 2e-4;  // smaller spheres never split (the study: 0.2 mm)
@@ -96,6 +112,13 @@ struct BreakageOptions {
   // fragment sphere (any size) born overlapping a neighbour of its mother or
   // a wall by more than this (the crushed zone at the mother's contact).
   double fines_overlap = 0.3;
+  // Birth overlap of fragment spheres (above). A shrunk sphere keeps its
+  // centre and density (its mass follows its radius; the shaved volume is
+  // counted in volume_lost); its bonds are sized from the radii it is born
+  // with (bond_section), so the bonds of a shrunk sphere span a small gap.
+  // Shrinking never takes more than half of a sphere's radius; spheres born
+  // past fines_overlap are fines first (SublimitPolicy), as with kInherit.
+  BirthOverlap birth_overlap = BirthOverlap::kInherit;
 };
 
 // Counters for the history table.
@@ -115,6 +138,17 @@ struct BreakageRecord {
 };
 
 // One split, for tests and logs.
+//   mother_overlap_ratio: the mother's largest overlap with a neighbour or
+//     wall (positions of the check) / her radius;
+//   fragment_overlap_ratio: the largest overlap / own radius of the 34 new
+//     spheres as the template places them (before fines and birth_overlap);
+//   fragment_contacts, fragment_force_N: touching contacts of the new
+//     spheres as born (after birth_overlap) and the largest Hertz normal
+//     force among them, estimated from the overlap with the grain-grain law
+//     (r_eff = r for a wall), N — to set against f_max_N and the bond
+//     strength σ̄c·A of the fragment's bonds (~1 N for a 1.3 mm grain).
+// Neighbours = spheres touching the mother at the check (and their own new
+// fragments when they split in the same check) and walls.
 struct SplitEvent {
   int64_t step = 0;
   double time_s = 0;      // engine time of the check
@@ -125,6 +159,25 @@ struct SplitEvent {
   double f_max_N = 0, stress_Pa = 0, strength_Pa = 0;
   SplittingPlane plane;
   double volume_retained_m3 = 0, volume_mother_m3 = 0;
+  double mother_overlap_ratio = 0, fragment_overlap_ratio = 0;
+  int64_t fragment_contacts = 0;
+  double fragment_force_N = 0;
+};
+
+// One bond broken by stress (not dropped with a split element), for the
+// diagnosis of how long fragments hold together (bond_breaks.csv).
+// age: number of steps the bond was updated / simulated time since it was
+// made (a fragment's bonds are made at its split, so this is the fragment's
+// age); generation: of its spheres; tensile: σmax/σ̄c ≥ τmax/τ̄c.
+struct BondBreak {
+  int64_t step = 0;            // the step in which it broke
+  double time_s = 0;           // engine time at the end of that step
+  int64_t born_step = 0;       // engine step count when it was made
+  int64_t age_steps = 0;
+  double age_s = 0;
+  int generation = 0;
+  double radius_a_m = 0, radius_b_m = 0;
+  bool tensile = false;
 };
 
 class BreakageModel {
@@ -154,6 +207,8 @@ class BreakageModel {
 
   const BreakageRecord& record() const { return rec_; }
   const std::vector<SplitEvent>& events() const { return events_; }
+  // Every bond broken by stress since the model was built or restored.
+  const std::vector<BondBreak>& bond_break_log() const { return bond_breaks_; }
   double strength(int64_t s) const { return strength_[s]; }
   int generation(int64_t s) const { return generation_[s]; }
   // Intact bonds (sphere index pairs) and their state, for snapshots.
@@ -173,8 +228,12 @@ class BreakageModel {
 
  private:
   void add_bond_forces(Engine& e);
-  // Replaces sphere s, whose bonds the caller has dropped, by two fragments.
-  Replacement split(int64_t s, const SplittingPlane& plane);
+  // Replaces sphere s, whose bonds the caller has dropped, by two fragments;
+  // `neighbours`: the spheres the new ones may overlap (besides walls).
+  // Fills ev's birth figures and born_overlap[k] = largest overlap (m) of
+  // new sphere k as placed (the fines rule's), with `fines_neighbours` only.
+  Replacement split(int64_t s, const SplittingPlane& plane, const std::vector<int64_t>& neighbours,
+                    const std::vector<int64_t>& fines_neighbours, SplitEvent& ev, std::vector<double>& born_overlap);
   // The contact loads (point, force on the sphere) of each of `spheres`, in
   // one pass over the pair list: O(pairs + spheres).
   std::vector<std::vector<ContactLoad>> contact_loads(const std::vector<int64_t>& spheres) const;
@@ -187,8 +246,10 @@ class BreakageModel {
   // Largest contact overlap of every sphere / its radius (last positions).
   std::vector<double> max_overlap_ratios() const;
   double wall_overlap(int64_t s) const;  // largest overlap with a wall, m (0 = none)
-  // Removes the bonds flagged in broken_; adds their count to *counter.
-  void compact_bonds(int64_t* counter);
+  double wall_overlap(Vec3 x, double r) const;  // the same for a sphere at x of radius r
+  // Removes the bonds flagged in broken_; adds their count to *counter;
+  // `log`: record each in bond_breaks_ (broken by stress, in the force hook).
+  void compact_bonds(int64_t* counter, bool log = false);
   // Drops (counted in bonds_dropped) every bond with an end marked non-zero.
   void drop_bonds_of(const std::vector<uint8_t>& marked);
 
@@ -212,10 +273,13 @@ class BreakageModel {
   std::vector<BondSection> section_;
   std::vector<BondState> state_;
   std::vector<uint8_t> broken_;
+  std::vector<int64_t> born_step_;  // engine step count when made (diagnostics)
+  std::vector<double> born_time_;   // engine time then, s
   template <class F>
   void for_each_bond_field(F&& f) {
-    f(ba_), f(bb_), f(section_), f(state_), f(broken_);
+    f(ba_), f(bb_), f(section_), f(state_), f(broken_), f(born_step_), f(born_time_);
   }
+  std::vector<BondBreak> bond_breaks_;
   std::vector<BondLoads> loads_;  // scratch, one per bond
   bool bonds_changed_ = false;
 };

@@ -10,6 +10,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
 #include <memory>
 #include <numbers>
 
@@ -197,7 +200,11 @@ TEST(BreakageOptions, KeepUnbreakableKeepsSubLimitSpheresUntilSqueezed) {
 // bond radius), weak grains so that grains split early: a run stopped and
 // restarted from its checkpoint ends bit for bit where the uninterrupted one
 // does, and 2 threads give the 1-thread bits. None of the options adds state
-// to the checkpoint (they are config keys, read again on restart).
+// to the checkpoint (they are config keys, read again on restart). With
+// birth_overlap "mother" (shrunk spheres, bonds sized from their radii) and
+// the log of broken bonds: the log of the restarted run (before + after the
+// restart) has the uninterrupted run's rows, ages included (the bonds' birth
+// steps travel in the checkpoint).
 TEST(BreakageOptions, NewOptionsKeepRestartAndThreadsBitExact) {
   namespace fs = std::filesystem;
   const fs::path d = fs::temp_directory_path() / ("tg_brk_opts_" + std::to_string(::getpid()));
@@ -217,7 +224,8 @@ TEST(BreakageOptions, NewOptionsKeepRestartAndThreadsBitExact) {
         "[oedometer]\nplaten_speed_m_s = 0.5\ntarget_strain = 0.05\nsnapshot_strains = [0.0, 0.05]\n"
         "history_every_steps = 200\ncheckpoint_every_steps = 1000\n"
         "[breakage]\nsigma_t0_Pa = 1.0e6\nmin_split_diameter_m = 5.0e-4\nbond_damping = 0.5\nsplit_bonded = false\n"
-        "sublimit_policy = \"keep_unbreakable\"\nbond_radius_rule = \"min\"\n",
+        "sublimit_policy = \"keep_unbreakable\"\nbond_radius_rule = \"min\"\nbirth_overlap = \"mother\"\n"
+        "log_bond_breaks = true\n",
         "options.toml");
     return read_oedometer_config(cfg, d);
   };
@@ -241,6 +249,19 @@ TEST(BreakageOptions, NewOptionsKeepRestartAndThreadsBitExact) {
     EXPECT_TRUE(o->final_state.x == a.final_state.x && o->final_state.vz == a.final_state.vz &&
                 o->final_state.wx == a.final_state.wx);
   }
+  auto rows = [](const fs::path& f) {
+    std::ifstream in(f);
+    std::vector<std::string> r;
+    for (std::string line; std::getline(in, line);) r.push_back(line);
+    if (!r.empty()) r.erase(r.begin());  // header
+    return r;
+  };
+  const std::vector<std::string> log_a = rows(d / "a" / "bond_breaks.csv");
+  ASSERT_GT(log_a.size(), 0u);
+  EXPECT_EQ(rows(d / "c" / "bond_breaks.csv"), log_a);
+  std::vector<std::string> log_b = rows(d / "b" / "bond_breaks.csv");
+  for (const std::string& line : rows(d / "b" / "bond_breaks_after_restart.csv")) log_b.push_back(line);
+  EXPECT_EQ(log_b, log_a);
   fs::remove_all(d);
 }
 

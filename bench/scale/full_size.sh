@@ -7,11 +7,15 @@
 #   3. `tomograin track` of five label stages made from analyse's labels by
 #      compressing the specimen along z by the study's strains
 #      (compress_stages.py: grains flatten, which real ones do not; the
-#      stages cost the tracker what real ones would: same size, same count).
+#      stages cost the tracker what real ones would: same size, same count);
+#   4. with a DEM run folder as third argument (`tomograin dem oedometer`),
+#      `tomograin compare` of the scan, as the experiment's stage 0, with the
+#      run's snapshot at strain 0 voxelised, imaged, segmented and measured
+#      at the scan's 12.3 um (~1.4e9 voxels).
 # Run it alone on the machine: it needs ~17 GiB of memory (synth) and ~14 GB of disk.
 #
-#   bench/scale/full_size.sh BUILD WORK
-#   bench/scale/full_size.sh build/release /work/big
+#   bench/scale/full_size.sh BUILD WORK [DEMRUN]
+#   bench/scale/full_size.sh build/release /work/big runs/calibrated
 set -eu
 B=${1:-build/release}
 W=${2:-/tmp/tomograin_full_size}
@@ -32,3 +36,8 @@ rm -rf tracked
 /usr/bin/time -v "$T" track stages/L0.h5 stages/L1.h5 stages/L2.h5 stages/L3.h5 stages/L4.h5 -o tracked > track.log 2>&1
 grep -E "Elapsed|Maximum resident|Percent" track.log
 cat tracked/track.json
+if [[ -n "${3:-}" ]]; then
+  rm -rf compared
+  /usr/bin/time -v "$T" compare --xct z1220.h5 --xct-strains 0 --dem "$(realpath "$3")" -o compared --no-track --no-plots > compare.log 2>&1
+  grep -E "Elapsed|Maximum resident|Percent" compare.log
+fi

@@ -2,7 +2,6 @@
 # Nothing is vendored or downloaded at build time.
 find_package(OpenMP REQUIRED)
 find_package(HDF5 REQUIRED COMPONENTS C)
-find_package(ZLIB REQUIRED)  # core/io/hdf5_chunks: deflate of HDF5 chunks on every core
 find_package(TIFF REQUIRED)
 find_package(nlohmann_json 3 REQUIRED)
 find_package(CLI11 REQUIRED)

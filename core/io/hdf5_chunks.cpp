@@ -140,26 +140,26 @@ void write_rows(hid_t dset, const Layout& layout, const Pipeline& p, const void*
     const int64_t rz = std::min(R.cz, z0 + nz - zr);
     int failed = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(| : failed)
-      for (int64_t c = 0; c < R.count(); ++c) {
-        const int64_t y0 = R.y0(c), x0 = R.x0(c);
-        const int64_t wy = std::min(R.cy, R.ny - y0), wx = std::min(R.cx, R.nx - x0);
-        unsigned char* const in = scratch.mine();  // the chunk as stored before deflate (shuffled or not)
-        if (rz < R.cz || wy < R.cy || wx < R.cx) std::memset(in, 0, cbytes);  // edge chunk: fill value 0
-        for (int64_t kz = 0; kz < rz; ++kz)
-          for (int64_t jy = 0; jy < wy; ++jy) {
-            const unsigned char* row = src + size_t(zr - z0 + kz) * slice_bytes + size_t((y0 + jy) * R.nx + x0) * R.elem;
-            const size_t e0 = size_t((kz * R.cy + jy) * R.cx);
-            if (p.shuffle)
-              row_to_planes(row, n, R.elem, e0, size_t(wx), in);
-            else
-              std::memcpy(in + e0 * R.elem, row, size_t(wx) * R.elem);
-          }
-        auto& out = stored[size_t(c)];
-        out.resize(libdeflate_zlib_compress_bound(scratch.compressor(), cbytes));
-        const size_t len = libdeflate_zlib_compress(scratch.compressor(), in, cbytes, out.data(), out.size());
-        if (len == 0) failed = 1;
-        out.resize(len);
-      }
+    for (int64_t c = 0; c < R.count(); ++c) {
+      const int64_t y0 = R.y0(c), x0 = R.x0(c);
+      const int64_t wy = std::min(R.cy, R.ny - y0), wx = std::min(R.cx, R.nx - x0);
+      unsigned char* const in = scratch.mine();  // the chunk as stored before deflate (shuffled or not)
+      if (rz < R.cz || wy < R.cy || wx < R.cx) std::memset(in, 0, cbytes);  // edge chunk: fill value 0
+      for (int64_t kz = 0; kz < rz; ++kz)
+        for (int64_t jy = 0; jy < wy; ++jy) {
+          const unsigned char* row = src + size_t(zr - z0 + kz) * slice_bytes + size_t((y0 + jy) * R.nx + x0) * R.elem;
+          const size_t e0 = size_t((kz * R.cy + jy) * R.cx);
+          if (p.shuffle)
+            row_to_planes(row, n, R.elem, e0, size_t(wx), in);
+          else
+            std::memcpy(in + e0 * R.elem, row, size_t(wx) * R.elem);
+        }
+      auto& out = stored[size_t(c)];
+      out.resize(libdeflate_zlib_compress_bound(scratch.compressor(), cbytes));
+      const size_t len = libdeflate_zlib_compress(scratch.compressor(), in, cbytes, out.data(), out.size());
+      if (len == 0) failed = 1;
+      out.resize(len);
+    }
     if (failed) throw ResourceError(where + ": libdeflate could not compress a chunk");
     for (int64_t c = 0; c < R.count(); ++c) {
       const hsize_t offset[3] = {hsize_t(zr), hsize_t(R.y0(c)), hsize_t(R.x0(c))};
@@ -210,31 +210,31 @@ bool read_rows(hid_t dset, const Layout& layout, const Pipeline& p, void* out_v,
     const int64_t k0 = std::max(zr, z0), k1 = std::min(zr + R.cz, z0 + nz);  // slices wanted from this row
     int64_t bad = -1;
 #pragma omp parallel for schedule(dynamic, 1) reduction(max : bad)
-      for (int64_t c = 0; c < R.count(); ++c) {
-        const int64_t y0 = R.y0(c), x0 = R.x0(c);
-        const int64_t wy = std::min(R.cy, R.ny - y0), wx = std::min(R.cx, R.nx - x0);
-        unsigned char* const raw = scratch.mine();  // the inflated chunk (shuffled or not)
-        if (present[size_t(c)]) {
-          const auto& b = stored[size_t(c)];
-          size_t len = 0;
-          if (libdeflate_zlib_decompress(scratch.decompressor(), b.data(), b.size(), raw, cbytes, &len) != LIBDEFLATE_SUCCESS ||
-              len != cbytes) {
-            bad = std::max(bad, c);
-            continue;
-          }
+    for (int64_t c = 0; c < R.count(); ++c) {
+      const int64_t y0 = R.y0(c), x0 = R.x0(c);
+      const int64_t wy = std::min(R.cy, R.ny - y0), wx = std::min(R.cx, R.nx - x0);
+      unsigned char* const raw = scratch.mine();  // the inflated chunk (shuffled or not)
+      if (present[size_t(c)]) {
+        const auto& b = stored[size_t(c)];
+        size_t len = 0;
+        if (libdeflate_zlib_decompress(scratch.decompressor(), b.data(), b.size(), raw, cbytes, &len) != LIBDEFLATE_SUCCESS ||
+            len != cbytes) {
+          bad = std::max(bad, c);
+          continue;
         }
-        for (int64_t k = k0; k < k1; ++k)
-          for (int64_t jy = 0; jy < wy; ++jy) {
-            unsigned char* row = out + size_t(k - z0) * slice_bytes + size_t((y0 + jy) * R.nx + x0) * R.elem;
-            const size_t e0 = size_t(((k - zr) * R.cy + jy) * R.cx);
-            if (!present[size_t(c)])
-              std::memset(row, 0, size_t(wx) * R.elem);  // never written: the fill value
-            else if (p.shuffle)
-              planes_to_row(raw, n, R.elem, e0, size_t(wx), row);
-            else
-              std::memcpy(row, raw + e0 * R.elem, size_t(wx) * R.elem);
-          }
       }
+      for (int64_t k = k0; k < k1; ++k)
+        for (int64_t jy = 0; jy < wy; ++jy) {
+          unsigned char* row = out + size_t(k - z0) * slice_bytes + size_t((y0 + jy) * R.nx + x0) * R.elem;
+          const size_t e0 = size_t(((k - zr) * R.cy + jy) * R.cx);
+          if (!present[size_t(c)])
+            std::memset(row, 0, size_t(wx) * R.elem);  // never written: the fill value
+          else if (p.shuffle)
+            planes_to_row(raw, n, R.elem, e0, size_t(wx), row);
+          else
+            std::memcpy(row, raw + e0 * R.elem, size_t(wx) * R.elem);
+        }
+    }
     if (bad >= 0)
       throw InputError(where + ": corrupt chunk at slice " + std::to_string(zr) + ", y " +
                        std::to_string(R.y0(bad)) + ", x " + std::to_string(R.x0(bad)) +

@@ -83,6 +83,16 @@ void Engine::rebuild() {
   list_ = std::move(fresh);
   xi_ = std::move(xi);
   pi_ = std::move(pi);
+  // Each part's spheres: its own rows and the j of its pairs (ascending in
+  // each row, so a row's last j is its largest).
+  for (int q = 0; q < kForceParts; ++q) {
+    const int64_t r0 = part_rows(q, kForceParts, n), r1 = part_rows(q + 1, kForceParts, n);
+    int64_t hi = r1;
+    for (int64_t i = r0; i < r1; ++i)
+      if (list_.offsets[i + 1] > list_.offsets[i]) hi = std::max(hi, list_.j[list_.offsets[i + 1] - 1] + 1);
+    part_range_[q] = {r0, hi};
+  }
+  part_range_n_ = n;
   // Force slots only for a force hook (breakage reads them): 72 bytes a
   // pair, about a sixth of the engine's memory, unused without one.
   slot_.assign(force_hook_ ? np : 0, PairData{});
@@ -291,22 +301,28 @@ void Engine::compute_pair_forces() {
   const int64_t np = list_.pairs();
   const int64_t n = p_.size();
   // Each part of the pair list sums its forces and torques into its own
-  // per-sphere array (part 0 starts from the weights); the gather adds the
-  // parts in their order. A pair's part is fixed by its own i alone (rows
-  // of i in chunks of kRowChunk spheres, dealt out to the parts in turn),
-  // not by the list: the sums then do not depend on which pairs that do not
-  // touch the list holds (skin, rebuild times, a restart).
+  // per-sphere array (each sphere's weight in the part of its row); the
+  // gather adds the parts in their order. A pair's part is fixed by its own
+  // i and the sphere count (contiguous rows, dem/contact/kernels.hpp
+  // part_rows), not by the list: the sums then do not depend on which
+  // pairs that do not touch the list holds (skin, rebuild times, a
+  // restart). The list only bounds the spheres a part clears and the gather
+  // reads (part_range_), which skips exact zeros.
   acc_.resize(size_t(kForceParts) * kAccStride * size_t(n) + 8);
   double* const acc0 = align64(acc_.data());
+  if (part_range_n_ != n)  // spheres added or removed since the last build: every j may be in range
+    for (int q = 0; q < kForceParts; ++q) part_range_[q] = {part_rows(q, kForceParts, n), n};
+  part_range_n_ = n;
   const PairKernelArgs args{pi_.data(), list_.j.data(), list_.offsets.data(),
                             static_cast<int64_t>(list_.offsets.size()) - 1, n,
                             p_.x.data(), p_.y.data(), p_.z.data(), p_.r.data(),
                             p_.vx.data(), p_.vy.data(), p_.vz.data(),
                             p_.wx.data(), p_.wy.data(), p_.wz.data(), p_.m.data(),
                             xi_.data(), slot_.data(), touching_.data(), bad_.data(),
-                            law_pp_, opt_.time_step, opt_.overlap_limit, opt_.gravity_z, keep_slots_, kForceParts};
+                            law_pp_, opt_.time_step, opt_.overlap_limit, opt_.gravity_z, keep_slots_, kForceParts,
+                            part_range_.data()};
   const PairPartKernel kernel = kernels_.pairs;
-  // One thread: the parts' chunks in list order in one sweep (the same sums:
+  // One thread: the parts one after the other in one call (the same sums:
   // dem/contact/kernels.hpp, kAllParts).
   const int bad = parallel(np) ? for_each_or(kForceParts, true, [&](int64_t part) __attribute__((always_inline)) {
     return kernel(args, static_cast<int>(part), acc0 + part * kAccStride * n);
@@ -334,7 +350,7 @@ void Engine::gather_forces(bool kick, bool drift_next, double alpha) {
   Particles& p = p_;
   const Walls& w = opt_.walls;
   const int64_t n_built = std::min<int64_t>(n, static_cast<int64_t>(x0_.size()));
-  const GatherArgs args{align64(acc_.data()), kForceParts,
+  const GatherArgs args{align64(acc_.data()), kForceParts, part_range_.data(),
                         p.x.data(), p.y.data(), p.z.data(), p.r.data(), p.m.data(), inv_m_.data(), inv_i_.data(),
                         p.vx.data(), p.vy.data(), p.vz.data(), p.wx.data(), p.wy.data(), p.wz.data(),
                         p.fx.data(), p.fy.data(), p.fz.data(), p.tx.data(), p.ty.data(), p.tz.data(),

@@ -83,16 +83,7 @@ void Engine::rebuild() {
   list_ = std::move(fresh);
   xi_ = std::move(xi);
   pi_ = std::move(pi);
-  // Each part's spheres: its own rows and the j of its pairs (ascending in
-  // each row, so a row's last j is its largest).
-  for (int q = 0; q < kForceParts; ++q) {
-    const int64_t r0 = part_rows(q, kForceParts, n), r1 = part_rows(q + 1, kForceParts, n);
-    int64_t hi = r1;
-    for (int64_t i = r0; i < r1; ++i)
-      if (list_.offsets[i + 1] > list_.offsets[i]) hi = std::max(hi, list_.j[list_.offsets[i + 1] - 1] + 1);
-    part_range_[q] = {r0, hi};
-  }
-  part_range_n_ = n;
+  update_part_ranges();
   // Force slots only for a force hook (breakage reads them): 72 bytes a
   // pair, about a sixth of the engine's memory, unused without one.
   slot_.assign(force_hook_ ? np : 0, PairData{});
@@ -153,6 +144,54 @@ std::vector<int64_t> Engine::remove_spheres(const std::vector<uint8_t>& remove) 
   xi_ = std::move(xi);
   rebuild();
   return map;
+}
+
+void Engine::update_part_ranges() {
+  const int64_t n = p_.size();
+  const int64_t rows = static_cast<int64_t>(list_.offsets.size()) - 1;
+  const int64_t split = std::clamp<int64_t>(split_ < 0 ? n / 2 / kRowChunk * kRowChunk : split_, 0, n);
+  const int64_t cut[kForceParts + 1] = {0, split, n};
+  static_assert(kForceParts == 2);
+  for (int q = 0; q < kForceParts; ++q) {
+    // Rows ascend in j, so a row's last j is its largest; a list built for
+    // another sphere count says nothing: every sphere may be touched.
+    int64_t hi = rows == n ? cut[q + 1] : n;
+    for (int64_t i = cut[q]; rows == n && i < cut[q + 1]; ++i)
+      if (list_.offsets[i + 1] > list_.offsets[i]) hi = std::max(hi, list_.j[list_.offsets[i + 1] - 1] + 1);
+    part_range_[q] = {cut[q], cut[q + 1], hi};
+  }
+  part_range_n_ = n;
+}
+
+void Engine::balance_parts() {
+  // Row i weighs two per touching pair (the force chain) plus one (its
+  // listed pairs' distance test and its sums): with these weights the two
+  // parts' busy times came out 48/52 on the 1e4 oedometer of
+  // bench/dem/scaling.sh (one per pair: 57/43; halves of the rows: 67/33).
+  // The cut goes to the chunk boundary where the weight is half done. The
+  // touching pairs are the same whatever the list holds, so the cut, and
+  // the sums, do not depend on the skin or on when the list was rebuilt.
+  const int64_t rows = static_cast<int64_t>(list_.offsets.size()) - 1;
+  if (rows != p_.size()) return;
+  std::vector<int64_t> weight(static_cast<size_t>((rows + kRowChunk - 1) / kRowChunk), 0);
+  int64_t total = 0;
+  for (int64_t i = 0; i < rows; ++i) {
+    int64_t w = 1;
+    for (int64_t k = list_.offsets[i]; k < list_.offsets[i + 1]; ++k) w += 2 * (touching_[k] == kTouching);
+    weight[static_cast<size_t>(i / kRowChunk)] += w;
+    total += w;
+  }
+  int64_t done = 0, chunk = 0;
+  while (chunk < static_cast<int64_t>(weight.size()) && 2 * (done + weight[static_cast<size_t>(chunk)]) <= total)
+    done += weight[static_cast<size_t>(chunk++)];
+  const int64_t split = std::min(rows, chunk * kRowChunk);
+  split_next_ = split;  // taken at the next step's start: this step's gather reads the ranges its pairs used
+}
+
+void Engine::set_part_split(int64_t split) {
+  if (split < -1) throw InputError("DEM: part split must be >= -1");
+  split_ = split_next_ = split;
+  update_part_ranges();
 }
 
 bool Engine::parallel(int64_t items) const {
@@ -303,16 +342,14 @@ void Engine::compute_pair_forces() {
   // Each part of the pair list sums its forces and torques into its own
   // per-sphere array (each sphere's weight in the part of its row); the
   // gather adds the parts in their order. A pair's part is fixed by its own
-  // i and the sphere count (contiguous rows, dem/contact/kernels.hpp
-  // part_rows), not by the list: the sums then do not depend on which
-  // pairs that do not touch the list holds (skin, rebuild times, a
-  // restart). The list only bounds the spheres a part clears and the gather
-  // reads (part_range_), which skips exact zeros.
+  // i and the cut between the parts (balance_parts), not by the list: the
+  // sums then do not depend on which pairs that do not touch the list holds
+  // (skin, rebuild times). The list only bounds the spheres a part clears
+  // and the gather reads (part_range_), which skips exact zeros.
   acc_.resize(size_t(kForceParts) * kAccStride * size_t(n) + 8);
   double* const acc0 = align64(acc_.data());
-  if (part_range_n_ != n)  // spheres added or removed since the last build: every j may be in range
-    for (int q = 0; q < kForceParts; ++q) part_range_[q] = {part_rows(q, kForceParts, n), n};
-  part_range_n_ = n;
+  if (split_next_ != split_) split_ = split_next_, part_range_n_ = -1;  // balance_parts() moved the cut
+  if (part_range_n_ != n) update_part_ranges();  // or spheres were added or removed since the last build
   const PairKernelArgs args{pi_.data(), list_.j.data(), list_.offsets.data(),
                             static_cast<int64_t>(list_.offsets.size()) - 1, n,
                             p_.x.data(), p_.y.data(), p_.z.data(), p_.r.data(),
@@ -327,6 +364,7 @@ void Engine::compute_pair_forces() {
   const int bad = parallel(np) ? for_each_or(kForceParts, true, [&](int64_t part) __attribute__((always_inline)) {
     return kernel(args, static_cast<int>(part), acc0 + part * kAccStride * n);
   }) : kernel(args, kAllParts, acc0);
+  if (steps_ % kBalanceEvery == 0) balance_parts();
   const double lim = opt_.overlap_limit;
   const Particles& p = p_;
   if (bad) {

@@ -49,23 +49,19 @@ enum : uint8_t { kNotTouching = 0, kTouching = 1, kHistoryOnly = 2 };
 // A sphere's force and torque sums of one part (6 doubles) in a 64-byte
 // line of its own.
 constexpr int64_t kAccStride = 8;
-// Rows (i) of the pair list in contiguous ranges, one a part: part p takes
-// rows [part_rows(p, parts, n), part_rows(p + 1, parts, n)), cut at
-// multiples of kRowChunk. A pair's part depends on its i and the sphere
-// count alone. Contiguous, so that a part's rows are the spheres its thread
-// gathers and kicks (the gather's static blocks): positions, velocities and
-// sums mostly stay in one core's cache, and part p's array holds non-zero
-// sums only from its first row to its largest j (PartRange), the only range
-// it clears and the gather reads.
+// Rows (i) of the pair list in contiguous ranges, one a part, cut at
+// multiples of kRowChunk (the engine chooses the cuts: dem/engine.hpp). A
+// pair's part depends on its i and the cuts alone, never on the list.
+// Contiguous, so that a part's rows are mostly the spheres its thread
+// gathers and kicks: positions, velocities and sums stay in one core's
+// cache, and part p's array holds non-zero sums only from its first row to
+// its largest j, the only range it clears and the gather reads.
 constexpr int64_t kRowChunk = 64;
-[[gnu::always_inline]] inline int64_t part_rows(int p, int parts, int64_t n) {
-  return p >= parts ? n : (p * n / parts) / kRowChunk * kRowChunk;
-}
-// The spheres a part's sums may touch: [lo, hi), lo its first row, hi past
-// its last row and its largest j (dem/engine.cpp, at each rebuild). Where
-// a range is unknown, [lo, n).
+// A part's spheres: its rows [lo, own_end), and [lo, hi) the spheres its
+// sums may touch (hi past its largest j; the engine finds it at each
+// rebuild, or takes n where it is unknown).
 struct PartRange {
-  int64_t lo, hi;
+  int64_t lo, own_end, hi;
 };
 
 // What the contact loop reads and writes; the engine's arrays.
@@ -389,14 +385,14 @@ int pair_part(const PairKernelArgs& a, int part, double* acc_base) {
   int failed = 0;
   for (int q = all ? 0 : part; q <= (all ? a.parts - 1 : part); ++q) {
     acc = all ? acc_base + q * kAccStride * n : acc_base;
-    const int64_t own_end = part_rows(q + 1, a.parts, n);
+    const int64_t own_end = a.range[q].own_end;
     for (int64_t s = a.range[q].lo; s < a.range[q].hi; ++s) {
       double* c = acc + kAccStride * s;
       c[0] = c[1] = 0;
       c[2] = s < own_end ? a.m[s] * a.gravity_z : 0.0;  // each sphere's weight in the part of its row
       c[3] = c[4] = c[5] = c[6] = c[7] = 0;  // 6, 7: padding (the AVX-512 kernel adds whole lines)
     }
-    const int64_t r0 = part_rows(q, a.parts, n), r1 = own_end < a.rows ? own_end : a.rows;
+    const int64_t r0 = a.range[q].lo, r1 = own_end < a.rows ? own_end : a.rows;
     if (r0 >= r1) continue;
     const int64_t lo = a.offsets[r0], hi = a.offsets[r1];
     for (int64_t kb = lo; kb < hi; kb += kPairBlock) failed |= block(kb, hi - kb < kPairBlock ? hi : kb + kPairBlock);

@@ -10,9 +10,10 @@
 namespace tg::dem {
 
 namespace {
-// Version 2 added the checksum, version 3 the previous_particle field;
-// older files are refused by name.
-constexpr char kMagic[8] = {'T', 'G', 'D', 'E', 'M', 'C', 'K', '3'};
+// Version 2 added the checksum, version 3 the previous_particle field,
+// version 4 the cut between the pair list's parts (it orders the force
+// sums); older files are refused by name.
+constexpr char kMagic[8] = {'T', 'G', 'D', 'E', 'M', 'C', 'K', '4'};
 
 // 64-bit FNV-1a over the body. Each step (xor a byte, multiply by an odd
 // constant) is a bijection of the state, so any change confined to one byte
@@ -108,6 +109,7 @@ void save_checkpoint(const Engine& e, const std::string& scene, const std::files
     const Walls& w = e.options().walls;
     put<double>(os, w.top_z);
     put<double>(os, w.top_vz);
+    put<int64_t>(os, e.part_split());
     const Engine::PairHistory h = e.pair_history();
     put_vec(os, h.i);
     put_vec(os, h.j);
@@ -152,6 +154,8 @@ CheckpointState load_checkpoint(const std::filesystem::path& path) {
   s.steps = r.get<int64_t>();
   s.walls.top_z = r.get<double>();
   s.walls.top_vz = r.get<double>();
+  s.part_split = r.get<int64_t>();
+  if (s.part_split < -1 || s.part_split > n) r.fail("part split out of range");
   r.get_vec(s.history.i, "pair i");
   r.get_vec(s.history.j, "pair j");
   r.get_vec(s.history.xi, "pair history");
@@ -166,6 +170,7 @@ Engine resume_engine(CheckpointState& s, EngineOptions opt) {
   opt.walls.top_vz = s.walls.top_vz;
   Engine e(std::move(s.particles), opt);
   e.restore(s.time, s.steps, s.history);
+  e.set_part_split(s.part_split);
   return e;
 }
 

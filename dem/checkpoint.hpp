@@ -3,7 +3,7 @@
 // the declared field list, so none can be forgotten), time, step count, the
 // walls (top platen position and speed), the pair tangential histories, and
 // an opaque text blob for the scene (strain reference, next snapshot...).
-// Layout: magic "TGDEMCK2" (the last character is the format version),
+// Layout: magic "TGDEMCK4" (the last character is the format version),
 // length-prefixed records, then a 64-bit FNV-1a checksum of the records.
 // Doubles are stored raw (little-endian machines only; the magic check
 // rejects others only by the field-size check). Written atomically (temp +
@@ -25,6 +25,7 @@ struct CheckpointState {
   double time = 0;
   int64_t steps = 0;
   Walls walls;
+  int64_t part_split = -1;  // Engine::part_split()
   Engine::PairHistory history;
   std::string scene;  // scene-defined text
 };

@@ -83,6 +83,7 @@ void Engine::rebuild() {
   list_ = std::move(fresh);
   xi_ = std::move(xi);
   pi_ = std::move(pi);
+  update_part_ranges();
   // Force slots only for a force hook (breakage reads them): 72 bytes a
   // pair, about a sixth of the engine's memory, unused without one.
   slot_.assign(force_hook_ ? np : 0, PairData{});
@@ -143,6 +144,54 @@ std::vector<int64_t> Engine::remove_spheres(const std::vector<uint8_t>& remove) 
   xi_ = std::move(xi);
   rebuild();
   return map;
+}
+
+void Engine::update_part_ranges() {
+  const int64_t n = p_.size();
+  const int64_t rows = static_cast<int64_t>(list_.offsets.size()) - 1;
+  const int64_t split = std::clamp<int64_t>(split_ < 0 ? n / 2 / kRowChunk * kRowChunk : split_, 0, n);
+  const int64_t cut[kForceParts + 1] = {0, split, n};
+  static_assert(kForceParts == 2);
+  for (int q = 0; q < kForceParts; ++q) {
+    // Rows ascend in j, so a row's last j is its largest; a list built for
+    // another sphere count says nothing: every sphere may be touched.
+    int64_t hi = rows == n ? cut[q + 1] : n;
+    for (int64_t i = cut[q]; rows == n && i < cut[q + 1]; ++i)
+      if (list_.offsets[i + 1] > list_.offsets[i]) hi = std::max(hi, list_.j[list_.offsets[i + 1] - 1] + 1);
+    part_range_[q] = {cut[q], cut[q + 1], hi};
+  }
+  part_range_n_ = n;
+}
+
+void Engine::balance_parts() {
+  // Row i weighs two per touching pair (the force chain) plus one (its
+  // listed pairs' distance test and its sums): with these weights the two
+  // parts' busy times came out 48/52 on the 1e4 oedometer of
+  // bench/dem/scaling.sh (one per pair: 57/43; halves of the rows: 67/33).
+  // The cut goes to the chunk boundary where the weight is half done. The
+  // touching pairs are the same whatever the list holds, so the cut, and
+  // the sums, do not depend on the skin or on when the list was rebuilt.
+  const int64_t rows = static_cast<int64_t>(list_.offsets.size()) - 1;
+  if (rows != p_.size()) return;
+  std::vector<int64_t> weight(static_cast<size_t>((rows + kRowChunk - 1) / kRowChunk), 0);
+  int64_t total = 0;
+  for (int64_t i = 0; i < rows; ++i) {
+    int64_t w = 1;
+    for (int64_t k = list_.offsets[i]; k < list_.offsets[i + 1]; ++k) w += 2 * (touching_[k] == kTouching);
+    weight[static_cast<size_t>(i / kRowChunk)] += w;
+    total += w;
+  }
+  int64_t done = 0, chunk = 0;
+  while (chunk < static_cast<int64_t>(weight.size()) && 2 * (done + weight[static_cast<size_t>(chunk)]) <= total)
+    done += weight[static_cast<size_t>(chunk++)];
+  const int64_t split = std::min(rows, chunk * kRowChunk);
+  split_next_ = split;  // taken at the next step's start: this step's gather reads the ranges its pairs used
+}
+
+void Engine::set_part_split(int64_t split) {
+  if (split < -1) throw InputError("DEM: part split must be >= -1");
+  split_ = split_next_ = split;
+  update_part_ranges();
 }
 
 bool Engine::parallel(int64_t items) const {
@@ -291,26 +340,31 @@ void Engine::compute_pair_forces() {
   const int64_t np = list_.pairs();
   const int64_t n = p_.size();
   // Each part of the pair list sums its forces and torques into its own
-  // per-sphere array (part 0 starts from the weights); the gather adds the
-  // parts in their order. A pair's part is fixed by its own i alone (rows
-  // of i in chunks of kRowChunk spheres, dealt out to the parts in turn),
-  // not by the list: the sums then do not depend on which pairs that do not
-  // touch the list holds (skin, rebuild times, a restart).
+  // per-sphere array (each sphere's weight in the part of its row); the
+  // gather adds the parts in their order. A pair's part is fixed by its own
+  // i and the cut between the parts (balance_parts), not by the list: the
+  // sums then do not depend on which pairs that do not touch the list holds
+  // (skin, rebuild times). The list only bounds the spheres a part clears
+  // and the gather reads (part_range_), which skips exact zeros.
   acc_.resize(size_t(kForceParts) * kAccStride * size_t(n) + 8);
   double* const acc0 = align64(acc_.data());
+  if (split_next_ != split_) split_ = split_next_, part_range_n_ = -1;  // balance_parts() moved the cut
+  if (part_range_n_ != n) update_part_ranges();  // or spheres were added or removed since the last build
   const PairKernelArgs args{pi_.data(), list_.j.data(), list_.offsets.data(),
                             static_cast<int64_t>(list_.offsets.size()) - 1, n,
                             p_.x.data(), p_.y.data(), p_.z.data(), p_.r.data(),
                             p_.vx.data(), p_.vy.data(), p_.vz.data(),
                             p_.wx.data(), p_.wy.data(), p_.wz.data(), p_.m.data(),
                             xi_.data(), slot_.data(), touching_.data(), bad_.data(),
-                            law_pp_, opt_.time_step, opt_.overlap_limit, opt_.gravity_z, keep_slots_, kForceParts};
+                            law_pp_, opt_.time_step, opt_.overlap_limit, opt_.gravity_z, keep_slots_, kForceParts,
+                            part_range_.data()};
   const PairPartKernel kernel = kernels_.pairs;
-  // One thread: the parts' chunks in list order in one sweep (the same sums:
+  // One thread: the parts one after the other in one call (the same sums:
   // dem/contact/kernels.hpp, kAllParts).
   const int bad = parallel(np) ? for_each_or(kForceParts, true, [&](int64_t part) __attribute__((always_inline)) {
     return kernel(args, static_cast<int>(part), acc0 + part * kAccStride * n);
   }) : kernel(args, kAllParts, acc0);
+  if (steps_ % kBalanceEvery == 0) balance_parts();
   const double lim = opt_.overlap_limit;
   const Particles& p = p_;
   if (bad) {
@@ -334,7 +388,7 @@ void Engine::gather_forces(bool kick, bool drift_next, double alpha) {
   Particles& p = p_;
   const Walls& w = opt_.walls;
   const int64_t n_built = std::min<int64_t>(n, static_cast<int64_t>(x0_.size()));
-  const GatherArgs args{align64(acc_.data()), kForceParts,
+  const GatherArgs args{align64(acc_.data()), kForceParts, part_range_.data(),
                         p.x.data(), p.y.data(), p.z.data(), p.r.data(), p.m.data(), inv_m_.data(), inv_i_.data(),
                         p.vx.data(), p.vy.data(), p.vz.data(), p.wx.data(), p.wy.data(), p.wz.data(),
                         p.fx.data(), p.fy.data(), p.fz.data(), p.tx.data(), p.ty.data(), p.tz.data(),

@@ -13,12 +13,14 @@
 //
 // Determinism with threads: forces are never summed in an order that the
 // thread count can change. (1) The pair list is cut into kForceParts parts
-// by the pairs' rows (i in chunks of 64 spheres, dealt to the parts in
-// turn); each part computes its pairs' forces and torques (and updates
-// their tangential histories) and sums them, in ascending pair order, into
-// a per-sphere array of its own, part 0 starting from the weights. The
-// parts run on the OpenMP team. (2) A parallel loop over spheres adds the
-// parts in order, then its wall contacts. (3) Wall reaction forces are
+// by the pairs' rows (i in two contiguous ranges, cut where the rows' touching
+// pairs are half done, found again every kBalanceEvery steps from the
+// touching pairs and kept in checkpoints); each part computes its pairs' forces
+// and torques (and updates their tangential histories) and sums them, in
+// ascending pair order, into a per-sphere array of its own, each sphere's
+// weight in the part of its row. The parts run on the OpenMP team. (2) A
+// parallel loop over spheres adds the parts in order (skipping those that
+// cannot hold a sum for it), then its wall contacts. (3) Wall reaction forces are
 // summed serially over spheres. Every sum therefore has the same operands
 // in the same order for any thread count; as the parts depend on the pairs'
 // indices only, not on which non-touching pairs the neighbour list holds,
@@ -52,6 +54,7 @@
 //    whose (i, j) indices survive and dropped otherwise — when indices are
 //    renumbered, clear them with reset_pair_history().
 #pragma once
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <stdexcept>
@@ -194,6 +197,11 @@ class Engine {
   // particles (whose forces are restored too): the next step() continues
   // exactly as the saved run would have.
   void restore(double time, int64_t steps, const PairHistory& h);
+  // The cut between the pair list's two parts (first row of part 1; -1:
+  // half the spheres): part of the state a checkpoint keeps, as it decides
+  // the order of the force sums.
+  int64_t part_split() const { return split_next_; }  // the cut the next step uses
+  void set_part_split(int64_t split);
 
  private:
   void rebuild();
@@ -235,6 +243,16 @@ class Engine {
   // t): two threads share the contact loop and nothing else of each other's.
   static constexpr int kForceParts = 2;
   std::vector<double> acc_;            // per part and sphere: f, t in a 64-byte line (engine.cpp kAccStride)
+  std::array<PartRange, kForceParts> part_range_{};  // per part: its rows, the spheres its sums may touch
+  int64_t part_range_n_ = -1;                        // the sphere count they were found for
+  // The first row of part 1 (-1: half the spheres). Found every
+  // kBalanceEvery steps so that each part holds half the touching pairs:
+  // where contacts crowd (the loaded half of a specimen, a crushing zone),
+  // halves of the rows left one thread with 87 % of them (1e4 spheres).
+  int64_t split_ = -1, split_next_ = -1;  // the cut in use, and the one the next step takes
+  static constexpr int64_t kBalanceEvery = 1000;
+  void update_part_ranges();
+  void balance_parts();
   std::vector<PairData> slot_;     // this step's force
   // Per pair: kTouching, kHistoryOnly or kNotTouching (contact/kernels.hpp).
   std::vector<uint8_t> touching_;

@@ -13,8 +13,8 @@
 // The settled height then says how loose the deposit is. As in the study
 // (§4.2: "the height of the sample was set to 12.25 mm"), a deposit that
 // settles above the target height is then pressed down to it by the top
-// platen (slowly, grains still frictionless), held until at rest, and
-// released; the oedometer measures strain from the top of the highest grain
+// platen (slowly, grains still frictionless), held until at rest, lifted
+// off at the press speed until it carries nothing, and taken away; the oedometer measures strain from the top of the highest grain
 // (as the LIGGGHTS peer does), so from 12.25 mm. Insertion: random sequential addition (uniform positions, rejected
 // on overlap with a wall or an earlier grain), O(n²) checks (n ~ 10³).
 #pragma once

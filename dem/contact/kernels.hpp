@@ -49,9 +49,20 @@ enum : uint8_t { kNotTouching = 0, kTouching = 1, kHistoryOnly = 2 };
 // A sphere's force and torque sums of one part (6 doubles) in a 64-byte
 // line of its own.
 constexpr int64_t kAccStride = 8;
-// Rows (i) of the pair list in chunks of this many spheres, dealt out to
-// the parts in turn: a pair's part depends on its i alone.
+// Rows (i) of the pair list in contiguous ranges, one a part, cut at
+// multiples of kRowChunk (the engine chooses the cuts: dem/engine.hpp). A
+// pair's part depends on its i and the cuts alone, never on the list.
+// Contiguous, so that a part's rows are mostly the spheres its thread
+// gathers and kicks: positions, velocities and sums stay in one core's
+// cache, and part p's array holds non-zero sums only from its first row to
+// its largest j, the only range it clears and the gather reads.
 constexpr int64_t kRowChunk = 64;
+// A part's spheres: its rows [lo, own_end), and [lo, hi) the spheres its
+// sums may touch (hi past its largest j; the engine finds it at each
+// rebuild, or takes n where it is unknown).
+struct PartRange {
+  int64_t lo, own_end, hi;
+};
 
 // What the contact loop reads and writes; the engine's arrays.
 struct PairKernelArgs {
@@ -65,17 +76,16 @@ struct PairKernelArgs {
   double dt, overlap_limit, gravity_z;
   bool keep;
   int parts;
+  const PartRange* range;  // per part: the spheres its sums may touch
 };
 
 // Part `part` of the pair list: fills acc (kAccStride doubles per sphere,
-// 64-byte aligned) with the weights (part 0) or zeros, then adds the part's
-// contact forces and torques. Returns 1 if some pair overlapped beyond the
-// limit or was not finite (its bad flag set). part = kAllParts: every part
-// on this thread, acc = part 0's array (the parts' arrays follow it, n
-// spheres apart), the row chunks taken in list order, each into its own
-// part's array: the same sums in the same order as part by part, but each
-// chunk's spheres are read once a step, not once per part (at 10^5 spheres
-// and more they no longer stay in cache between the parts' sweeps).
+// 64-byte aligned) over the part's range with the weights (its own rows)
+// or zeros (the j beyond them), then adds the part's contact forces and
+// torques. Returns 1 if some pair overlapped beyond the limit or was not
+// finite (its bad flag set). part = kAllParts: every part on this thread,
+// in order, acc = part 0's array (the parts' arrays follow it, n spheres
+// apart): the same sums in the same order as part by part.
 using PairPartKernel = int (*)(const PairKernelArgs&, int part, double* acc);
 constexpr int kAllParts = -1;
 
@@ -86,6 +96,7 @@ constexpr int64_t kSphereBlock = 64;
 struct GatherArgs {
   const double* acc;  // the parts' sums: part p, sphere s at (p n + s) kAccStride
   int parts;
+  const PartRange* range;  // per part: the spheres whose sums it wrote
   double *x, *y, *z;
   const double *r, *m, *inv_m, *inv_i;
   double *vx, *vy, *vz, *wx, *wy, *wz;
@@ -371,20 +382,19 @@ int pair_part(const PairKernelArgs& a, int part, double* acc_base) {
 
   const int64_t n = a.n;
   const bool all = part == kAllParts;
+  int failed = 0;
   for (int q = all ? 0 : part; q <= (all ? a.parts - 1 : part); ++q) {
-    double* const ap = all ? acc_base + q * kAccStride * n : acc_base;
-    for (int64_t s = 0; s < n; ++s) {
-      double* c = ap + kAccStride * s;
+    acc = all ? acc_base + q * kAccStride * n : acc_base;
+    const int64_t own_end = a.range[q].own_end;
+    for (int64_t s = a.range[q].lo; s < a.range[q].hi; ++s) {
+      double* c = acc + kAccStride * s;
       c[0] = c[1] = 0;
-      c[2] = q == 0 ? a.m[s] * a.gravity_z : 0.0;
+      c[2] = s < own_end ? a.m[s] * a.gravity_z : 0.0;  // each sphere's weight in the part of its row
       c[3] = c[4] = c[5] = c[6] = c[7] = 0;  // 6, 7: padding (the AVX-512 kernel adds whole lines)
     }
-  }
-  int failed = 0;
-  for (int64_t c = all ? 0 : part; c * kRowChunk < a.rows; c += all ? 1 : a.parts) {
-    if (all) acc = acc_base + (c % a.parts) * kAccStride * n;
-    const int64_t lo = a.offsets[c * kRowChunk];
-    const int64_t hi = a.offsets[(c + 1) * kRowChunk < a.rows ? (c + 1) * kRowChunk : a.rows];
+    const int64_t r0 = a.range[q].lo, r1 = own_end < a.rows ? own_end : a.rows;
+    if (r0 >= r1) continue;
+    const int64_t lo = a.offsets[r0], hi = a.offsets[r1];
     for (int64_t kb = lo; kb < hi; kb += kPairBlock) failed |= block(kb, hi - kb < kPairBlock ? hi : kb + kPairBlock);
   }
   return failed;
@@ -488,6 +498,7 @@ int gather_block(const GatherArgs& a, int64_t from, int64_t to) {
     const int q = static_cast<int>(s - from);
     Vec3 f, t;
     for (int part = 0; part < a.parts; ++part) {
+      if (s < a.range[part].lo || s >= a.range[part].hi) continue;  // no sums of this part
       const double* c = a.acc + (part * n + s) * kAccStride;
       f = f + Vec3{c[0], c[1], c[2]};
       t = t + Vec3{c[3], c[4], c[5]};

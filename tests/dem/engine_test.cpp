@@ -433,6 +433,26 @@ void expect_kernel_gives_sse2_bits(KernelIsa isa) {
 TEST(Engine, Avx2ContactKernelGivesTheSse2Bits) { expect_kernel_gives_sse2_bits(KernelIsa::kAvx2); }
 TEST(Engine, Avx512ContactKernelGivesTheSse2Bits) { expect_kernel_gives_sse2_bits(KernelIsa::kAvx512); }
 
+// The cut between the pair list's two parts (one per thread) goes where the
+// rows' weights (two per touching pair, one per row) are half done, at a
+// multiple of 64 rows. 512 spheres in a chain, each overlapping the next
+// (rows 0..510 hold one touching pair: weight 3; row 511: 1), then 512 lone
+// spheres (weight 1): total 511 * 3 + 1 + 512 = 2046; chunks of 64 rows
+// weigh 192 in the chain, so five chunks (960) stay under half (1023) and a
+// sixth (1152) would not: the cut is at row 320, not at the halfway 512.
+TEST(Engine, PartsAreCutWhereHalfTheContactWorkIsDone) {
+  Particles p;
+  const double rho = EngineOptions{}.material.density_kg_m3;
+  for (int s = 0; s < 512; ++s) p.append_sphere(s * 1.9 * kR, 0, 0, kR, rho, s);
+  for (int s = 0; s < 512; ++s) p.append_sphere(s * 3 * kR, 1.0, 0, kR, rho, 512 + s);
+  Engine e(std::move(p), free_space(1e-8));
+  EXPECT_EQ(e.part_split(), -1);  // halves until the first step's contacts are known
+  e.step();
+  EXPECT_EQ(e.contact_count(), 511);
+  EXPECT_EQ(e.part_split(), 320);
+  EXPECT_THROW(e.set_part_split(-2), InputError);
+}
+
 TEST(Engine, UnknownContactKernelNameIsAnInputError) {
   setenv("TOMOGRAIN_SIMD", "avx9", 1);
   EXPECT_THROW(contact_kernels(), InputError);

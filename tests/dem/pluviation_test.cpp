@@ -232,9 +232,15 @@ TEST(Pluviation, PressesTheDepositDownToTheTargetHeight) {
 // Regression (issue 25): with the study's tolerance (1e-9 J) and the rest
 // window, the pressed specimen of seed 6, which the former one-check rule
 // called settled with a grain perched on another and the wall (3.7e-10 J and
-// growing; restarted, grains moved by 0.84 mm), is at rest: restarted with
-// the preparation's contact law, no grain moves by a hundredth of a diameter
-// over 100 ms and the kinetic energy stays below the tolerance.
+// growing; restarted, grains moved by 0.84 mm), does not rearrange:
+// restarted with the preparation's contact law for 100 ms, the kinetic
+// energy stays below the tolerance and no grain moves by 5 % of a diameter
+// (68 um; a rearrangement moves grains 0.1-0.5 mm). What is left is creep
+// of the frictionless packing, and it depends on the summation order of the
+// forces: seeds 1-8 restarted moved their farthest grain 34, 33, 262, 27,
+// 38, 4.5, 103, 46 um with the interleaved parts of 1620aa5 and 6.9, 255, 19, 27, 6.8,
+// 44, 103, 89 um with contiguous parts (seeds 3 and 2 at ~1e-9 J and above
+// rearrange: the rest window lowers that risk, it does not remove it).
 TEST(Pluviation, PressedSpecimenIsAtRestWithTheStudysTolerance) {
   PluviationOptions o = small_cell();
   o.seed = 6;
@@ -262,7 +268,7 @@ TEST(Pluviation, PressedSpecimenIsAtRestWithTheStudysTolerance) {
     moved = std::max(moved, std::hypot(e.particles().x[i] - p.x[i], e.particles().y[i] - p.y[i], e.particles().z[i] - p.z[i]));
   std::printf("seed 6 restarted: KE max %.3g J, largest displacement %.3g um\n", ke_max, moved * 1e6);
   EXPECT_LT(ke_max, q.kinetic_energy_tol_J);
-  EXPECT_LT(moved, 0.01 * o.d50_m);
+  EXPECT_LT(moved, 0.05 * o.d50_m);
 }
 
 // A target the grains cannot reach without deforming (half the deposit's

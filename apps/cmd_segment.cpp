@@ -54,7 +54,7 @@ tg::SegmentOptions segment_options(const SegmentJob& o, const tg::Geometry& geom
   s.saturation_level = top;
   s.threshold = tg::parse_threshold_method(o.threshold);
   if (s.local_window_vox > 0 && s.threshold != tg::ThresholdMethod::local) {
-    if (o.threshold != "moments")
+    if (o.threshold != "auto")
       throw tg::UsageError("--local-window-vox is the window of --threshold local, not of --threshold " + o.threshold);
     s.threshold = tg::ThresholdMethod::local;
   }
@@ -134,6 +134,7 @@ int run_segment_chunked(const SegmentJob& o, const std::string& in_path, const s
   fmt::print("  threshold {} = {} (voxels above are solid), solid fraction {:.4f}{}\n",
              tg::threshold_method_name(r.threshold.method), r.threshold.value, r.solid_fraction,
              r.fov.active ? " (of the field of view)" : "");
+  if (r.threshold.method == tg::ThresholdMethod::automatic) fmt::print("  threshold auto: {}\n", r.threshold.automatic.why);
   for (const auto& n : r.notes) fmt::print("  note: {}\n", n);
   fmt::print("  labels {} ({} dropped below {} voxels)\n", r.count, r.dropped, s.resolved().min_size_vox);
   fmt::print("  pass 1 {:.2f} s ({} read{}), pass 2 {:.2f} s ({} slabs), peak memory {} ({:.2f} B/voxel)\n",
@@ -203,6 +204,8 @@ int run_segment(SegmentJob& o) {
     fmt::print("  threshold {} = {} (voxels above are solid), solid fraction {:.4f}{}\n",
                tg::threshold_method_name(res.threshold.method), res.threshold.value, res.solid_fraction,
                res.fov.active ? " (of the field of view)" : "");
+  if (res.threshold.method == tg::ThresholdMethod::automatic)
+    fmt::print("  threshold auto: {}\n", res.threshold.automatic.why);
   for (const auto& n : res.notes) fmt::print("  note: {}\n", n);
   if (res.graded)
     fmt::print("  grey evidence: solid above {} is bright; {:.1f} % of the solid dim; {} dim pockets filled\n",
@@ -237,10 +240,16 @@ int run_segment(SegmentJob& o) {
 namespace cmd_segment {
 static tg::app::Registrar reg{{"segment", 30,
     "Segment a grey scan into one label per grain or fragment (reference study section 2.2):\n"
-    "moment-preserving threshold (Tsai 1985, as Fiji 'Moments'; voxels above it are solid),\n"
-    "filling of small near-spherical enclosed pores, exact Euclidean distance map, h-maxima\n"
-    "markers (one per grain and per split fragment), marker-controlled watershed with 1-voxel\n"
+    "global threshold (voxels above it are solid), filling of small near-spherical enclosed\n"
+    "pores, exact Euclidean distance map, h-maxima markers (one per grain and per split\n"
+    "fragment), marker-controlled watershed with 1-voxel\n"
     "void lines between touching grains, merging of over-segmented pieces, size filter.\n"
+    "Threshold (--threshold auto, the default): halfway between the void and solid peaks (the\n"
+    "level a blurred surface crosses at its true place) when that is at least k void noise sigmas\n"
+    "above the void peak, k such that noise lifts about one of the scan's N void voxels that far\n"
+    "(k = 5.0 for N = 3e6); else the moment-preserving threshold (Tsai 1985, as Fiji 'Moments',\n"
+    "the reference study's choice: --threshold moments), or k sigmas above the void if that is\n"
+    "lower. The summary's threshold.auto says which and why.\n"
     "Grey evidence: solid darker than halfway between the threshold and the mean solid grey\n"
     "(and at least 3 noise sigmas below the solid's peak) is 'dim': partial volume at grain\n"
     "surfaces and in the blurred gap between two fragments a voxel apart. The distance map\n"
@@ -296,8 +305,9 @@ static tg::app::Registrar reg{{"segment", 30,
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--threshold", o->threshold,
-                  "moments | otsu | manual | local (moments per block, for uneven brightness) | midpoint (halfway "
-                  "between the void and solid peaks)")
+                  "auto (midpoint where the void's noise allows it, else moments) | moments (Tsai) | otsu | manual | "
+                  "local (moments per block, for uneven brightness) | midpoint (halfway between the void and solid "
+                  "peaks)")
       ->capture_default_str();
   sub->add_option("--local-window-vox", o->seg.local_window_vox,
                   "Block edge of --threshold local in voxels (default 4 R, at least 32); implies --threshold local")

@@ -409,13 +409,15 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                               {"solid_level", a.solid_level},
                               {"void_sigma", a.void_sigma},
                               {"solid_sigma", a.solid_sigma},
+                              {"sigma", a.sigma},
                               {"midpoint", a.midpoint},
                               {"moments", a.moments},
                               {"void_voxels", a.void_voxels},
                               {"k_sigmas", a.k_sigmas},
                               {"floor", a.floor},
-                              {"rule", "midpoint if void_level + k void_sigma <= midpoint (k: P(noise > k sigma) = "
-                                       "1 / void_voxels), else min(that floor, moments), never below the midpoint"}};
+                              {"rule", "midpoint if floor = void_level + k sigma <= midpoint (sigma: the larger phase sigma; k: "
+                                       "P(noise > k sigma) = 1 / void_voxels), else min(floor, moments), never below "
+                                       "the midpoint"}};
   }
   if (r.threshold.method == ThresholdMethod::local)
     j["threshold"]["local"] = {{"window_vox", r.local.window},

@@ -345,29 +345,30 @@ ThresholdResult auto_threshold(const std::vector<int64_t>& hist) {
   a.moments = r.value;
   for (size_t g = 1; g <= size_t(r.value) && g < hist.size(); ++g) a.void_voxels += hist[g];
   a.k_sigmas = a.void_voxels > 1 ? gaussian_tail_sigmas(1.0 / double(a.void_voxels)) : 0.0;
-  a.floor = a.void_level + a.k_sigmas * a.void_sigma;
+  a.sigma = std::max(a.void_sigma, a.solid_sigma);
+  a.floor = a.void_level + a.k_sigmas * a.sigma;
   const double t = std::max(a.midpoint, std::min(a.floor, double(a.moments)));
-  const double margin = a.void_sigma > 0 ? (a.midpoint - a.void_level) / a.void_sigma : 0.0;
+  const double margin = a.sigma > 0 ? (a.midpoint - a.void_level) / a.sigma : 0.0;
   r.method = ThresholdMethod::automatic;
   if (a.floor <= a.midpoint || double(a.moments) <= a.midpoint) {
     a.chosen = "midpoint";
     r.value = uint16_t(std::clamp(std::lround(a.midpoint), 0L, 65535L));
     a.why = a.floor <= a.midpoint
-                ? fmt::format("midpoint: {:.1f} void noise sigmas above the void peak, at least k = {:.2f} (k: pure noise lifts about one "
+                ? fmt::format("midpoint: {:.1f} noise sigmas above the void peak, at least k = {:.2f} (k: pure noise lifts about one "
                               "of the {} void voxels that far)",
                               margin, a.k_sigmas, a.void_voxels)
                 : fmt::format("midpoint: Tsai's level ({}) is below it; nothing higher to fall back on", a.moments);
   } else if (a.floor >= double(a.moments)) {
     a.chosen = "moments";
     r.value = a.moments;
-    a.why = fmt::format("moments: the midpoint is only {:.1f} void noise sigmas above the void peak, under k = {:.2f} "
+    a.why = fmt::format("moments: the midpoint is only {:.1f} noise sigmas above the void peak, under k = {:.2f} "
                         "(k: pure noise lifts about one of the {} void voxels that far); the floor k sigmas above the "
                         "void peak is above Tsai's level, which is kept",
                         margin, a.k_sigmas, a.void_voxels);
   } else {
     a.chosen = "floor";
     r.value = uint16_t(std::clamp(std::lround(t), 0L, 65535L));
-    a.why = fmt::format("floor: the midpoint is only {:.1f} void noise sigmas above the void peak, under k = {:.2f}; "
+    a.why = fmt::format("floor: the midpoint is only {:.1f} noise sigmas above the void peak, under k = {:.2f}; "
                         "the threshold is k sigmas above the void peak, between the midpoint and Tsai's level",
                         margin, a.k_sigmas);
   }

@@ -54,7 +54,7 @@ tg::SegmentOptions segment_options(const SegmentJob& o, const tg::Geometry& geom
   s.saturation_level = top;
   s.threshold = tg::parse_threshold_method(o.threshold);
   if (s.local_window_vox > 0 && s.threshold != tg::ThresholdMethod::local) {
-    if (o.threshold != "auto")
+    if (o.threshold != "moments")
       throw tg::UsageError("--local-window-vox is the window of --threshold local, not of --threshold " + o.threshold);
     s.threshold = tg::ThresholdMethod::local;
   }
@@ -240,16 +240,16 @@ int run_segment(SegmentJob& o) {
 namespace cmd_segment {
 static tg::app::Registrar reg{{"segment", 30,
     "Segment a grey scan into one label per grain or fragment (reference study section 2.2):\n"
-    "global threshold (voxels above it are solid), filling of small near-spherical enclosed\n"
-    "pores, exact Euclidean distance map, h-maxima markers (one per grain and per split\n"
-    "fragment), marker-controlled watershed with 1-voxel void lines between touching grains,\n"
-    "merging of over-segmented pieces, size filter.\n"
-    "Threshold (--threshold auto, the default): halfway between the void and solid peaks (the\n"
-    "level a blurred surface crosses at its true place) when that is at least k noise sigmas (the\n"
-    "noisier phase's) above the void peak, k such that noise lifts about one of the scan's N void\n"
-    "voxels that far (k = 5.0 for N = 3e6); else the moment-preserving threshold (Tsai 1985, as\n"
-    "Fiji 'Moments', the reference study's choice: --threshold moments), or k sigmas above the\n"
-    "void if that is lower. The summary's threshold.auto says which and why.\n"
+    "moment-preserving threshold (Tsai 1985, as Fiji 'Moments'; voxels above it are solid),\n"
+    "filling of small near-spherical enclosed pores, exact Euclidean distance map, h-maxima\n"
+    "markers (one per grain and per split fragment), marker-controlled watershed with 1-voxel\n"
+    "void lines between touching grains, merging of over-segmented pieces, size filter.\n"
+    "--threshold auto: halfway between the void and solid peaks (the level a blurred surface\n"
+    "crosses at its true place) when that is at least k noise sigmas (the noisier phase's) above\n"
+    "the void peak, k such that noise lifts about one of the scan's N void voxels that far\n"
+    "(k = 5.0 for N = 3e6); else Tsai's level, or k sigmas above the void if that is lower. The\n"
+    "summary's threshold.auto says which and why. Smaller label volume error than Tsai (1.4 %\n"
+    "against 2.2 % median |dV/V| on the blind sweep's middle setting), same F1 within noise.\n"
     "Grey evidence: solid darker than halfway between the threshold and the mean solid grey\n"
     "(and at least 3 noise sigmas below the solid's peak) is 'dim': partial volume at grain\n"
     "surfaces and in the blurred gap between two fragments a voxel apart. The distance map\n"
@@ -305,7 +305,7 @@ static tg::app::Registrar reg{{"segment", 30,
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--threshold", o->threshold,
-                  "auto (midpoint where the void's noise allows it, else moments) | moments (Tsai) | otsu | manual | "
+                  "moments (Tsai) | auto (midpoint where the noise allows it, else moments) | otsu | manual | "
                   "local (moments per block, for uneven brightness) | midpoint (halfway between the void and solid "
                   "peaks)")
       ->capture_default_str();

@@ -12,7 +12,7 @@ namespace tg::app {
 
 // tomograin segment: grey scan -> /labels (u32) + JSON summary.
 struct SegmentJob {
-  std::string in, out, summary, threshold = "auto";
+  std::string in, out, summary, threshold = "moments";
   double voxel_um = 0, grain_radius_vox = 0, grain_diameter_um = 1360.0;
   int manual = -1;
   tg::SegmentOptions seg;

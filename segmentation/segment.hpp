@@ -2,8 +2,7 @@
 // voxelised DEM snapshots, ../shared/DESIGN.md "Data flow"):
 //
 //   grey u16 -> field of view, pre-masked zeros, saturation (field_of_view)
-//            -> threshold (global: the phases' midpoint or Tsai, chosen
-//               from the void's noise; or local) -> graded mask (void, dim,
+//            -> threshold (global Tsai, or local) -> graded mask (void, dim,
 //               bright: the grey evidence below) -> pore filter (void pores,
 //               then dim pockets) -> distance map to void or dim
 //            -> h-maxima markers -> watershed (lines) -> merge repair
@@ -102,9 +101,10 @@ struct SegmentOptions {
   // the scale the defaults below derive from.
   double grain_radius_vox = 20.0;
 
-  // auto: the phases' midpoint where the void's noise allows it, else Tsai
-  // (threshold.hpp auto_threshold).
-  ThresholdMethod threshold = ThresholdMethod::automatic;
+  // Tsai. ThresholdMethod::automatic (the phases' midpoint where the noise
+  // allows it, threshold.hpp auto_threshold) is an option, not the default:
+  // on held-out seeds 201-202 it did not beat Tsai (bench/segmentation/RESULTS.md).
+  ThresholdMethod threshold = ThresholdMethod::moments;
   int manual_threshold = -1;  // grey level for ThresholdMethod::manual (voxels above are solid)
   int64_t local_window_vox = 0;  // ThresholdMethod::local: block edge; 0: 4 R (default_local_window)
 

@@ -171,6 +171,12 @@ PhaseLevels phase_levels(std::vector<int64_t> hist);
 // (phase_levels). Blind sweep: midpoint = void + 6.4 sigma at CNR 13,
 // 3.9 sigma at CNR 8, 2.5 at CNR 5, with k = 5.0 at 192^3.
 // Two grey levels or no void: the midpoint (sigma 0, nothing to lift).
+// Measured (bench/segmentation/RESULTS.md, rule fixed on dev seeds 1-3):
+// the best of midpoint and Tsai at every sweep point within noise (middle
+// F1 0.982, CNR 5-8 as Tsai, cupping 0.3 as Tsai), label |dV/V| 1.4 %
+// against 2.2 %; but on the held-out seeds 201-202 (160^3, R 16) F1 0.969
+// and one pore-induced over-segmentation against Tsai's 0.974 and none, so
+// it is an option (--threshold auto), not the default.
 ThresholdResult auto_threshold(const std::vector<int64_t>& hist);
 
 // k with P(N(0,1) > k) = p (0 < p < 1; p >= 0.5 gives 0): the one-sided

@@ -69,7 +69,7 @@ TEST(Segment, MidpointThresholdIsHalfwayBetweenThePhases) {
   EXPECT_EQ(r.count, 2u);
 }
 
-// The default threshold (auto) on two noisy scans of the same two balls:
+// --threshold auto on two noisy scans of the same two balls:
 // CNR 13 takes the midpoint (within 200 of 20000), CNR 4 (sigma 5000: the
 // midpoint 2 sigmas above the void, under k ~ 4) keeps Tsai's level, the
 // same as --threshold moments; the summary says which.
@@ -83,9 +83,11 @@ TEST(Segment, AutoThresholdTakesTheMidpointOnlyWhereTheNoiseAllows) {
     std::normal_distribution<double> noise(0.0, sigma);
     for (int64_t i = 0; i < m.size(); ++i)
       g[i] = uint16_t(std::clamp(std::lround((m[i] ? 30000 : 10000) + noise(rng)), 0L, 65535L));
-    const auto r = segment(g, opts(10));
+    SegmentOptions ao = opts(10);
+    ao.threshold = ThresholdMethod::automatic;
+    const auto r = segment(g, ao);
     EXPECT_EQ(r.threshold.method, ThresholdMethod::automatic);
-    const auto js = summary_json(r, opts(10));
+    const auto js = summary_json(r, ao);
     if (sigma < 2000) {
       EXPECT_EQ(r.threshold.automatic.chosen, "midpoint");
       EXPECT_NEAR(r.threshold.value, 20000, 200);

@@ -43,7 +43,7 @@ namespace tg {
 // level where a blurred surface between the two phases sits for a symmetric
 // PSF ("ISO-50" in dimensional CT); Tsai's moments sit above it on blurred
 // scans (20 632 against 20 031 on the blind sweep's middle setting).
-// automatic ("auto", the default): the midpoint where the void's noise
+// automatic ("auto", an option): the midpoint where the void's noise
 // allows it, Tsai's level where it does not (auto_threshold below).
 enum class ThresholdMethod { moments, otsu, manual, local, midpoint, automatic };
 const char* threshold_method_name(ThresholdMethod m);

@@ -134,6 +134,7 @@ int run_segment_chunked(const SegmentJob& o, const std::string& in_path, const s
   fmt::print("  threshold {} = {} (voxels above are solid), solid fraction {:.4f}{}\n",
              tg::threshold_method_name(r.threshold.method), r.threshold.value, r.solid_fraction,
              r.fov.active ? " (of the field of view)" : "");
+  if (r.threshold.method == tg::ThresholdMethod::automatic) fmt::print("  threshold auto: {}\n", r.threshold.automatic.why);
   for (const auto& n : r.notes) fmt::print("  note: {}\n", n);
   fmt::print("  labels {} ({} dropped below {} voxels)\n", r.count, r.dropped, s.resolved().min_size_vox);
   fmt::print("  pass 1 {:.2f} s ({} read{}), pass 2 {:.2f} s ({} slabs), peak memory {} ({:.2f} B/voxel)\n",
@@ -203,6 +204,8 @@ int run_segment(SegmentJob& o) {
     fmt::print("  threshold {} = {} (voxels above are solid), solid fraction {:.4f}{}\n",
                tg::threshold_method_name(res.threshold.method), res.threshold.value, res.solid_fraction,
                res.fov.active ? " (of the field of view)" : "");
+  if (res.threshold.method == tg::ThresholdMethod::automatic)
+    fmt::print("  threshold auto: {}\n", res.threshold.automatic.why);
   for (const auto& n : res.notes) fmt::print("  note: {}\n", n);
   if (res.graded)
     fmt::print("  grey evidence: solid above {} is bright; {:.1f} % of the solid dim; {} dim pockets filled\n",
@@ -241,6 +244,12 @@ static tg::app::Registrar reg{{"segment", 30,
     "filling of small near-spherical enclosed pores, exact Euclidean distance map, h-maxima\n"
     "markers (one per grain and per split fragment), marker-controlled watershed with 1-voxel\n"
     "void lines between touching grains, merging of over-segmented pieces, size filter.\n"
+    "--threshold auto: halfway between the void and solid peaks (the level a blurred surface\n"
+    "crosses at its true place) when that is at least k noise sigmas (the noisier phase's) above\n"
+    "the void peak, k such that noise lifts about one of the scan's N void voxels that far\n"
+    "(k = 5.0 for N = 3e6); else Tsai's level, or k sigmas above the void if that is lower. The\n"
+    "summary's threshold.auto says which and why. Smaller label volume error than Tsai (1.4 %\n"
+    "against 2.2 % median |dV/V| on the blind sweep's middle setting), same F1 within noise.\n"
     "Grey evidence: solid darker than halfway between the threshold and the mean solid grey\n"
     "(and at least 3 noise sigmas below the solid's peak) is 'dim': partial volume at grain\n"
     "surfaces and in the blurred gap between two fragments a voxel apart. The distance map\n"
@@ -296,8 +305,9 @@ static tg::app::Registrar reg{{"segment", 30,
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--threshold", o->threshold,
-                  "moments | otsu | manual | local (moments per block, for uneven brightness) | midpoint (halfway "
-                  "between the void and solid peaks)")
+                  "moments (Tsai) | auto (midpoint where the noise allows it, else moments) | otsu | manual | "
+                  "local (moments per block, for uneven brightness) | midpoint (halfway between the void and solid "
+                  "peaks)")
       ->capture_default_str();
   sub->add_option("--local-window-vox", o->seg.local_window_vox,
                   "Block edge of --threshold local in voxels (default 4 R, at least 32); implies --threshold local")

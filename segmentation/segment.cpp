@@ -66,6 +66,8 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist, cons
     d.t = moments_threshold(hist);  // its p0, z0, z1 stay in the summary
     d.t.method = ThresholdMethod::midpoint;
     d.t.value = static_cast<uint16_t>(std::clamp(std::lround(0.5 * (pl.void_level + pl.solid)), 0L, 65535L));
+  } else if (o.threshold == ThresholdMethod::automatic) {
+    d.t = auto_threshold(hist);
   } else {
     d.t = o.threshold == ThresholdMethod::otsu ? otsu_threshold(hist) : moments_threshold(hist);
   }
@@ -399,6 +401,24 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                     {"separability", r.threshold.separability},
                     {"z0", r.threshold.z0},
                     {"z1", r.threshold.z1}};
+  if (r.threshold.method == ThresholdMethod::automatic) {
+    const AutoChoice& a = r.threshold.automatic;
+    j["threshold"]["auto"] = {{"chosen", a.chosen},
+                              {"why", a.why},
+                              {"void_level", a.void_level},
+                              {"solid_level", a.solid_level},
+                              {"void_sigma", a.void_sigma},
+                              {"solid_sigma", a.solid_sigma},
+                              {"sigma", a.sigma},
+                              {"midpoint", a.midpoint},
+                              {"moments", a.moments},
+                              {"void_voxels", a.void_voxels},
+                              {"k_sigmas", a.k_sigmas},
+                              {"floor", a.floor},
+                              {"rule", "midpoint if floor = void_level + k sigma <= midpoint (sigma: the larger phase sigma; k: "
+                                       "P(noise > k sigma) = 1 / void_voxels), else min(floor, moments), never below "
+                                       "the midpoint"}};
+  }
   if (r.threshold.method == ThresholdMethod::local)
     j["threshold"]["local"] = {{"window_vox", r.local.window},
                                {"blocks_zyx", {r.local.nbz, r.local.nby, r.local.nbx}},

@@ -101,6 +101,9 @@ struct SegmentOptions {
   // the scale the defaults below derive from.
   double grain_radius_vox = 20.0;
 
+  // Tsai. ThresholdMethod::automatic (the phases' midpoint where the noise
+  // allows it, threshold.hpp auto_threshold) is an option, not the default:
+  // on held-out seeds 201-202 it did not beat Tsai (bench/segmentation/RESULTS.md).
   ThresholdMethod threshold = ThresholdMethod::moments;
   int manual_threshold = -1;  // grey level for ThresholdMethod::manual (voxels above are solid)
   int64_t local_window_vox = 0;  // ThresholdMethod::local: block edge; 0: 4 R (default_local_window)

@@ -2,7 +2,10 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
+#include <fmt/core.h>
+#include <limits>
 
 #include "core/errors.hpp"
 
@@ -49,6 +52,7 @@ const char* threshold_method_name(ThresholdMethod m) {
     case ThresholdMethod::manual: return "manual";
     case ThresholdMethod::local: return "local";
     case ThresholdMethod::midpoint: return "midpoint";
+    case ThresholdMethod::automatic: return "auto";
   }
   return "?";
 }
@@ -59,7 +63,8 @@ ThresholdMethod parse_threshold_method(const std::string& s) {
   if (s == "manual") return ThresholdMethod::manual;
   if (s == "local") return ThresholdMethod::local;
   if (s == "midpoint") return ThresholdMethod::midpoint;
-  throw UsageError("threshold method '" + s + "': expected moments, otsu, manual, local or midpoint");
+  if (s == "auto") return ThresholdMethod::automatic;
+  throw UsageError("threshold method '" + s + "': expected auto, moments, otsu, manual, local or midpoint");
 }
 
 std::vector<int64_t> histogram_u16(const Volume<uint16_t>& v, const std::vector<int64_t>* x0,
@@ -289,6 +294,7 @@ PhaseLevels phase_levels(std::vector<int64_t> hist) {
   r.threshold = moments_threshold(hist).value;
   const SolidPeak solid = solid_peak(hist, r.threshold);
   r.solid = threshold_detail::refine_mode(hist, solid.mode, solid.sigma);
+  r.solid_sigma = solid.sigma;
   // The void peak: from the 0.1th percentile of the voxels at or below t
   // (dark outliers out) to t; its noise sigma from its lower side, the side
   // without partial volume (as solid_peak takes the solid's upper side).
@@ -313,6 +319,59 @@ PhaseLevels phase_levels(std::vector<int64_t> hist) {
       break;
     }
   r.void_level = threshold_detail::refine_mode(hist, m, sigma);
+  r.void_sigma = std::max(0.0, sigma);
+  return r;
+}
+
+double gaussian_tail_sigmas(double p) {
+  if (!(p > 0) || p >= 0.5) return p > 0 ? 0.0 : std::numeric_limits<double>::infinity();
+  double lo = 0, hi = 40;  // 0.5 erfc(40 / sqrt 2) ~ 4e-350: below any p a double holds
+  for (int i = 0; i < 200 && hi - lo > 1e-12; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (0.5 * std::erfc(mid / std::sqrt(2.0)) > p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+ThresholdResult auto_threshold(const std::vector<int64_t>& hist) {
+  ThresholdResult r = moments_threshold(hist);  // its p0, z0, z1 stay in the summary
+  const PhaseLevels pl = phase_levels(hist);
+  AutoChoice& a = r.automatic;
+  a.void_level = pl.void_level;
+  a.solid_level = pl.solid;
+  a.void_sigma = pl.void_sigma;
+  a.solid_sigma = pl.solid_sigma;
+  a.midpoint = 0.5 * (pl.void_level + pl.solid);
+  a.moments = r.value;
+  for (size_t g = 1; g <= size_t(r.value) && g < hist.size(); ++g) a.void_voxels += hist[g];
+  a.k_sigmas = a.void_voxels > 1 ? gaussian_tail_sigmas(1.0 / double(a.void_voxels)) : 0.0;
+  a.sigma = std::max(a.void_sigma, a.solid_sigma);
+  a.floor = a.void_level + a.k_sigmas * a.sigma;
+  const double t = std::max(a.midpoint, std::min(a.floor, double(a.moments)));
+  const double margin = a.sigma > 0 ? (a.midpoint - a.void_level) / a.sigma : 0.0;
+  r.method = ThresholdMethod::automatic;
+  if (a.floor <= a.midpoint || double(a.moments) <= a.midpoint) {
+    a.chosen = "midpoint";
+    r.value = uint16_t(std::clamp(std::lround(a.midpoint), 0L, 65535L));
+    a.why = a.floor <= a.midpoint
+                ? fmt::format("midpoint: {:.1f} noise sigmas above the void peak, at least k = {:.2f} (k: pure noise lifts about one "
+                              "of the {} void voxels that far)",
+                              margin, a.k_sigmas, a.void_voxels)
+                : fmt::format("midpoint: Tsai's level ({}) is below it; nothing higher to fall back on", a.moments);
+  } else if (a.floor >= double(a.moments)) {
+    a.chosen = "moments";
+    r.value = a.moments;
+    a.why = fmt::format("moments: the midpoint is only {:.1f} noise sigmas above the void peak, under k = {:.2f} "
+                        "(k: pure noise lifts about one of the {} void voxels that far); the floor k sigmas above the "
+                        "void peak is above Tsai's level, which is kept",
+                        margin, a.k_sigmas, a.void_voxels);
+  } else {
+    a.chosen = "floor";
+    r.value = uint16_t(std::clamp(std::lround(t), 0L, 65535L));
+    a.why = fmt::format("floor: the midpoint is only {:.1f} noise sigmas above the void peak, under k = {:.2f}; "
+                        "the threshold is k sigmas above the void peak, between the midpoint and Tsai's level",
+                        margin, a.k_sigmas);
+  }
   return r;
 }
 

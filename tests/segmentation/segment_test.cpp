@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <set>
 
@@ -66,6 +67,39 @@ TEST(Segment, MidpointThresholdIsHalfwayBetweenThePhases) {
   EXPECT_EQ(r.threshold.method, ThresholdMethod::midpoint);
   EXPECT_NEAR(r.threshold.value, 20000, 200);
   EXPECT_EQ(r.count, 2u);
+}
+
+// --threshold auto on two noisy scans of the same two balls:
+// CNR 13 takes the midpoint (within 200 of 20000), CNR 4 (sigma 5000: the
+// midpoint 2 sigmas above the void, under k ~ 4) keeps Tsai's level, the
+// same as --threshold moments; the summary says which.
+TEST(Segment, AutoThresholdTakesTheMidpointOnlyWhereTheNoiseAllows) {
+  auto m = Volume<uint8_t>::filled(Shape{28, 28, 46}, 0);
+  draw_ball(m, 13.5, 13.5, 13.5, 10);
+  draw_ball(m, 13.5, 13.5, 31.5, 10);
+  for (const double sigma : {1500.0, 5000.0}) {
+    Volume<uint16_t> g(m.shape(), m.geometry());
+    std::mt19937 rng(11);
+    std::normal_distribution<double> noise(0.0, sigma);
+    for (int64_t i = 0; i < m.size(); ++i)
+      g[i] = uint16_t(std::clamp(std::lround((m[i] ? 30000 : 10000) + noise(rng)), 0L, 65535L));
+    SegmentOptions ao = opts(10);
+    ao.threshold = ThresholdMethod::automatic;
+    const auto r = segment(g, ao);
+    EXPECT_EQ(r.threshold.method, ThresholdMethod::automatic);
+    const auto js = summary_json(r, ao);
+    if (sigma < 2000) {
+      EXPECT_EQ(r.threshold.automatic.chosen, "midpoint");
+      EXPECT_NEAR(r.threshold.value, 20000, 200);
+      EXPECT_NE(js.find("\"chosen\": \"midpoint\""), std::string::npos);
+    } else {
+      SegmentOptions mo = opts(10);
+      mo.threshold = ThresholdMethod::moments;
+      EXPECT_EQ(r.threshold.automatic.chosen, "moments");
+      EXPECT_EQ(r.threshold.value, segment(g, mo).threshold.value);
+      EXPECT_NE(js.find("\"chosen\": \"moments\""), std::string::npos);
+    }
+  }
 }
 
 TEST(Segment, SplitHalvesWithAOneVoxelGapAreTwoParticles) {

@@ -155,6 +155,8 @@ TEST(Threshold, Separability) {
 
 TEST(Threshold, ParseMethod) {
   EXPECT_EQ(parse_threshold_method("otsu"), ThresholdMethod::otsu);
+  EXPECT_EQ(parse_threshold_method("auto"), ThresholdMethod::automatic);
+  EXPECT_STREQ(threshold_method_name(ThresholdMethod::automatic), "auto");
   EXPECT_THROW(parse_threshold_method("tsai"), UsageError);
 }
 
@@ -175,6 +177,61 @@ TEST(PhaseLevels, ModesOfBothPhasesWithPartialVolumeAndZeros) {
   EXPECT_NEAR(p.solid, 30000, 100);
   EXPECT_GT(p.threshold, 15000);
   EXPECT_LT(p.threshold, 25000);
+  // The noise of each phase from its outer side: the generator's 1500,
+  // within 10 % (measured +111 and +70: the deviations are taken about the
+  // smoothed histogram's mode, which lies ~100 grey levels inwards of the
+  // refined one; an overestimate makes the auto rule's margin cautious).
+  EXPECT_NEAR(p.void_sigma, 1500, 150);
+  EXPECT_NEAR(p.solid_sigma, 1500, 150);
+}
+
+// The one-sided Gaussian tail's inverse against tabulated values of
+// 1 - Phi(k) (Abramowitz & Stegun 26.2).
+TEST(AutoThreshold, GaussianTailSigmasMatchTables) {
+  EXPECT_NEAR(gaussian_tail_sigmas(0.5), 0.0, 1e-9);
+  EXPECT_NEAR(gaussian_tail_sigmas(0.158655254), 1.0, 1e-6);
+  EXPECT_NEAR(gaussian_tail_sigmas(0.022750132), 2.0, 1e-6);
+  EXPECT_NEAR(gaussian_tail_sigmas(1.349898e-3), 3.0, 1e-5);
+  EXPECT_NEAR(gaussian_tail_sigmas(2.866516e-7), 5.0, 1e-5);
+  EXPECT_EQ(gaussian_tail_sigmas(0.7), 0.0);
+}
+
+// Void N(10000, s) (400 000 voxels), solid N(30000, s) (500 000), a
+// partial-volume band spread evenly between them (10 %).
+std::vector<int64_t> auto_scene_histogram(double s, unsigned seed) {
+  std::vector<int64_t> h = bimodal(10000, s, 30000, s, 400000, 500000, seed);
+  std::mt19937_64 rng(seed + 100);
+  std::uniform_real_distribution<double> pv(10000, 30000);
+  for (int i = 0; i < 100000; ++i) h[size_t(std::lround(pv(rng)))]++;
+  return h;
+}
+
+// CNR 13 (s = 1500): the midpoint 20000 is 6.7 sigmas above the void, more
+// than k ~ 4.6 (about 4.5e5 void voxels: 1 - Phi(4.6) ~ 2e-6): the rule
+// takes it, within 150 grey levels of the true 20000; Tsai's level (the
+// independent transcription) is above it, pulled up by the band.
+TEST(AutoThreshold, QuietScanTakesTheMidpoint) {
+  const auto h = auto_scene_histogram(1500, 21);
+  const ThresholdResult r = auto_threshold(h);
+  EXPECT_EQ(r.method, ThresholdMethod::automatic);
+  EXPECT_EQ(r.automatic.chosen, "midpoint");
+  EXPECT_NEAR(r.value, 20000, 150);
+  EXPECT_EQ(int(r.automatic.moments), tsai_reference(h));
+  EXPECT_GT(int(r.automatic.moments), int(r.value));
+  EXPECT_GT(r.automatic.k_sigmas, 4.3);
+  EXPECT_LT(r.automatic.k_sigmas, 4.9);
+}
+
+// CNR 5 (s = 4000): the midpoint is 2.5 sigmas above the void, far under
+// k: noise would lift ~0.6 % of the void above it. The rule keeps Tsai's
+// level (the floor void + k sigma ~ 28 000 is above it).
+TEST(AutoThreshold, NoisyScanKeepsTsai) {
+  const auto h = auto_scene_histogram(4000, 22);
+  const ThresholdResult r = auto_threshold(h);
+  EXPECT_EQ(r.automatic.chosen, "moments");
+  EXPECT_EQ(int(r.value), tsai_reference(h));
+  EXPECT_NEAR(r.automatic.void_sigma, 4000, 200);
+  EXPECT_GT(r.automatic.floor, double(r.value));
 }
 
 }  // namespace

@@ -60,9 +60,12 @@ std::vector<int64_t> grey_volume_sums(const VolumeView<const uint32_t>& labels, 
   // f(g) for every grey level: (g - void) / (solid - void), clamped to
   // [-1, 2]; grey 0 is pre-masked void (header).
   std::vector<double> frac(65536);
+  std::vector<int64_t> frac_fixed(65536);  // fixed(frac): a boundary voxel's share, without llround per voxel
   const double span = opt.solid_grey - opt.void_grey;
-  for (size_t g = 0; g < frac.size(); ++g)
+  for (size_t g = 0; g < frac.size(); ++g) {
     frac[g] = g == 0 ? 0.0 : std::clamp((double(g) - opt.void_grey) / span, -1.0, 2.0);
+    frac_fixed[g] = fixed(frac[g]);
+  }
   const int64_t one = fixed(1.0);
 
   std::vector<std::vector<int64_t>> part(static_cast<size_t>(nt));
@@ -81,6 +84,12 @@ std::vector<int64_t> grey_volume_sums(const VolumeView<const uint32_t>& labels, 
     // near3 alone instead of a 26-neighbour scan (the whole pass took half
     // of `measure`'s time on a 1220^3 scan before).
     std::vector<uint32_t> near(static_cast<size_t>(s.nx)), near3(static_cast<size_t>(s.nx));
+    // inner[i]: 1 where the voxel is labelled and its six face neighbours
+    // carry its label (it counts one voxel). Found in a branch-free pass the
+    // compiler vectorises; the voxel loop below then tests one byte instead
+    // of six labels (the pass was ~30 % of `measure` on a 1220^3 scan).
+    std::vector<uint8_t> inner(static_cast<size_t>(s.nx));
+    const std::vector<uint32_t> zero_row(static_cast<size_t>(s.nx), 0u);
     for (int64_t k = z0; k < z1; ++k)
       for (int64_t j = 0; j < s.ny; ++j) {
         const uint32_t* row = labels.row(k, j).data();
@@ -93,27 +102,58 @@ std::vector<int64_t> grey_volume_sums(const VolumeView<const uint32_t>& labels, 
             rows[size_t(3 * (dk + 1) + dj + 1)] =
                 kk >= 0 && kk < s.nz && jj >= 0 && jj < s.ny ? labels.row(kk, jj).data() : nullptr;
           }
-        std::fill(near.begin(), near.end(), 0u);
-        for (const uint32_t* r : rows)
-          if (r)
-            for (int64_t i = 0; i < s.nx; ++i) near[size_t(i)] |= r[i];
+        // One pass over the nine rows (a row of zeros outside the volume),
+        // then near3 without a branch inside the row: both vectorise (nine
+        // read-modify-write passes were a quarter of this function).
+        std::array<const uint32_t*, 9> src{};
+        for (size_t q = 0; q < 9; ++q) src[q] = rows[q] ? rows[q] : zero_row.data();
+        uint32_t* nr = near.data();
         for (int64_t i = 0; i < s.nx; ++i)
-          near3[size_t(i)] = near[size_t(i)] | (i > 0 ? near[size_t(i - 1)] : 0u) |
-                             (i + 1 < s.nx ? near[size_t(i + 1)] : 0u);
+          nr[i] = src[0][i] | src[1][i] | src[2][i] | src[3][i] | src[4][i] | src[5][i] | src[6][i] | src[7][i] |
+                  src[8][i];
+        uint32_t* n3 = near3.data();
+        for (int64_t i = 1; i + 1 < s.nx; ++i) n3[i] = nr[i - 1] | nr[i] | nr[i + 1];
+        n3[0] = nr[0] | (s.nx > 1 ? nr[1] : 0u);
+        if (s.nx > 1) n3[s.nx - 1] = nr[s.nx - 2] | nr[s.nx - 1];
         const uint32_t *below = rows[1], *above = rows[7], *before = rows[3], *after = rows[5];
         const bool edge_row = !below || !above || !before || !after;
+        uint8_t* in = inner.data();
+        std::fill(inner.begin(), inner.end(), uint8_t{0});  // the row's first and last voxels touch a face
+        if (!edge_row)
+          for (int64_t i = 1; i < s.nx - 1; ++i) {
+            const uint32_t l = row[i];
+            in[i] = uint8_t((l != 0) & (below[i] == l) & (above[i] == l) & (before[i] == l) & (after[i] == l) &
+                            (row[i - 1] == l) & (row[i + 1] == l));
+          }
+        uint32_t last = 0;  // the label of the last labelled voxel, and its index
+        int32_t last_x = -1;
         for (int64_t i = 0; i < s.nx; ++i) {
           const uint32_t l = row[i];
           if (l) {
-            const bool boundary = edge_row || i == 0 || i == s.nx - 1 || below[i] != l || above[i] != l ||
-                                  before[i] != l || after[i] != l || row[i - 1] != l || row[i + 1] != l;
-            const int32_t x = index_of(l);
-            if (x >= 0) acc[size_t(x)] += boundary ? fixed(frac[grow[i]]) : one;
+            if (l != last) last = l, last_x = index_of(l);
+            if (last_x >= 0) acc[size_t(last_x)] += in[i] ? one : frac_fixed[grow[i]];
             continue;
           }
           if (!near3[size_t(i)]) continue;  // no labelled neighbour
           // Unlabelled: share f among the labels of the 26 neighbours, by count.
           const double f = frac[grow[i]];
+          if (i > 0 && i + 1 < s.nx) {
+            // Most such voxels touch one label only: found without branches
+            // (the largest neighbour label, and whether every labelled
+            // neighbour carries it); the general count below is the rest.
+            uint32_t top = 0;
+            int n = 0;
+            for (const uint32_t* r : src)
+              for (int64_t ii = i - 1; ii <= i + 1; ++ii) top = std::max(top, r[ii]), n += r[ii] != 0;
+            bool single = true;
+            for (const uint32_t* r : src)
+              for (int64_t ii = i - 1; ii <= i + 1; ++ii) single &= (r[ii] == 0) | (r[ii] == top);
+            if (single) {
+              const int32_t x = index_of(top);
+              if (x >= 0) acc[size_t(x)] += fixed(f * n / n);  // the general case's expression, count = n
+              continue;
+            }
+          }
           int distinct = 0, n = 0;
           for (const uint32_t* nrow : rows) {
             if (!nrow) continue;

@@ -28,6 +28,37 @@ std::vector<double> grey_volumes(const VolumeView<const uint32_t>& labels, const
   return out;
 }
 
+int64_t grey_window_slices(const Shape& s) {
+  const int64_t slice_bytes = std::max<int64_t>(1, s.slice_voxels()) * int64_t(sizeof(uint16_t));
+  return std::clamp<int64_t>((int64_t(256) << 20) / slice_bytes, 3, std::max<int64_t>(3, s.nz));
+}
+
+std::vector<double> grey_volumes(const VolumeView<const uint32_t>& labels, const GreySlabSource& grey,
+                                 const std::vector<uint32_t>& ids, const GreyVolumeOptions& opt,
+                                 int64_t window_slices) {
+  if (window_slices < 3) throw UsageError("grey volume: a window needs >= 3 slices (a core and one on each side)");
+  const Shape s = labels.shape();
+  std::vector<int64_t> sum(ids.size(), 0);
+  // Windows of equal size (one buffer serves them all): [c0 - 1, c0 - 1 + W)
+  // holds the core [c0, c0 + W - 2); the first starts at the face, the last
+  // ends there.
+  for (int64_t c0 = 0; c0 < s.nz;) {
+    const int64_t w0 = std::max<int64_t>(0, c0 - 1), w1 = std::min(s.nz, w0 + window_slices);
+    const int64_t c1 = w1 == s.nz ? s.nz : w1 - 1;
+    const Volume<uint16_t>& g = grey(w0, w1 - w0);
+    const Shape ws{w1 - w0, s.ny, s.nx};
+    if (!(g.shape() == ws))
+      throw InputError("grey slab of slices " + std::to_string(w0) + ".." + std::to_string(w1 - 1) + " is " +
+                       g.shape().str() + ", expected " + ws.str());
+    const std::vector<int64_t> part = grey_volume_sums(labels.slices(w0, w1 - w0), g.view(), ids, opt, c0 - w0, c1 - w0);
+    for (size_t n = 0; n < sum.size(); ++n) sum[n] += part[n];
+    c0 = c1;
+  }
+  std::vector<double> out(sum.size());
+  for (size_t n = 0; n < sum.size(); ++n) out[n] = double(sum[n]) / grey_volume_detail::kUnit;
+  return out;
+}
+
 std::vector<int64_t> grey_volume_sums(const VolumeView<const uint32_t>& labels, const VolumeView<const uint16_t>& grey,
                                       const std::vector<uint32_t>& ids, const GreyVolumeOptions& opt, int64_t c0,
                                       int64_t c1) {

@@ -58,6 +58,7 @@
 // to a label; O(L * T) memory for L labels and T threads.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "core/volume.hpp"
@@ -87,5 +88,21 @@ std::vector<int64_t> grey_volume_sums(const VolumeView<const uint32_t>& labels, 
                                       const std::vector<uint32_t>& ids, const GreyVolumeOptions& opt,
                                       int64_t core_begin, int64_t core_end);
 inline constexpr double grey_volume_units = 16777216.0;  // 2^24 per voxel
+
+// A grey scan read slab by slab: slices [z0, z0 + nz) of it, valid until
+// the next call (a source keeps one buffer and reads into it, so a pass
+// over the scan touches no fresh pages after its first slab).
+using GreySlabSource = std::function<const Volume<uint16_t>&(int64_t z0, int64_t nz)>;
+
+// grey_volumes with the scan read window by window (a core of slices and
+// the slice on either side, `window_slices` in all, at least 3): only a
+// window of the scan is ever in memory, and the volumes are the same (the
+// windows' integer sums add up to the whole volume's). InputError when the
+// source gives a window of another shape.
+std::vector<double> grey_volumes(const VolumeView<const uint32_t>& labels, const GreySlabSource& grey,
+                                 const std::vector<uint32_t>& ids, const GreyVolumeOptions& opt,
+                                 int64_t window_slices);
+// The window for a scan of this shape: about 256 MiB of grey, >= 3 slices.
+int64_t grey_window_slices(const Shape& s);
 
 }  // namespace tg::measure

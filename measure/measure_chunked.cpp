@@ -182,7 +182,7 @@ ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geo
     }
     if (search) search->add_crossings(L.view(), c0 - w0, c1 - w0, w0);
     if (with_grey) {
-      const Volume<uint16_t> G = read_grey(w0, w1 - w0);
+      const Volume<uint16_t>& G = read_grey(w0, w1 - w0);
       if (!(G.shape() == ws))
         throw InputError("grey slab of slices " + std::to_string(w0) + ".." + std::to_string(w1 - 1) + " is " +
                          G.shape().str() + ", expected " + ws.str());

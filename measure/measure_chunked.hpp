@@ -65,9 +65,9 @@ struct MeasureChunkPlan {
 // slab does not fit beside the planned lists, or a side exceeds 65535.
 MeasureChunkPlan plan_measure_chunks(const Shape& s, bool grey, int64_t memory_limit_bytes);
 
-// Slices [z0, z0 + nz) of the label volume / of the grey scan.
+// Slices [z0, z0 + nz) of the label volume (the grey scan's: GreySlabSource,
+// grey_volume.hpp).
 using LabelSlabSource = std::function<Volume<uint32_t>(int64_t z0, int64_t nz)>;
-using GreySlabSource = std::function<Volume<uint16_t>(int64_t z0, int64_t nz)>;
 
 struct ChunkedMeasureOptions {
   int64_t core = 0;                // > 0: every slab has this many core slices

@@ -71,12 +71,13 @@ std::vector<Particle> measure_particles(const VolumeView<const uint32_t>& labels
   so.threads = opt.threads;
   const LabelStatsResult ls = label_stats(labels, so);
   std::vector<double> grey_vox;  // aligned with ls.labels; empty without a grey scan
-  if (opt.grey) {
+  if (opt.grey || opt.grey_slabs) {
     GreyVolumeOptions go = opt.grey_levels;
     go.threads = opt.threads;
     std::vector<uint32_t> ids;
     for (const LabelStats& st : ls.labels) ids.push_back(st.label);
-    grey_vox = grey_volumes(labels, *opt.grey, ids, go);
+    grey_vox = opt.grey ? grey_volumes(labels, *opt.grey, ids, go)
+                        : grey_volumes(labels, *opt.grey_slabs, ids, go, grey_window_slices(labels.shape()));
   }
   std::vector<Particle> out = particles_from_stats(ls, grey_vox, labels.geometry(), opt, &labels);
   if (opt.contacts) {

@@ -61,6 +61,9 @@ struct ParticleOptions {
   // grey volume over the shrunken calipers read Dmed 7 % high on
   // data_synth spheres of radius 8 voxels: tests/apps/analyse_test.sh).
   const VolumeView<const uint16_t>* grey = nullptr;
+  // Or, instead, the scan read window by window (grey_volume.hpp): the same
+  // volumes with ~256 MiB of it in memory instead of the whole scan.
+  const GreySlabSource* grey_slabs = nullptr;
   GreyVolumeOptions grey_levels;
   ContactOptions contact;
   int threads = 0;            // 0 = OpenMP default

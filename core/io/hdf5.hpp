@@ -53,7 +53,8 @@ class H5Reader {
   AnyVolume read_volume(const std::string& dataset, bool progress = false, AnyVolume* reuse = nullptr) const;
   // Slices [z0, z0 + nz) of a 3-D dataset (a slab of a volume larger than
   // memory), its origin moved to slice z0. InputError outside the dataset.
-  AnyVolume read_slab(const std::string& dataset, int64_t z0, int64_t nz) const;
+  // `reuse` as for read_volume: slab after slab into one buffer.
+  AnyVolume read_slab(const std::string& dataset, int64_t z0, int64_t nz, AnyVolume* reuse = nullptr) const;
   // The dataset's shape (z, y, x) without reading it; a 2-D dataset is one slice.
   Shape shape(const std::string& dataset) const;
   Table read_table(const std::string& group) const;

@@ -405,11 +405,13 @@ TEST(Hdf5Chunks, ParallelDeflateReadsBackThroughLibhdf5) {
   const auto labels = runs_volume<uint32_t>(s, 3);
   const auto grey = runs_volume<uint16_t>(s, 4);
   const auto mask = runs_volume<uint8_t>(s, 5);
+  const auto raw = runs_volume<uint16_t>(s, 6);
   {
     H5Writer w(dir / "c.h5");
     w.write_volume("/labels", labels, 1);
     w.write_volume("/volume", grey, 6);
     w.write_volume("/mask", mask, 1);
+    w.write_volume("/raw", raw, 0);  // chunked, no filter: chunks moved whole
     w.commit();
   }
   const auto l2 = read_with_libhdf5<uint32_t>(dir / "c.h5", "/labels", s);
@@ -418,12 +420,22 @@ TEST(Hdf5Chunks, ParallelDeflateReadsBackThroughLibhdf5) {
   EXPECT_EQ(std::memcmp(l2.data(), labels.data(), size_t(s.voxels()) * 4), 0);
   EXPECT_EQ(std::memcmp(g2.data(), grey.data(), size_t(s.voxels()) * 2), 0);
   EXPECT_EQ(std::memcmp(m2.data(), mask.data(), size_t(s.voxels())), 0);
-  // And through tomograin's reader (the parallel inflate).
+  const auto r2 = read_with_libhdf5<uint16_t>(dir / "c.h5", "/raw", s);
+  EXPECT_EQ(std::memcmp(r2.data(), raw.data(), size_t(s.voxels()) * 2), 0);
+  // And through tomograin's reader (the parallel inflate; the raw chunks).
   const auto back = std::get<Volume<uint32_t>>(H5Reader(dir / "c.h5").read_volume("/labels"));
   EXPECT_EQ(std::memcmp(back.data(), labels.data(), size_t(s.voxels()) * 4), 0);
+  const auto rb = std::get<Volume<uint16_t>>(H5Reader(dir / "c.h5").read_volume("/raw"));
+  EXPECT_EQ(std::memcmp(rb.data(), raw.data(), size_t(s.voxels()) * 2), 0);
+  const auto rs = std::get<Volume<uint16_t>>(H5Reader(dir / "c.h5").read_slab("/raw", 13, 20));  // across chunk rows
+  EXPECT_EQ(std::memcmp(rs.data(), raw.data() + 13 * s.slice_voxels(), size_t(20 * s.slice_voxels()) * 2), 0);
 }
 
-TEST(Hdf5Chunks, ReadsWhatLibhdf5DeflatedIncludingUnwrittenChunks) {
+// Deflated (shuffle + deflate) and unfiltered chunks written by libhdf5.
+class Hdf5ChunksFromLibhdf5 : public ::testing::TestWithParam<bool> {};
+INSTANTIATE_TEST_SUITE_P(Hdf5Chunks, Hdf5ChunksFromLibhdf5, ::testing::Values(true, false));
+
+TEST_P(Hdf5ChunksFromLibhdf5, ReadsIncludingUnwrittenChunks) {
   TempDir dir;
   const Shape s{21, 40, 50};
   const auto grey = runs_volume<uint16_t>(s, 8);
@@ -433,8 +445,10 @@ TEST(Hdf5Chunks, ReadsWhatLibhdf5DeflatedIncludingUnwrittenChunks) {
   const hid_t sp = H5Screate_simple(3, dims, nullptr);
   const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
   H5Pset_chunk(dcpl, 3, chunk);
-  H5Pset_shuffle(dcpl);
-  H5Pset_deflate(dcpl, 4);
+  if (GetParam()) {
+    H5Pset_shuffle(dcpl);
+    H5Pset_deflate(dcpl, 4);
+  }
   const hid_t d = H5Dcreate2(f, "volume", H5T_NATIVE_UINT16, sp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
   // Slices 0..15 only: the chunks of the last row are never written (read as 0).
   const hsize_t start[3] = {0, 0, 0}, count[3] = {16, 40, 50};

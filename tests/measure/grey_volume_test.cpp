@@ -206,6 +206,27 @@ TEST(GreyVolume, EqualsAVoxelByVoxelReferenceOnRandomLabels) {
       }
   ASSERT_EQ(got.size(), ids.size());
   for (size_t x = 0; x < ids.size(); ++x) EXPECT_EQ(got[x], want[ids[x]]) << "label " << ids[x];
+
+  // The scan read window by window (measure's path for an HDF5 scan): the
+  // same volumes for windows of 3 slices (one-slice cores), 4, 8 (cores
+  // that do not divide the 9 slices) and one window larger than the scan.
+  // Windows of nine slices: w 3: [0,3) [1,4) ... [6,9), seven; w 4: [0,4)
+  // [2,6) [4,8) [6,9); w 8: [0,8) [6,9); w 20: [0,9).
+  for (const auto& [w, cores] : std::vector<std::pair<int64_t, int64_t>>{{3, 7}, {4, 4}, {8, 2}, {20, 1}}) {
+    Volume<uint16_t> buf;
+    int64_t reads = 0, read_slices = 0;
+    const GreySlabSource slabs = [&](int64_t z0, int64_t nz) -> const Volume<uint16_t>& {
+      ++reads, read_slices += nz;
+      buf = to_volume(g.view().slices(z0, nz));
+      return buf;
+    };
+    const auto vol = grey_volumes(lab.view(), slabs, ids, levels(), w);
+    ASSERT_EQ(vol.size(), ids.size());
+    for (size_t x = 0; x < ids.size(); ++x)
+      EXPECT_EQ(vol[x], double(want[ids[x]]) / grey_volume_units) << "window " << w << ", label " << ids[x];
+    EXPECT_EQ(reads, cores) << "window " << w;
+    EXPECT_EQ(read_slices, sh.nz + 2 * (cores - 1)) << "window " << w;  // each slice once, plus two per seam
+  }
 }
 
 TEST(GreyVolume, BadInputThrows) {
@@ -217,6 +238,10 @@ TEST(GreyVolume, BadInputThrows) {
   o.solid_grey = o.void_grey;
   EXPECT_THROW(grey_volumes(lab.view(), g2.view(), {1}, o), UsageError);
   EXPECT_THROW(grey_volumes(lab.view(), g2.view(), {2, 1}, levels()), UsageError);
+  Volume<uint16_t> short_slab(Shape{2, 4, 4});
+  const GreySlabSource wrong = [&](int64_t, int64_t) -> const Volume<uint16_t>& { return short_slab; };
+  EXPECT_THROW(grey_volumes(lab.view(), wrong, {1}, levels(), 3), InputError);
+  EXPECT_THROW(grey_volumes(lab.view(), wrong, {1}, levels(), 2), UsageError);
 }
 
 }  // namespace

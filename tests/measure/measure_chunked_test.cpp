@@ -111,7 +111,11 @@ TEST(MeasureChunked, SlabsGiveTheWholeVolumesTable) {
   ASSERT_GE(ref.size(), 20u);
   const Shape sh = s.labels.shape();
   auto labels = [&](int64_t z0, int64_t nz) { return chunk_slices(s.labels, z0, nz); };
-  auto grey = [&](int64_t z0, int64_t nz) { return chunk_slices(s.grey, z0, nz); };
+  Volume<uint16_t> grey_buf;
+  auto grey = [&](int64_t z0, int64_t nz) -> const Volume<uint16_t>& {
+    grey_buf = chunk_slices(s.grey, z0, nz);
+    return grey_buf;
+  };
   const std::vector<std::pair<int64_t, int>> runs{{1, 2}, {5, 1}, {64, 1}};
   for (const auto& [core, threads] : runs) {
     ParticleOptions o = chunk_options(true);

@@ -16,6 +16,7 @@
 #include "compare/xct_stage.hpp"
 #include "dem/yield_stress.hpp"
 #include "core/errors.hpp"
+#include "core/memory.hpp"
 
 namespace tg::compare {
 namespace {
@@ -36,6 +37,16 @@ void check_inputs(const CompareInputs& in) {
 std::string stage_name(const CompareInputs& in, size_t n, double strain) {
   if (!in.stage_names.empty()) return in.stage_names[n];
   return fmt::format("stage {}{}", n, std::isfinite(strain) ? fmt::format(" (strain {:.2f} %)", 100 * strain) : "");
+}
+
+// A tracker's last labels go to disk until the next stage when they are
+// large beside the memory left: the next stage's segmentation and, on the
+// DEM side, its voxelised truth and imaged labels come before they are
+// needed again. Five 1220^3 stages with the DEM lineage held two previous
+// stages in memory and ran out at 21.6 GB (bench/scale/RESULTS.md). The
+// lineage does not change; each spill costs a write and a read of the labels.
+void spill_if_large(track::Tracker& t, const fs::path& file) {
+  if (t.held_bytes() > available_memory_bytes() / 4) t.spill(file.string());
 }
 
 // Notes on what the report lacks, joined.
@@ -98,6 +109,7 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
       }
     }
     x.labels = Volume<uint32_t>{};  // only the tracker keeps a stage's labels (the previous one)
+    if (tracker && n + 1 < in.xct.size()) spill_if_large(*tracker, out / ".tracker_xct.h5");
     const size_t m = match_snapshot(dem.strains, x.strain, n);
     const double vox_m = opt.voxel_um > 0 ? opt.voxel_um * 1e-6 : x.geometry.voxel_size_m[0];
     if (!(vox_m > 0)) throw UsageError("compare: " + in.xct[n] + " has no voxel size: give --voxel-um");
@@ -117,8 +129,14 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
       }
       if (dem_tracker) {
         dem_maps.push_back(track::correspondence(d.imaged_labels, d.truth_labels));
+        // Each volume goes as soon as it has served: at full size the stage's
+        // truth, its imaged labels, their copy on the first grid and the
+        // tracker's previous stage would be 16 B/voxel at once.
+        d.truth_labels = Volume<uint32_t>{};
+        Volume<uint32_t> imaged_on_grid0 = on_grid(d.imaged_labels, grid0, geom0);
+        d.imaged_labels = Volume<uint32_t>{};
         try {
-          dem_tracker->add_stage(on_grid(d.imaged_labels, grid0, geom0), dem.snapshots[m]);
+          dem_tracker->add_stage(std::move(imaged_on_grid0), dem.snapshots[m]);
         } catch (const InputError& e) {
           dem_tracker.reset();
           add_note(rep.dem_lineage_note, std::string("imaged DEM path not tracked: ") + e.what());
@@ -126,6 +144,7 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
       }
       d.truth_labels = Volume<uint32_t>{};
       d.imaged_labels = Volume<uint32_t>{};
+      if (dem_tracker && n + 1 < in.xct.size()) spill_if_large(*dem_tracker, out / ".tracker_dem.h5");
     }
     const BrokenEstimate b = dem_broken_fraction(dem.history, dem.strains[m], d.particles, scale0.particles);
     ideal[n] = std::move(d.ideal);

@@ -286,8 +286,29 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
 
 Tracker::Tracker(TrackOptions o) : o_(std::move(o)) {}
 
+Tracker::~Tracker() {
+  std::error_code ec;
+  if (!spilled_.empty()) std::filesystem::remove(spilled_, ec);
+}
+
+void Tracker::spill(const std::string& file) {
+  if (prev_.empty() || !spilled_.empty()) return;
+  H5Writer w(file);
+  w.write_volume("/labels", prev_, 1);
+  w.commit();
+  spilled_ = file;
+  prev_ = Volume<uint32_t>{};
+}
+
 Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& name) {
   const auto t0 = std::chrono::steady_clock::now();
+  if (!spilled_.empty()) {
+    AnyVolume back = H5Reader(spilled_).read_volume("/labels");
+    prev_ = std::move(std::get<Volume<uint32_t>>(back));
+    std::error_code ec;
+    std::filesystem::remove(spilled_, ec);
+    spilled_.clear();
+  }
   const int s = stages();
   if (s > 0) {
     if (labels.shape() != prev_.shape())

@@ -6,7 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <map>
 
@@ -83,10 +86,13 @@ TEST(Track, IntactGrainsFollowCompressionWithPermutedLabels) {
   EXPECT_EQ(r.summary[1].pct_intact_broken, 0.0);
 }
 
-// One thread or two: the same tables, byte for byte.
-TEST(Track, ThreadCountDoesNotChangeTheResult) {
-  std::string out[2];
-  for (int t = 1; t <= 2; ++t) {
+// One thread or two, and the labels of stage 0 spilled to disk between the
+// stages (compare at full size): the same tables, byte for byte.
+TEST(Track, ThreadCountAndSpillingDoNotChangeTheResult) {
+  const std::filesystem::path spill = std::filesystem::temp_directory_path() /
+                                      ("tg_track_spill_" + std::to_string(::getpid()) + ".h5");
+  std::string out[3];
+  for (int t = 1; t <= 3; ++t) {
     Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage();
     const auto c0 = centres(0), c1 = centres(0.05);
     for (size_t q = 0; q < c0.size(); ++q) {
@@ -94,14 +100,29 @@ TEST(Track, ThreadCountDoesNotChangeTheResult) {
       paint(s1, label_at(1, q), c1[q], 6, [q](double, double, double x) { return q % 5 || std::abs(x) > 0.75; });
     }
     TrackOptions o;
-    o.threads = t;
+    o.threads = std::min(t, 2);
     Tracker tr(o);
     tr.add_stage(std::move(s0), "s0");
+    if (t == 3) {
+      EXPECT_EQ(tr.held_bytes(), 48 * 60 * 60 * 4);
+      tr.spill(spill.string());
+      EXPECT_EQ(tr.held_bytes(), 0);
+      EXPECT_TRUE(std::filesystem::exists(spill));
+    }
     tr.add_stage(std::move(s1), "s1");
+    EXPECT_FALSE(std::filesystem::exists(spill));  // read back and removed
     const auto r = tr.result();
     out[t - 1] = to_csv(lineage_table(r)) + to_csv(events_table(r)) + to_csv(summary_table(r));
   }
   EXPECT_EQ(out[0], out[1]);
+  EXPECT_EQ(out[0], out[2]);
+  {  // a tracker that goes with its labels on disk takes the file with it
+    Tracker tr;
+    tr.add_stage(empty_stage(), "s0");
+    tr.spill(spill.string());
+    EXPECT_TRUE(std::filesystem::exists(spill));
+  }
+  EXPECT_FALSE(std::filesystem::exists(spill));
 }
 
 // One grain of each kind of event, among intact ones; then a fragment breaks again.

@@ -93,8 +93,10 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
   Geometry geom0;
   for (size_t n = 0; n < in.xct.size(); ++n) {
     const auto t0 = std::chrono::steady_clock::now();
+    const bool own_peak = reset_peak_rss();
     const std::string stem = "stage" + std::to_string(n);
     XctStage x = load_xct_stage(in.xct[n], opt, scale0.median_radius_m, out / "slices", stem);
+    const int64_t stage_voxels = x.labels.size();
     if (!in.xct_strains.empty()) x.strain = in.xct_strains[n];
     if (tracker && x.labels.empty()) {
       tracker.reset();
@@ -167,6 +169,9 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
     st.exp_vs_imaged = sample_distances(x.s.sample, imaged[n].sample);
     st.ideal_vs_imaged = sample_distances(ideal[n].sample, imaged[n].sample);
     st.seconds = seconds_since(t0);
+    st.peak_rss_bytes = peak_rss_bytes();
+    st.own_peak = own_peak;
+    st.voxels = stage_voxels;
     rep.stages.push_back(st);
     write_csv(x.s.particles, out / "particles" / (stem + "_experiment.csv"));
     write_csv(ideal[n].particles, out / "particles" / (stem + "_dem_ideal.csv"));

@@ -132,6 +132,11 @@ struct StageReport {
   measure::StageGrading experiment, ideal, imaged;
   Distances exp_vs_imaged, exp_vs_ideal, ideal_vs_imaged;
   double seconds = 0;
+  // Memory: the process's peak while this stage ran (own_peak: reset at its
+  // start where the kernel allows, else the peak so far), and the voxels of
+  // its XCT volume (0 for a particle table) for bytes per voxel.
+  int64_t peak_rss_bytes = 0, voxels = 0;
+  bool own_peak = false;
 };
 
 struct Report {

@@ -262,6 +262,9 @@ void write_report_json(const fs::path& out, const ReportData& d, json meta) {
                       {"experiment_vs_dem_ideal", distances_json(st.exp_vs_ideal)},
                       {"dem_ideal_vs_dem_imaged", distances_json(st.ideal_vs_imaged)}};
     j["seconds"] = st.seconds;
+    j["peak_rss_bytes"] = st.peak_rss_bytes;
+    j["peak_rss_bytes_per_voxel"] = st.voxels ? json(double(st.peak_rss_bytes) / double(st.voxels)) : json(nullptr);
+    j["peak_scope"] = st.own_peak ? "stage" : "process";
     meta["stages"].push_back(j);
   }
   meta["sieves_mm"] = rep.sieves_mm;

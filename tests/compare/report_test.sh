@@ -44,6 +44,11 @@ for series in ("dem", "experiment"):
     assert y[f"{series}_mpa"] is not None and 0.1 < y[f"{series}_mpa"] < max(s), (series, y)
 br = [r for r in csv.DictReader(open(f"{d}/broken.csv")) if r["series"] == "dem_history"]
 assert br and all(float(r["grains_broken"]) >= 0 for r in br), "broken.csv: no DEM history counts"
+# Each stage states its memory: the peak while it ran, and per voxel of its XCT volume
+# (a 4 B/voxel label volume at least is held while it is measured).
+for st in json.load(open(f"{d}/report.json"))["stages"]:
+    assert st["peak_rss_bytes"] > 0 and st["peak_scope"] in ("stage", "process"), st
+    assert st["peak_rss_bytes_per_voxel"] is None or st["peak_rss_bytes_per_voxel"] > 4, st
 PY
 
 # The page plus a script that reports, after load, how many images decoded.

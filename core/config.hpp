@@ -12,6 +12,7 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace tg {
@@ -37,6 +38,30 @@ class Config {
 
   // Throws InputError("<file>: <key> <message>") unless ok.
   void require(bool ok, const std::string& key, const std::string& message) const;
+
+  // A key that names one of a fixed set of choices: `names` pairs each word
+  // with its value, the first pair is the default. Any other word is an
+  // InputError listing them. The same table gives the word back for a
+  // record of the run (Config::name_of), so each choice is spelled once.
+  template <class E>
+  using Choices = std::vector<std::pair<std::string, E>>;
+  template <class E>
+  E choice(const std::string& key, const Choices<E>& names) {
+    const std::string word = get(key, names.front().first);
+    std::string all;
+    for (const auto& [name, value] : names) {
+      if (name == word) return value;
+      all += (all.empty() ? "\"" : ", \"") + name + "\"";
+    }
+    require(false, key, "must be one of " + all + " (got \"" + word + "\")");
+    return names.front().second;
+  }
+  template <class E>
+  static const std::string& name_of(const Choices<E>& names, E value) {
+    for (const auto& n : names)
+      if (n.second == value) return n.first;
+    return names.front().first;
+  }
   // Throws InputError for the first key present in the file but never read.
   void finish() const;
   const std::string& source() const { return source_; }

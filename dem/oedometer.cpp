@@ -24,6 +24,24 @@
 
 namespace tg::dem {
 
+namespace {
+
+// The words of each choice-valued key, the default first (Config::choice):
+// read from the config and written back to run.json from one table.
+using breakage::BirthOverlap;
+using breakage::BondRadiusRule;
+using breakage::SublimitPolicy;
+const Config::Choices<bool> kDampingScope{{"contacts", false}, {"total", true}};
+const Config::Choices<BondRadiusRule> kBondRadiusRule{{"mean", BondRadiusRule::kMean}, {"min", BondRadiusRule::kMin}};
+const Config::Choices<SublimitPolicy> kSublimitPolicy{{"remove", SublimitPolicy::kRemove},
+                                                      {"keep", SublimitPolicy::kKeep},
+                                                      {"keep_unbreakable", SublimitPolicy::kKeepUnbreakable}};
+const Config::Choices<BirthOverlap> kBirthOverlap{{"inherit", BirthOverlap::kInherit},
+                                                  {"mother", BirthOverlap::kMotherRatio},
+                                                  {"none", BirthOverlap::kNone}};
+
+}  // namespace
+
 using json = nlohmann::json;
 
 OedometerSetup read_oedometer_config(Config& cfg, const std::filesystem::path& base_dir) {
@@ -36,9 +54,7 @@ OedometerSetup read_oedometer_config(Config& cfg, const std::filesystem::path& b
   e.friction = cfg.get("contact.friction", e.friction);
   e.restitution = cfg.get("contact.restitution", e.restitution);
   e.local_damping = cfg.get("contact.local_damping", e.local_damping);
-  const std::string scope = cfg.get("contact.local_damping_scope", std::string("contacts"));
-  cfg.require(scope == "contacts" || scope == "total", "contact.local_damping_scope", "must be \"contacts\" or \"total\"");
-  e.local_damping_total = scope == "total";
+  e.local_damping_total = cfg.choice("contact.local_damping_scope", kDampingScope);
   e.walls.cylinder_radius = cfg.get("walls.cylinder_radius_m", e.walls.cylinder_radius);
   e.walls.platen_friction = cfg.get("walls.platen_friction", e.walls.platen_friction);
   e.walls.cylinder_friction = cfg.get("walls.cylinder_friction", e.walls.cylinder_friction);
@@ -86,27 +102,15 @@ OedometerSetup read_oedometer_config(Config& cfg, const std::filesystem::path& b
   b.bond.radius_multiplier = cfg.get("breakage.bond_radius_multiplier", b.bond.radius_multiplier);
   b.bond.tensile_strength_Pa = cfg.get("breakage.bond_normal_strength_Pa", b.bond.tensile_strength_Pa);
   b.bond.shear_strength_Pa = cfg.get("breakage.bond_shear_strength_Pa", b.bond.shear_strength_Pa);
-  const std::string radius_rule = cfg.get("breakage.bond_radius_rule", std::string("mean"));
-  cfg.require(radius_rule == "mean" || radius_rule == "min", "breakage.bond_radius_rule", "must be \"mean\" or \"min\"");
-  b.bond.radius_rule = radius_rule == "min" ? breakage::BondRadiusRule::kMin : breakage::BondRadiusRule::kMean;
+  b.bond.radius_rule = cfg.choice("breakage.bond_radius_rule", kBondRadiusRule);
   b.bond.damping_ratio = cfg.get("breakage.bond_damping", b.bond.damping_ratio);
   cfg.require(b.bond.damping_ratio >= 0 && b.bond.damping_ratio <= 1, "breakage.bond_damping", "must be in [0, 1]");
   b.split_bonded = cfg.get("breakage.split_bonded", b.split_bonded);
   b.time_step_safety = cfg.get("breakage.time_step_safety", b.time_step_safety);
   b.min_time_step_s = cfg.get("breakage.min_time_step_s", b.min_time_step_s);
-  const std::string policy = cfg.get("breakage.sublimit_policy", std::string("remove"));
-  cfg.require(policy == "remove" || policy == "keep" || policy == "keep_unbreakable", "breakage.sublimit_policy",
-              "must be \"remove\", \"keep\" or \"keep_unbreakable\"");
-  b.sublimit = policy == "keep"               ? breakage::SublimitPolicy::kKeep
-               : policy == "keep_unbreakable" ? breakage::SublimitPolicy::kKeepUnbreakable
-                                              : breakage::SublimitPolicy::kRemove;
+  b.sublimit = cfg.choice("breakage.sublimit_policy", kSublimitPolicy);
   b.fines_overlap = cfg.get("breakage.fines_overlap", b.fines_overlap);
-  const std::string birth = cfg.get("breakage.birth_overlap", std::string("inherit"));
-  cfg.require(birth == "inherit" || birth == "mother" || birth == "none", "breakage.birth_overlap",
-              "must be \"inherit\", \"mother\" or \"none\"");
-  b.birth_overlap = birth == "none"     ? breakage::BirthOverlap::kNone
-                    : birth == "mother" ? breakage::BirthOverlap::kMotherRatio
-                                        : breakage::BirthOverlap::kInherit;
+  b.birth_overlap = cfg.choice("breakage.birth_overlap", kBirthOverlap);
   s.log_bond_breaks = cfg.get("breakage.log_bond_breaks", s.log_bond_breaks);
   cfg.require(b.min_time_step_s >= 0, "breakage.min_time_step_s", "must be >= 0 (0 = no density scaling)");
   cfg.require(b.fines_overlap > 0 && b.fines_overlap < e.overlap_limit, "breakage.fines_overlap",
@@ -220,7 +224,7 @@ void write_run_record(const std::filesystem::path& rundir, const OedometerSetup&
               {"critical_step_reference_overlap", s.reference_overlap},
               {"mass_scaling", s.mass_scaling},
               {"damping", {{"viscous_restitution", eo.restitution}, {"local", eo.local_damping},
-                           {"local_scope", eo.local_damping_total ? "total" : "contacts"}}},
+                           {"local_scope", Config::name_of(kDampingScope, eo.local_damping_total)}}},
               {"contact", "hertz_mindlin"},
               {"contact_kernel", kernels_name(eo.kernel_isa)},
               {"threads", omp_get_max_threads()},
@@ -230,16 +234,12 @@ void write_run_record(const std::filesystem::path& rundir, const OedometerSetup&
     rec["breakage"] = {{"min_split_diameter_m", b.min_split_diameter_m},
                        {"density_scaling_min_time_step_s", b.min_time_step_s},
                        {"time_step_safety", b.time_step_safety},
-                       {"sublimit_policy", b.sublimit == breakage::SublimitPolicy::kKeep               ? "keep"
-                                           : b.sublimit == breakage::SublimitPolicy::kKeepUnbreakable ? "keep_unbreakable"
-                                                                                                        : "remove"},
+                       {"sublimit_policy", Config::name_of(kSublimitPolicy, b.sublimit)},
                        {"fines_overlap", b.fines_overlap},
                        {"split_bonded", b.split_bonded},
-                       {"bond_radius_rule", b.bond.radius_rule == breakage::BondRadiusRule::kMin ? "min" : "mean"},
+                       {"bond_radius_rule", Config::name_of(kBondRadiusRule, b.bond.radius_rule)},
                        {"bond_damping", b.bond.damping_ratio},
-                       {"birth_overlap", b.birth_overlap == breakage::BirthOverlap::kNone          ? "none"
-                                         : b.birth_overlap == breakage::BirthOverlap::kMotherRatio ? "mother"
-                                                                                                   : "inherit"}};
+                       {"birth_overlap", Config::name_of(kBirthOverlap, b.birth_overlap)}};
   }
   write_file_atomic(rundir / "run.json", rec.dump(2) + "\n");
 }

@@ -40,4 +40,20 @@ TEST(Config, WrongTypeAndSyntaxErrorsNameTheKey) {
   EXPECT_THROW(r.require(nu < 0.5, "nu", "must be below 0.5"), InputError);
 }
 
+TEST(Config, ChoiceReadsOneOfItsWordsAndNamesThemOtherwise) {
+  enum class Mode { kA, kB, kC };
+  const Config::Choices<Mode> modes{{"alpha", Mode::kA}, {"beta", Mode::kB}, {"gamma", Mode::kC}};
+  Config c = Config::from_string("[x]\nmode = \"gamma\"\nbad = \"delta\"\n", "c.toml");
+  EXPECT_EQ(c.choice("x.mode", modes), Mode::kC);
+  EXPECT_EQ(c.choice("x.absent", modes), Mode::kA);  // the first is the default
+  try {
+    c.choice("x.bad", modes);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "c.toml: x.bad must be one of \"alpha\", \"beta\", \"gamma\" (got \"delta\")");
+  }
+  EXPECT_EQ(Config::name_of(modes, Mode::kB), "beta");
+  for (const auto& [name, value] : modes) EXPECT_EQ(Config::name_of(modes, value), name);
+}
+
 }  // namespace tg

@@ -224,7 +224,13 @@ int run_measure(const MeasureJob& o) {
     Geometry geom = geometry_of(r.read_slab(ds, 0, std::min<int64_t>(1, shape.nz)));
     if (o.voxel_um > 0) geom.voxel_size_m = {o.voxel_um * 1e-6, o.voxel_um * 1e-6, o.voxel_um * 1e-6};
     if (!geom.has_voxel_size()) throw InputError(o.in + ": no voxel size in the file; give --voxel-um");
-    const auto plan = measure::plan_measure_chunks(shape, !o.grey.empty(), limit);
+    // A uint16 HDF5 grey scan is read slab by slab below, in one buffer.
+    measure::GreyHeld held = measure::GreyHeld::none;
+    if (!o.grey.empty()) {
+      GreyFile probe;
+      held = is_hdf5(o.grey) && probe.open(o.grey) ? measure::GreyHeld::slabs : measure::GreyHeld::whole;
+    }
+    const auto plan = measure::plan_measure_chunks(shape, held, limit);
     if (!plan.in_memory) return run_measure_chunked(o, po, lp, ds, shape, geom, plan, limit);
   }
   Volume<uint32_t> read;
@@ -373,7 +379,7 @@ tg::app::Registrar reg_measure{{"measure", 40,
                   "(measure/grey_volume.hpp); d_med_mm and fr stay on the labels; volume_from says which");
   sub->add_option("--memory-limit", o->memory_limit,
                   "Memory to stay under, e.g. 16GiB, 512MiB, 2G or a byte count. Labels (HDF5) whose measuring "
-                  "needs more (~5 B/voxel, 7 with --grey) are measured slab by slab, with the same table; .csv "
+                  "needs more (~5 B/voxel, 7 with a --grey scan read whole; a uint16 HDF5 one is read in slabs) are measured slab by slab, with the same table; .csv "
                   "output only");
   tg::app::add_threads_option(sub, o->threads);
   tg::app::add_voxel_option(sub, o->voxel_um);

@@ -64,10 +64,13 @@ constexpr int64_t kSumSlices = 16;
 
 }  // namespace
 
-MeasureChunkPlan plan_measure_chunks(const Shape& s, bool grey, int64_t limit) {
+MeasureChunkPlan plan_measure_chunks(const Shape& s, GreyHeld held, int64_t limit) {
   MeasureChunkPlan p;
-  const double per_voxel = kMeasureBytesPerVoxel + (grey ? 2.0 : 0.0);
-  p.estimate_bytes = int64_t(per_voxel * double(s.voxels())) + kMeasureFixedBytes;
+  const bool grey = held != GreyHeld::none;
+  const double grey_bytes = held == GreyHeld::whole   ? 2.0 * double(s.voxels())
+                            : held == GreyHeld::slabs ? 2.0 * double(grey_window_slices(s) * s.slice_voxels())
+                                                      : 0.0;
+  p.estimate_bytes = int64_t(kMeasureBytesPerVoxel * double(s.voxels()) + grey_bytes) + kMeasureFixedBytes;
   if (limit <= 0 || p.estimate_bytes <= limit) {
     p.core = s.nz;
     return p;

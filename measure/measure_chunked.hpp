@@ -49,7 +49,7 @@ namespace tg::measure {
 // the planned share of the boundary lists in a slab-by-slab run before any
 // slab is read (per voxel of the volume: 0.15 boundary voxels x 8 B), and
 // the process's own.
-inline constexpr double kMeasureBytesPerVoxel = 5.0;  // + 2 with a grey scan
+inline constexpr double kMeasureBytesPerVoxel = 5.0;  // + 2 with a grey scan held whole
 inline constexpr double kMeasureListBytesPerVoxel = 1.2;
 inline constexpr int64_t kMeasureFixedBytes = int64_t(128) << 20;
 
@@ -60,10 +60,15 @@ struct MeasureChunkPlan {
   int64_t list_bytes = 0;      // the boundary lists' planned size
 };
 
-// The plan for labels of shape s (with a grey scan when `grey`) under
+// How a whole-volume measure holds the grey scan: not at all, whole (2
+// B/voxel), or slab by slab in one buffer of grey_window_slices() slices (a
+// uint16 HDF5 scan, grey_volume.hpp), which the estimate counts as such.
+enum class GreyHeld { none, whole, slabs };
+
+// The plan for labels of shape s (with the grey scan held as `grey`) under
 // memory_limit_bytes (<= 0: no limit). UsageError when even a one-slice
 // slab does not fit beside the planned lists, or a side exceeds 65535.
-MeasureChunkPlan plan_measure_chunks(const Shape& s, bool grey, int64_t memory_limit_bytes);
+MeasureChunkPlan plan_measure_chunks(const Shape& s, GreyHeld grey, int64_t memory_limit_bytes);
 
 // Slices [z0, z0 + nz) of the label volume (the grey scan's: GreySlabSource,
 // grey_volume.hpp).

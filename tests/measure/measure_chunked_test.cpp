@@ -212,18 +212,27 @@ TEST(MeasureChunked, ContactSearchBySlabsIsFindContacts) {
 
 TEST(MeasureChunked, PlanAndRefusals) {
   const Shape sh{2048, 2048, 2048};
-  const MeasureChunkPlan none = plan_measure_chunks(sh, true, 0);
+  const MeasureChunkPlan none = plan_measure_chunks(sh, GreyHeld::whole, 0);
   EXPECT_TRUE(none.in_memory);
   const int64_t gib = int64_t(1) << 30;
-  const MeasureChunkPlan p = plan_measure_chunks(sh, true, 16 * gib);
+  const MeasureChunkPlan p = plan_measure_chunks(sh, GreyHeld::whole, 16 * gib);
   EXPECT_FALSE(p.in_memory);
   EXPECT_GE(p.core, 1);
   // The first slab and the planned lists fit under the limit.
   EXPECT_LE(double(p.list_bytes) + double(p.core + 2) * 6.0 * double(sh.slice_voxels()) + double(kMeasureFixedBytes),
             double(16 * gib));
   EXPECT_GT(double(p.estimate_bytes), 7.0 * double(sh.voxels()));  // labels + grey + lists
-  EXPECT_THROW(plan_measure_chunks(sh, true, 4 * gib), UsageError);  // the lists alone need ~10 GB
-  EXPECT_THROW(plan_measure_chunks({10, 10, 70000}, false, 1), UsageError);  // over 65535 a side
+  EXPECT_THROW(plan_measure_chunks(sh, GreyHeld::whole, 4 * gib), UsageError);  // the lists alone need ~10 GB
+  EXPECT_THROW(plan_measure_chunks({10, 10, 70000}, GreyHeld::none, 1), UsageError);  // over 65535 a side
+  // A grey scan read slab by slab costs its window, not 2 B/voxel: 1024^3
+  // labels (5 GiB + 128 MiB) with a uint16 HDF5 scan fit under 5.5 GiB,
+  // with the scan held whole (7 GiB) they do not.
+  const Shape k{1024, 1024, 1024};
+  const MeasureChunkPlan slabs = plan_measure_chunks(k, GreyHeld::slabs, 11 * gib / 2);
+  EXPECT_TRUE(slabs.in_memory);
+  EXPECT_EQ(slabs.estimate_bytes, 5 * k.voxels() + 2 * grey_window_slices(k) * k.slice_voxels() + kMeasureFixedBytes);
+  EXPECT_FALSE(plan_measure_chunks(k, GreyHeld::whole, 11 * gib / 2).in_memory);
+  EXPECT_EQ(plan_measure_chunks(k, GreyHeld::none, 0).estimate_bytes, 5 * k.voxels() + kMeasureFixedBytes);
   const Shape small{10, 10, 10};
   auto none_read = [](int64_t, int64_t) -> Volume<uint32_t> { return {}; };
   ParticleOptions o;

@@ -1,9 +1,13 @@
 #include "core/atomic_file.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <fstream>
+#include <regex>
+#include <vector>
 
 #include "core/errors.hpp"
 
@@ -44,6 +48,26 @@ void AtomicPath::commit() {
   fs::rename(temp_, target_, ec);
   if (ec) throw InputError(target_.string() + ": cannot write (" + ec.message() + ")");
   committed_ = true;
+}
+
+int remove_stale_temporaries(const fs::path& dir) {
+  static const std::regex temp_name(R"(\..+\.tmp-([0-9]+)-[0-9]+)");
+  std::error_code ec;
+  int removed = 0;
+  std::vector<fs::path> stale;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    std::smatch m;
+    const std::string name = entry.path().filename().string();
+    if (!std::regex_match(name, m, temp_name)) continue;
+    const long pid = std::stol(m[1].str());
+    // kill(pid, 0) fails with ESRCH when no such process exists (EPERM: it
+    // exists, owned by another user).
+    if (pid > 0 && pid != long(::getpid()) && ::kill(pid_t(pid), 0) != 0 && errno == ESRCH)
+      stale.push_back(entry.path());
+  }
+  for (const auto& p : stale)
+    if (fs::remove_all(p, ec) > 0) ++removed;
+  return removed;
 }
 
 void write_file_atomic(const fs::path& path, std::string_view bytes) {

@@ -29,6 +29,12 @@ class AtomicPath {
   bool committed_ = false;
 };
 
+// Removes the temporaries that AtomicPath left in `dir` (not recursive) when
+// its process was killed before commit or destructor ran (".NAME.tmp-PID-N",
+// PID no longer running): a restarted run would otherwise carry them. Returns
+// how many it removed; a temporary of a live process is left alone.
+int remove_stale_temporaries(const std::filesystem::path& dir);
+
 // The one writer of small text or binary files (JSON, CSV, XDMF, .npy):
 // `bytes` to a temporary beside `path`, checked, then renamed onto it.
 // Throws InputError("PATH: cannot write") and leaves nothing behind on failure.

@@ -267,6 +267,9 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
     sum.critical_time_step = ct.dt_critical;
     eng.emplace(resume_engine(st, eo));
     fs::create_directories(rundir / "snapshots");
+    // A run killed while writing a file leaves its temporary beside it.
+    remove_stale_temporaries(rundir);
+    remove_stale_temporaries(rundir / "snapshots");
     hist.read_until(rundir / "history.csv", eng->step_count());
   } else {
     Particles p = load_specimen(s, eo);

@@ -12,6 +12,9 @@
 #include <fstream>
 #include <random>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include "core/atomic_file.hpp"
 #include "core/io/hdf5.hpp"
 #include "core/io/tiff.hpp"
@@ -248,6 +251,32 @@ TEST(VolumeIO, FailedWriteLeavesNothingBehind) {
   EXPECT_THROW(write_volume(Volume<uint16_t>(Shape{0, 4, 4}), d / "e.h5"), UsageError);
   EXPECT_TRUE(nothing_but(d.path(), 0));
   EXPECT_THROW(write_volume(Volume<uint16_t>::filled(Shape{1, 1, 1}, 0), d / "no/such/dir/x.tif"), InputError);
+}
+
+TEST(VolumeIO, StaleTemporariesOfKilledProcessesAreRemoved) {
+  // A process killed between AtomicPath's temporary and its rename leaves
+  // ".NAME.tmp-PID-N" behind; a restarted DEM run clears those of dead PIDs.
+  TempDir d;
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  ASSERT_GT(child, 0);
+  ::waitpid(child, nullptr, 0);  // `child` is now a PID of no process
+  const auto touch = [&](const std::string& name) { std::ofstream(d / name) << "x"; };
+  const std::string dead = ".a.h5.tmp-" + std::to_string(child) + "-3";
+  const std::string live = ".b.csv.tmp-" + std::to_string(::getpid()) + "-1";
+  touch(dead);
+  touch(live);
+  touch("c.tmp-" + std::to_string(child) + "-1");  // not hidden: not one of ours
+  touch("x.h5");
+  fs::create_directory(d / (".s.tmp-" + std::to_string(child) + "-7"));  // a folder output's temporary
+  touch(".s.tmp-" + std::to_string(child) + "-7/slice_0000.tif");
+  EXPECT_EQ(remove_stale_temporaries(d.path()), 2);
+  EXPECT_FALSE(fs::exists(d / dead));
+  EXPECT_FALSE(fs::exists(d / (".s.tmp-" + std::to_string(child) + "-7")));
+  EXPECT_TRUE(fs::exists(d / live));
+  EXPECT_TRUE(fs::exists(d / ("c.tmp-" + std::to_string(child) + "-1")));
+  EXPECT_TRUE(fs::exists(d / "x.h5"));
+  EXPECT_EQ(remove_stale_temporaries(d.path()), 0);
 }
 
 TEST(VolumeIO, TiledTiffReads) {

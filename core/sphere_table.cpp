@@ -4,6 +4,7 @@
 #include <unordered_set>
 
 #include "core/errors.hpp"
+#include "core/io/dem_text.hpp"
 #include "core/io/hdf5.hpp"
 #include "core/io/volume_io.hpp"
 
@@ -44,7 +45,10 @@ Table spheres_to_table(const SphereTable& s) {
 }
 
 SphereTable read_spheres(const std::string& path) {
-  if (!is_hdf5(path)) return spheres_from_table(read_csv(path, {"x_m", "y_m", "z_m", "r_m"}));
+  if (!is_hdf5(path)) {
+    if (std::optional<Table> other = read_dem_text(path)) return spheres_from_table(*other);
+    return spheres_from_table(read_csv(path, {"x_m", "y_m", "z_m", "r_m"}));
+  }
   const auto [file, ds] = split_dataset_spec(path);
   std::string group = ds;
   H5Reader rd(file);

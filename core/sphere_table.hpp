@@ -17,7 +17,10 @@
 // Files: CSV (one header line), or an HDF5 table (a group of 1-D datasets,
 // core/io/hdf5.hpp) named "snap.h5:/group"; "snap.h5" alone means the first
 // group (in file order) that holds an x_m column — the DEM's snapshots keep
-// theirs in /spheres (dem/snapshot.hpp).
+// theirs in /spheres (dem/snapshot.hpp). Other codes' files are read too,
+// recognised by their first line (core/io/dem_text.hpp): LAMMPS/LIGGGHTS
+// text dumps ("dump.txt", or "dump.txt:STEP" for one of several timesteps)
+// and YADE's export.text ("#format x_y_z_r").
 //
 // Reading validates every row: finite positions, 0 < r_m < inf, integer ids;
 // InputError("FILE: row N: problem") otherwise, and for a table with no rows.

@@ -35,7 +35,7 @@ Volume<uint32_t> read_labels(const std::string& in, double voxel_um) {
   if (format_of(in, false) == FileFormat::hdf5 && ds.empty() && H5Reader(path).has("/labels")) spec = path + ":/labels";
   ReadOptions ro;
   ro.voxel_um = voxel_um;
-  Volume<uint32_t> labels = read_volume_as<uint32_t>(spec, ro);
+  Volume<uint32_t> labels = read_label_volume(spec, ro);
   if (!labels.geometry().has_voxel_size()) throw InputError(in + ": no voxel size in the file; give --voxel-um");
   return labels;
 }

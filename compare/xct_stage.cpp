@@ -67,7 +67,7 @@ XctStage load_xct_stage(const std::string& path, const CompareOptions& opt, doub
       if (want_grey)
         grey = read_volume_as<uint16_t>(ds.empty() ? file + ":/volume" : path, ro);
       else
-        labels = read_volume_as<uint32_t>(ds.empty() ? file + ":/labels" : path, ro);
+        labels = read_label_volume(ds.empty() ? file + ":/labels" : path, ro);
     } else {
       grey = read_volume_as<uint16_t>(path, ro);
     }

@@ -584,7 +584,7 @@ TrackResult track_files(const std::vector<std::string>& paths, const TrackOption
     ReadOptions ro;
     ro.progress = false;
     ro.reuse = &spare;
-    Volume<uint32_t> labels = read_volume_as<uint32_t>(spec, ro);
+    Volume<uint32_t> labels = read_label_volume(spec, ro);
     voxels = labels.size();
     spare = tr.add_stage(std::move(labels), paths[s]);
     sec.push_back(seconds_since(t0));

@@ -19,7 +19,7 @@ using namespace tg;
 using namespace tg::track;
 
 namespace {
-Volume<uint32_t> labels_of(const std::string& f) { return read_volume_as<uint32_t>(f + ":/labels"); }
+Volume<uint32_t> labels_of(const std::string& f) { return read_label_volume(f + ":/labels"); }
 }  // namespace
 
 int main(int argc, char** argv) try {

@@ -391,11 +391,15 @@ AnyVolume read_range(hid_t file, const std::string& path, const std::string& dat
   const H5T_class_t cls = H5Tget_class(ft.get());
   const size_t size = H5Tget_size(ft.get());
   DType dt;
+  bool labels_only = false;
   if (cls == H5T_INTEGER && H5Tget_sign(ft.get()) == H5T_SGN_NONE && size == 1) dt = DType::u8;
   else if (cls == H5T_INTEGER && H5Tget_sign(ft.get()) == H5T_SGN_NONE && size == 2) dt = DType::u16;
   else if (cls == H5T_INTEGER && H5Tget_sign(ft.get()) == H5T_SGN_NONE && size == 4) dt = DType::u32;
   else if (cls == H5T_FLOAT && size == 4) dt = DType::f32;
-  else throw InputError(where + ": element type is not uint8/uint16/uint32/float32");
+  // Signed or 64-bit integers (labels from Python: int32, int64): into
+  // uint32 by libhdf5's conversion, refused when a value is out of range.
+  else if (cls == H5T_INTEGER && (size == 1 || size == 2 || size == 4 || size == 8)) dt = DType::u32, labels_only = true;
+  else throw InputError(where + ": element type is not uint8/uint16/uint32/float32 (or an integer label type)");
   Handle sp = space_h(H5Dget_space(d.get()));
   const int rank = H5Sget_simple_extent_ndims(sp.get());
   check_chunk_layout(d.get(), sp.get(), where, false);  // the chunk sizes below, where libhdf5 reads
@@ -426,7 +430,7 @@ AnyVolume read_range(hid_t file, const std::string& path, const std::string& dat
   // (hdf5_chunks.hpp); any other layout or pipeline goes through libhdf5.
   h5chunks::Pipeline pipe;
   h5chunks::Layout layout;
-  if (rank == 3) {
+  if (rank == 3 && !labels_only) {
     Handle dcpl = plist_h(H5Dget_create_plist(d.get()));
     if (dcpl.ok() && H5Pget_layout(dcpl.get()) == H5D_CHUNKED && H5Pget_chunk(dcpl.get(), 3, layout.chunk) == 3) {
       pipe = h5chunks::pipeline_of(dcpl.get());
@@ -446,6 +450,16 @@ AnyVolume read_range(hid_t file, const std::string& path, const std::string& dat
               }))
             return;
         }
+        // A value out of uint32's range stops the conversion (libhdf5 would clip it).
+        Handle dxpl = plist_h(H5Pcreate(H5P_DATASET_XFER));
+        if (labels_only)
+          H5Pset_type_conv_cb(
+              dxpl.get(),
+              [](H5T_conv_except_t e, hid_t, hid_t, void*, void*, void*) {
+                return e == H5T_CONV_EXCEPT_RANGE_HI || e == H5T_CONV_EXCEPT_RANGE_LOW ? H5T_CONV_ABORT
+                                                                                        : H5T_CONV_UNHANDLED;
+              },
+              nullptr);
         const hsize_t step = 16;
         for (hsize_t k0 = 0; k0 < static_cast<hsize_t>(shape.nz); k0 += step) {
           hsize_t start[3] = {hsize_t(z0) + k0, 0, 0};
@@ -453,9 +467,11 @@ AnyVolume read_range(hid_t file, const std::string& path, const std::string& dat
           Handle fsp = space_h(H5Dget_space(d.get()));
           if (rank == 3) H5Sselect_hyperslab(fsp.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
           Handle msp = space_h(H5Screate_simple(rank, rank == 3 ? count : count + 1, nullptr));
-          if (H5Dread(d.get(), native_type<T>(), msp.get(), fsp.get(), H5P_DEFAULT,
+          if (H5Dread(d.get(), native_type<T>(), msp.get(), fsp.get(), dxpl.get(),
                       v.data() + static_cast<int64_t>(k0) * shape.slice_voxels()) < 0)
-            throw InputError(where + ": read failed (corrupt or truncated file?)");
+            throw InputError(where + (labels_only ? ": a value outside 0..4294967295 (a signed or 64-bit integer "
+                                                    "dataset is read as labels only), or a corrupt file"
+                                                  : ": read failed (corrupt or truncated file?)"));
           if (progress) bar.update(static_cast<double>(k0 + count[0]));
         }
       },

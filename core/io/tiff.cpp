@@ -9,6 +9,8 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <type_traits>
+#include <vector>
 
 #include "core/atomic_file.hpp"
 #include "core/progress.hpp"
@@ -49,7 +51,12 @@ using TiffPtr = std::unique_ptr<TIFF, TiffCloser>;
 
 struct PageInfo {
   uint32_t width = 0, height = 0;
-  DType dtype = DType::u8;
+  DType dtype = DType::u8;  // the volume's element type
+  // Signed or 64-bit integer pages (label volumes from other tools: Python's
+  // labelling functions give int32/int64) are read into uint32 with every
+  // value checked to be a label, 0..2^32-1: src_bits is their width.
+  int src_bits = 0;
+  bool src_signed = false;
 };
 
 PageInfo page_info(TIFF* t, const std::string& path, int page) {
@@ -68,16 +75,21 @@ PageInfo page_info(TIFF* t, const std::string& path, int page) {
   else if ((fmt == SAMPLEFORMAT_UINT || fmt == SAMPLEFORMAT_VOID) && bits == 8) p.dtype = DType::u8;
   else if ((fmt == SAMPLEFORMAT_UINT || fmt == SAMPLEFORMAT_VOID) && bits == 16) p.dtype = DType::u16;
   else if ((fmt == SAMPLEFORMAT_UINT || fmt == SAMPLEFORMAT_VOID) && bits == 32) p.dtype = DType::u32;
-  else
+  else if ((fmt == SAMPLEFORMAT_INT && (bits == 8 || bits == 16 || bits == 32 || bits == 64)) ||
+           ((fmt == SAMPLEFORMAT_UINT || fmt == SAMPLEFORMAT_VOID) && bits == 64)) {
+    p.dtype = DType::u32;
+    p.src_bits = bits;
+    p.src_signed = fmt == SAMPLEFORMAT_INT;
+  } else
     fail(path, "page " + std::to_string(page) + ": " + std::to_string(bits) + "-bit sample format " +
-                   std::to_string(fmt) + " is not supported (8/16/32-bit unsigned or 32-bit float)");
+                   std::to_string(fmt) +
+                   " is not supported (8/16/32-bit unsigned or 32-bit float; signed or 64-bit integers as labels)");
   if (p.width == 0 || p.height == 0) fail(path, "page " + std::to_string(page) + " is empty (0 pixels)");
   return p;
 }
 
-// Decodes the current page into dst (height*width samples of bytes_per_sample).
-void read_page(TIFF* t, const std::string& path, int page, const PageInfo& p, unsigned char* dst) {
-  const int bps = dtype_bytes(p.dtype);
+// Decodes the current page into dst (height*width samples of bps bytes).
+void decode_page(TIFF* t, const std::string& path, int page, const PageInfo& p, int bps, unsigned char* dst) {
   const int64_t row_bytes = static_cast<int64_t>(p.width) * bps;
   const int64_t page_bytes = row_bytes * p.height;
   if (TIFFIsTiled(t)) {
@@ -118,6 +130,39 @@ void read_page(TIFF* t, const std::string& path, int page, const PageInfo& p, un
   if (off != page_bytes)
     fail(path, "page " + std::to_string(page) + " holds " + std::to_string(off) + " bytes of pixel data, expected " +
                    std::to_string(page_bytes));
+}
+
+// One sample of a signed or 64-bit integer page, as a label.
+template <class S>
+void samples_to_labels(const unsigned char* src, uint32_t* dst, int64_t n, const std::string& path, int page,
+                       uint32_t width) {
+  for (int64_t i = 0; i < n; ++i) {
+    S v;
+    std::memcpy(&v, src + i * int64_t(sizeof(S)), sizeof(S));
+    bool negative = false;
+    if constexpr (std::is_signed_v<S>) negative = v < 0;
+    if (negative || static_cast<uint64_t>(v) > 0xffffffffull)
+      fail(path, "page " + std::to_string(page) + ": value " + std::to_string(v) + " at (y,x)=(" +
+                     std::to_string(i / width) + "," + std::to_string(i % width) +
+                     ") is not a label (0..4294967295): a signed or 64-bit integer TIFF is read as labels only");
+    dst[i] = static_cast<uint32_t>(v);
+  }
+}
+
+// Decodes the current page into dst (height*width elements of p.dtype).
+void read_page(TIFF* t, const std::string& path, int page, const PageInfo& p, unsigned char* dst) {
+  if (p.src_bits == 0) return decode_page(t, path, page, p, dtype_bytes(p.dtype), dst);
+  const int64_t n = int64_t(p.width) * p.height;
+  std::vector<unsigned char> raw(static_cast<size_t>(n * (p.src_bits / 8)));
+  decode_page(t, path, page, p, p.src_bits / 8, raw.data());
+  auto* out = reinterpret_cast<uint32_t*>(dst);
+  switch (p.src_bits * (p.src_signed ? -1 : 1)) {
+    case -8: return samples_to_labels<int8_t>(raw.data(), out, n, path, page, p.width);
+    case -16: return samples_to_labels<int16_t>(raw.data(), out, n, path, page, p.width);
+    case -32: return samples_to_labels<int32_t>(raw.data(), out, n, path, page, p.width);
+    case -64: return samples_to_labels<int64_t>(raw.data(), out, n, path, page, p.width);
+    default: return samples_to_labels<uint64_t>(raw.data(), out, n, path, page, p.width);
+  }
 }
 
 double unit_to_m(std::string u) {

@@ -109,6 +109,32 @@ static AnyVolume read_volume_unchecked(const std::string& spec, const ReadOption
   return v;
 }
 
+Volume<uint32_t> read_label_volume(const std::string& spec, const ReadOptions& opt) {
+  AnyVolume v = read_volume(spec, opt);
+  if (auto* p = std::get_if<Volume<uint32_t>>(&v)) return std::move(*p);
+  if (auto* f = std::get_if<Volume<float>>(&v)) {
+    // Labels stored as floats are exact integers up to 2^24.
+    const float* d = f->data();
+    for (int64_t i = 0; i < f->size(); ++i)
+      if (!(d[i] >= 0.f && d[i] <= 16777216.f && d[i] == std::floor(d[i]))) {
+        const auto c = f->shape().coords(i);
+        throw InputError(spec + ": holds float32 value " + std::to_string(d[i]) + " at (z,y,x)=(" +
+                         std::to_string(c[0]) + "," + std::to_string(c[1]) + "," + std::to_string(c[2]) +
+                         "), not a label (an integer 0..16777216): a grey scan where labels were expected?");
+      }
+  }
+  return std::visit(
+      [&](const auto& src) {
+        Volume<uint32_t> out(src.shape(), src.geometry());
+        const auto* d = src.data();
+        uint32_t* o = out.data();
+#pragma omp parallel for schedule(static)
+        for (int64_t i = 0; i < src.size(); ++i) o[i] = static_cast<uint32_t>(d[i]);
+        return out;
+      },
+      v);
+}
+
 template <class T>
 Volume<T> read_volume_as(const std::string& spec, const ReadOptions& opt) {
   AnyVolume v = read_volume(spec, opt);

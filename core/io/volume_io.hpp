@@ -42,6 +42,13 @@ AnyVolume read_volume(const std::string& spec, const ReadOptions& opt = {});
 template <class T>
 Volume<T> read_volume_as(const std::string& spec, const ReadOptions& opt = {});
 
+// A label volume (0 = void, 1.. = particles) from any tool: uint32 as is;
+// uint8 and uint16 widened; signed and 64-bit integers (TIFF, HDF5: what
+// Python's labelling functions write) checked to be 0..2^32-1; float32
+// (Fiji/MorphoLibJ's 32-bit labels) checked to hold integers 0..2^24.
+// InputError naming the file otherwise (e.g. a grey scan given as labels).
+Volume<uint32_t> read_label_volume(const std::string& spec, const ReadOptions& opt = {});
+
 void write_volume(const AnyVolume& v, const std::string& spec, const WriteOptions& opt = {});
 template <class T>
 void write_volume(const Volume<T>& v, const std::string& spec, const WriteOptions& opt = {});

@@ -66,7 +66,11 @@ assert rows == {5: 8, 4000000000: 27}, rows
 PY
 then echo "ok   label volume with gaps and label 4e9: measured as labels 5 (8 voxels) and 4000000000 (27)"; passes=$((passes+1))
 else echo "FAIL label volume with gaps and huge labels"; fails=$((fails+1)); fi
-expect_bad "label volume of the wrong type" "zero.json: holds uint8, expected uint32" -- "$TG" measure zero.json -o out.csv
+# uint8/uint16 and integer-valued labels of other types are read (core/io/volume_io.hpp
+# read_label_volume); a grey scan given as labels is refused, naming a voxel.
+printf '{"shape_zyx":[2,2,2],"dtype":"float32","voxel_size_um":10}' > greyf.json
+for i in 1 2 3 4 5 6 7 8; do printf '\x00\x00\x00\x3f'; done > greyf.raw
+expect_bad "grey scan given as labels" "greyf.json: holds float32 value 0.500000 at (z,y,x)=(0,0,0), not a label" -- "$TG" measure greyf.json -o out.csv
 
 # --- sphere CSVs (DEM packing and voxelise input)
 printf 'x_m,y_m,z_m\n0,0,0.001\n' > nocol.csv

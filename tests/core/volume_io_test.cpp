@@ -279,6 +279,89 @@ TEST(VolumeIO, StaleTemporariesOfKilledProcessesAreRemoved) {
   EXPECT_EQ(remove_stale_temporaries(d.path()), 0);
 }
 
+// Label volumes as other tools write them: signed and 64-bit integers (TIFF
+// sample format 2, HDF5 int types), uint8/uint16, float32 with integer values.
+TEST(VolumeIO, LabelVolumesOfAnyIntegerTypeReadAsUint32) {
+  TempDir d;
+  const int64_t W = 6, H = 5, Z = 3;
+  std::vector<int64_t> lab(Z * H * W);
+  for (size_t i = 0; i < lab.size(); ++i) lab[i] = (i % 7 == 0) ? 0 : int64_t(i * 40503 % 4000000000ull);
+  auto expect_labels = [&](const Volume<uint32_t>& v, const std::string& what) {
+    ASSERT_EQ(v.shape(), (Shape{Z, H, W})) << what;
+    for (int64_t i = 0; i < v.size(); ++i) ASSERT_EQ(int64_t(v.data()[i]), lab[size_t(i)]) << what << " voxel " << i;
+  };
+  // TIFF: int64 and uint64 pages (libtiff directly: our writer writes unsigned types only).
+  auto tiff_of = [&](const std::string& name, uint16_t fmt, const std::vector<int64_t>& vals) {
+    const std::string p = d / name;
+    TIFF* t = TIFFOpen(p.c_str(), "w");
+    for (int64_t z = 0; z < Z; ++z) {
+      TIFFSetField(t, TIFFTAG_IMAGEWIDTH, uint32_t(W));
+      TIFFSetField(t, TIFFTAG_IMAGELENGTH, uint32_t(H));
+      TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, 64);
+      TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, fmt);
+      TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, 1);
+      TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+      TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, uint32_t(H));
+      TIFFWriteEncodedStrip(t, 0, const_cast<int64_t*>(vals.data() + z * H * W), tmsize_t(H * W * 8));
+      TIFFWriteDirectory(t);
+    }
+    TIFFClose(t);
+    return p;
+  };
+  expect_labels(read_label_volume(tiff_of("i64.tif", SAMPLEFORMAT_INT, lab)), "int64 TIFF");
+  expect_labels(read_label_volume(tiff_of("u64.tif", SAMPLEFORMAT_UINT, lab)), "uint64 TIFF");
+  std::vector<int64_t> bad = lab;
+  bad[17] = -1;
+  try {
+    read_label_volume(tiff_of("neg.tif", SAMPLEFORMAT_INT, bad));
+    ADD_FAILURE() << "a negative label was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("neg.tif: page 0: value -1 at (y,x)=(2,5) is not a label"), std::string::npos)
+        << e.what();
+  }
+  bad[17] = int64_t(1) << 33;
+  EXPECT_THROW(read_label_volume(tiff_of("big.tif", SAMPLEFORMAT_INT, bad)), InputError);
+  // HDF5: int64 and int32 datasets (libhdf5 directly, chunked and deflated as h5py writes them).
+  auto h5_of = [&](const std::string& name, hid_t ftype, const std::vector<int64_t>& vals) {
+    const std::string p = d / name;
+    hid_t f = H5Fcreate(p.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    hsize_t dims[3] = {hsize_t(Z), hsize_t(H), hsize_t(W)}, chunk[3] = {1, hsize_t(H), hsize_t(W)};
+    hid_t sp = H5Screate_simple(3, dims, nullptr);
+    hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(dcpl, 3, chunk);
+    H5Pset_deflate(dcpl, 4);
+    hid_t ds = H5Dcreate2(f, "labels", ftype, sp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+    H5Dwrite(ds, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, vals.data());
+    H5Dclose(ds);
+    H5Pclose(dcpl);
+    H5Sclose(sp);
+    H5Fclose(f);
+    return p;
+  };
+  expect_labels(read_label_volume(h5_of("i64.h5", H5T_STD_I64LE, lab) + ":/labels"), "int64 HDF5");
+  std::vector<int64_t> small = lab;
+  for (auto& v : small) v %= 2000000000;
+  std::swap(small, lab);
+  expect_labels(read_label_volume(h5_of("i32.h5", H5T_STD_I32BE, lab) + ":/labels"), "int32 big-endian HDF5");
+  std::swap(small, lab);
+  bad = lab;
+  bad[3] = -5;
+  EXPECT_THROW(read_label_volume(h5_of("neg.h5", H5T_STD_I64LE, bad) + ":/labels"), InputError);
+  // uint16 widened; float32 integers read; a float32 grey scan refused.
+  Volume<uint16_t> u16(Shape{2, 2, 2});
+  for (int64_t i = 0; i < 8; ++i) u16.data()[i] = uint16_t(i * 9000);
+  write_volume(u16, d / "u16.tif");
+  const Volume<uint32_t> w = read_label_volume(d / "u16.tif");
+  for (int64_t i = 0; i < 8; ++i) EXPECT_EQ(w.data()[i], uint32_t(i * 9000));
+  Volume<float> f32(Shape{2, 2, 2});
+  for (int64_t i = 0; i < 8; ++i) f32.data()[i] = float(i * 1000);
+  write_volume(f32, d / "f.h5");
+  EXPECT_EQ(read_label_volume(d / "f.h5").data()[7], 7000u);
+  f32.data()[5] = 0.5f;
+  write_volume(f32, d / "g.h5");
+  EXPECT_THROW(read_label_volume(d / "g.h5"), InputError);
+}
+
 TEST(VolumeIO, TiledTiffReads) {
   // Tiled pages come from other tools (not our writer): build one with libtiff directly.
   TempDir d;

@@ -2,6 +2,22 @@
 // from the particles themselves: y = M x + t (voxel coordinates, (z, y, x)).
 //
 // Method (one RANSAC fit, then a least-squares polish):
+//  0. Where to look sideways, when the whole specimen moved (a cell remounted
+//     or a scan recentred between stages): the mode of the (y, x) offsets of
+//     all grain-sized pairs of similar volume, voted in bins of the lateral
+//     radius; kept only when it gathers 25 % more pairs than a zero offset,
+//     else (0, 0). When under a quarter of the grain-sized particles agree
+//     even so, the specimen may have been turned about its axis: A is turned
+//     in steps that move the scan's rim by half a bin, the offset voted
+//     again at each angle (with up to 100 of A's grains and offsets within a
+//     quarter of the scan's radius), and the best angle kept when it gathers
+//     half as many pairs again as no turn (cost: angles x 100 x nB, only
+//     then: ~2 s for 256 grains here). Step 1 searches
+//     around the prior; the affine fit takes the rotation in. Measured on a
+//     blind scene (truth labels, 256 grains, R 16), stage 1 against stage 0:
+//     5 % strain plus a shift of (7, 12) voxels, and a turn of 30 degrees,
+//     went from failed fits (52.7 % and 43.7 % of grains "broken") to every
+//     grain intact with its right parent.
 //  1. Candidate centroid matches. Between two stages the specimen shortens
 //     along z (the top platen moves, the bottom one is fixed) and grains move
 //     little sideways, so every "grain-sized" particle of stage A (volume
@@ -27,7 +43,7 @@
 //
 // Reference: M. A. Fischler, R. C. Bolles (1981), Random sample consensus,
 // Commun. ACM 24(6) 381-395, doi:10.1145/358669.358692.
-// Cost: O(nA nB) for the candidate search (a few thousand particles per
+// Cost: O(nA nB) for the offset vote and the candidate search (a few thousand particles per
 // stage: milliseconds), RANSAC <= 2000 iterations (OpenCV's cap), polish
 // O(nA nB) per round.
 #pragma once

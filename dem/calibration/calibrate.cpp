@@ -117,10 +117,11 @@ fs::path plot_script(const std::string& given) {
 
 }  // namespace calibrate_detail
 
-std::vector<double> crush_bonds_broken(const Target& t, const std::vector<OedometerSetup>& setups, int threads) {
+std::vector<CrushMean> crush_bonds_broken(const Target& t, const std::vector<OedometerSetup>& setups, int threads) {
   const int n = t.crush_grains;
   const int64_t tests = static_cast<int64_t>(setups.size()) * n;
   std::vector<double> bonds(static_cast<size_t>(tests), std::numeric_limits<double>::quiet_NaN());
+  std::vector<std::string> why(static_cast<size_t>(tests));
 #pragma omp parallel for schedule(dynamic) num_threads(std::max(1, threads))
   for (int64_t k = 0; k < tests; ++k) {
     const OedometerSetup& s = setups[static_cast<size_t>(k / n)];
@@ -133,14 +134,19 @@ std::vector<double> crush_bonds_broken(const Target& t, const std::vector<Oedome
     c.breakage.strength.seed = static_cast<uint64_t>(k % n + 1);
     try {
       bonds[static_cast<size_t>(k)] = static_cast<double>(breakage::run_crush(c).final_record.bonds_broken);
-    } catch (const std::exception&) {  // leaves NaN: that setup has no objective
+    } catch (const std::exception& e) {  // that setup has no objective; say why
+      why[static_cast<size_t>(k)] = "strength seed " + std::to_string(k % n + 1) + ": " + e.what();
     }
   }
-  std::vector<double> mean;
+  std::vector<CrushMean> mean(setups.size());
   for (size_t i = 0; i < setups.size(); ++i) {
     double sum = 0;  // in seed order: the same sum for any thread count
-    for (int j = 0; j < n; ++j) sum += bonds[i * static_cast<size_t>(n) + static_cast<size_t>(j)];
-    mean.push_back(sum / n);
+    for (int j = 0; j < n; ++j) {
+      const size_t k = i * static_cast<size_t>(n) + static_cast<size_t>(j);
+      sum += bonds[k];
+      if (!why[k].empty() && mean[i].failed++ == 0) mean[i].first_failure = why[k];
+    }
+    mean[i].bonds_broken = sum / n;
   }
   return mean;
 }
@@ -206,7 +212,7 @@ CalibrationResult run_calibration(const CalibrateOptions& o) {
     size_t next = 0;
     for (const Point& u : pts) runs.push_back({scale(params, u), {}, "", 0});
     // The crush tests of the round's candidates, before their oedometer runs.
-    std::vector<double> crush(pts.size(), std::numeric_limits<double>::quiet_NaN());
+    std::vector<CrushMean> crush(pts.size(), CrushMean{std::numeric_limits<double>::quiet_NaN(), 0, ""});
     if (t.crush_bonds_broken > 0) {
       std::vector<OedometerSetup> setups;
       for (size_t i = 0; i < pts.size(); ++i) {
@@ -248,10 +254,12 @@ CalibrationResult run_calibration(const CalibrateOptions& o) {
           const fs::path dir = o.out / "runs" / name;
           const Table h = read_csv(dir / "history.csv", {"strain", "top_stress_Pa"});
           const double grains = static_cast<double>(read_csv(dir / "packing_initial.csv").rows());
-          r.score = score_run(t, h, grains, crush[i]);
+          r.score = score_run(t, h, grains, crush[i].bonds_broken);
           r.status = std::isfinite(r.score.objective)           ? "ok"
-                     : t.crush_bonds_broken > 0 && !std::isfinite(crush[i]) ? "crush tests failed"
-                                                                             : "short of the target strain";
+                     : t.crush_bonds_broken > 0 && !std::isfinite(crush[i].bonds_broken)
+                         ? "crush tests failed (" + std::to_string(crush[i].failed) + " of " + std::to_string(t.crush_grains) +
+                               "; " + crush[i].first_failure + ")"
+                         : "short of the target strain";
         } catch (const InputError& e) {
           r.status = std::string("unreadable (") + e.what() + ")";
         }

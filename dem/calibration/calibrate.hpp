@@ -58,9 +58,16 @@ CalibrationResult run_calibration(const CalibrateOptions& o);
 // breakage.d0_m = 0 (the packing's mean diameter in the oedometer) means the
 // crush diameter here: the crush grain is the reference size. One result per
 // entry of `setups`, `threads` tests at a time; each test is single-threaded
-// and independent, so the result does not depend on `threads`. NaN for a
-// setup whose tests failed.
-std::vector<double> crush_bonds_broken(const Target& t, const std::vector<OedometerSetup>& setups, int threads);
+// and independent, so the result does not depend on `threads`. A setup with
+// a failed test has no mean (NaN: a mean over the other seeds would be a
+// different target); the count and the first failure's reason are kept so
+// that runs.csv can say why.
+struct CrushMean {
+  double bonds_broken = 0;  // NaN when a test failed
+  int failed = 0;           // tests that threw
+  std::string first_failure;  // "strength seed S: what()" of the lowest failed seed
+};
+std::vector<CrushMean> crush_bonds_broken(const Target& t, const std::vector<OedometerSetup>& setups, int threads);
 
 // The config text of one run: CONFIG with `values` set at the parameters'
 // keys and relative paths made absolute (the run's config lives in DIR/runs).

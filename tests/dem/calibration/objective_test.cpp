@@ -204,13 +204,14 @@ TEST(CalibrationObjective, CrushMeanIsTheCrushTestsMean) {
   t.crush_grains = 2;
   t.crush_diameter_m = 1.2e-3;
   t.crush_travel = 0.08;  // past the split and the first bond breaks (dozens), < 1 s a test
-  std::vector<tg::dem::OedometerSetup> s(2);
+  std::vector<tg::dem::OedometerSetup> s(3);
   for (auto& x : s) x.breakage_options.min_time_step_s = 2e-8;
   s[0].breakage_options.bond.radius_multiplier = 0.9;
   s[1].breakage_options.bond.radius_multiplier = 1.6;
   s[1].breakage_options.strength.sigma_t0_Pa = 8e6;
-  const std::vector<double> m = cal::crush_bonds_broken(t, s, 2);
-  ASSERT_EQ(m.size(), 2u);
+  s[2].breakage_options.fines_overlap = 2;  // every test of this setup throws
+  const std::vector<cal::CrushMean> m = cal::crush_bonds_broken(t, s, 2);
+  ASSERT_EQ(m.size(), 3u);
   double direct = 0;
   for (uint64_t seed : {1, 2}) {
     tg::dem::breakage::CrushOptions c;
@@ -223,5 +224,11 @@ TEST(CalibrationObjective, CrushMeanIsTheCrushTestsMean) {
     direct += static_cast<double>(tg::dem::breakage::run_crush(c).final_record.bonds_broken);
   }
   EXPECT_GT(direct, 0);  // the test breaks bonds: the term measures something
-  EXPECT_EQ(m[1], direct / 2);  // 2 threads over both setups = one by one, bit for bit
+  EXPECT_EQ(m[1].bonds_broken, direct / 2);  // 2 threads over the setups = one by one, bit for bit
+  EXPECT_EQ(m[1].failed, 0);
+  EXPECT_TRUE(m[1].first_failure.empty());
+  // A setup whose tests fail has no mean, and says which seed failed first and why.
+  EXPECT_TRUE(std::isnan(m[2].bonds_broken));
+  EXPECT_EQ(m[2].failed, 2);
+  EXPECT_EQ(m[2].first_failure, "strength seed 1: breakage: fines overlap must be in (0, 1)");
 }

@@ -111,7 +111,8 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
       }
     }
     x.labels = Volume<uint32_t>{};  // only the tracker keeps a stage's labels (the previous one)
-    if (tracker && n + 1 < in.xct.size()) spill_if_large(*tracker, out / ".tracker_xct.h5");
+    const bool last = n + 1 == in.xct.size();
+    if (tracker) last ? tracker->finish() : spill_if_large(*tracker, out / ".tracker_xct.h5");
     const size_t m = match_snapshot(dem.strains, x.strain, n);
     const double vox_m = opt.voxel_um > 0 ? opt.voxel_um * 1e-6 : x.geometry.voxel_size_m[0];
     if (!(vox_m > 0)) throw UsageError("compare: " + in.xct[n] + " has no voxel size: give --voxel-um");
@@ -146,7 +147,7 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
       }
       d.truth_labels = Volume<uint32_t>{};
       d.imaged_labels = Volume<uint32_t>{};
-      if (dem_tracker && n + 1 < in.xct.size()) spill_if_large(*dem_tracker, out / ".tracker_dem.h5");
+      if (dem_tracker) last ? dem_tracker->finish() : spill_if_large(*dem_tracker, out / ".tracker_dem.h5");
     }
     const BrokenEstimate b = dem_broken_fraction(dem.history, dem.strains[m], d.particles, scale0.particles);
     ideal[n] = std::move(d.ideal);

@@ -10,6 +10,7 @@
 #include <limits>
 #include <map>
 #include <numbers>
+#include <stdexcept>
 #include <unordered_map>
 
 #include "core/clock.hpp"
@@ -300,8 +301,17 @@ void Tracker::spill(const std::string& file) {
   prev_ = Volume<uint32_t>{};
 }
 
+void Tracker::finish() {
+  std::error_code ec;
+  if (!spilled_.empty()) std::filesystem::remove(spilled_, ec);
+  spilled_.clear();
+  prev_ = Volume<uint32_t>{};
+  finished_ = true;
+}
+
 Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& name) {
   const auto t0 = std::chrono::steady_clock::now();
+  if (finished_) throw std::logic_error("Tracker::add_stage after finish()");
   if (!spilled_.empty()) {
     AnyVolume back = H5Reader(spilled_).read_volume("/labels");
     prev_ = std::move(std::get<Volume<uint32_t>>(back));

@@ -240,6 +240,12 @@ class Tracker {
   // (~10 s at 1220^3 with tomograin's parallel deflate).
   void spill(const std::string& file);
   int64_t held_bytes() const { return prev_.size() * int64_t(sizeof(uint32_t)); }
+  // Frees the last stage's labels (and any spill file) for a caller that adds
+  // no more stages: result() does not need them. compare calls it after its
+  // last stage, whose DEM imaging otherwise ran beside both trackers' labels
+  // (12.7 B per XCT voxel at 1220^3, bench/scale/RESULTS.md). A later
+  // add_stage is a logic error.
+  void finish();
   ~Tracker();
   Tracker(Tracker&&) = default;
   Tracker& operator=(Tracker&&) = default;
@@ -250,6 +256,7 @@ class Tracker {
   std::vector<std::string> names_;
   Volume<uint32_t> prev_;
   std::string spilled_;  // the file holding prev_ while it is out of memory
+  bool finished_ = false;
   std::vector<LineageRow> prev_rows_;
   std::vector<char> prev_whole_;  // per prev_rows_: a stage-0 grain with no break in its chain
   std::vector<LineageRow> lineage_;

@@ -8,10 +8,12 @@
 #      compressing the specimen along z by the study's strains
 #      (compress_stages.py: grains flatten, which real ones do not; the
 #      stages cost the tracker what real ones would: same size, same count);
-#   4. with a DEM run folder as third argument (`tomograin dem oedometer`),
-#      `tomograin compare` of the scan, as the experiment's stage 0, with the
-#      run's snapshot at strain 0 voxelised, imaged, segmented and measured
-#      at the scan's 12.3 um (~1.4e9 voxels).
+#   4. with a DEM run folder as third argument (`tomograin dem oedometer` to
+#      15.48 %), `tomograin compare` of the five stages against the run: each
+#      stage segmented, measured and tracked, the matching DEM snapshot
+#      voxelised, imaged, segmented and measured at the scan's 12.3 um
+#      (~1.4e9 voxels) and tracked, and the DEM's exact lineage (report.json
+#      gives each stage's peak bytes per voxel).
 # Run it alone on the machine: it needs ~17 GiB of memory (synth) and ~14 GB of disk.
 #
 #   bench/scale/full_size.sh BUILD WORK [DEMRUN]
@@ -38,6 +40,7 @@ grep -E "Elapsed|Maximum resident|Percent" track.log
 cat tracked/track.json
 if [[ -n "${3:-}" ]]; then
   rm -rf compared
-  /usr/bin/time -v "$T" compare --xct z1220.h5 --xct-strains 0 --dem "$(realpath "$3")" -o compared --no-track --no-plots > compare.log 2>&1
+  /usr/bin/time -v "$T" compare --xct stages/L0.h5 stages/L1.h5 stages/L2.h5 stages/L3.h5 stages/L4.h5 \
+    --xct-strains 0 0.044 0.0712 0.1128 0.1548 --voxel-um 12.3 --dem "$(realpath "$3")" -o compared --no-plots > compare.log 2>&1
   grep -E "Elapsed|Maximum resident|Percent" compare.log
 fi

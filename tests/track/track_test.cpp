@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <stdexcept>
 
 #include "core/errors.hpp"
 
@@ -111,6 +112,13 @@ TEST(Track, ThreadCountAndSpillingDoNotChangeTheResult) {
     }
     tr.add_stage(std::move(s1), "s1");
     EXPECT_FALSE(std::filesystem::exists(spill));  // read back and removed
+    if (t == 2) {  // a caller done adding stages frees the labels (and the spill file): same result
+      tr.spill(spill.string());
+      tr.finish();
+      EXPECT_EQ(tr.held_bytes(), 0);
+      EXPECT_FALSE(std::filesystem::exists(spill));
+      EXPECT_THROW(tr.add_stage(empty_stage(), "s2"), std::logic_error);
+    }
     const auto r = tr.result();
     out[t - 1] = to_csv(lineage_table(r)) + to_csv(events_table(r)) + to_csv(summary_table(r));
   }

@@ -19,6 +19,7 @@ struct Opts {
   std::string config, out;
   bool restart = false;
   tg::dem::breakage::CrushOptions crush;
+  std::string crush_model;
   tg::dem::calibration::CalibrateOptions calib;
   std::string calib_config, calib_target;
   bool no_plot = false;
@@ -88,7 +89,11 @@ static tg::app::Registrar reg{{"dem", 60,
       "elements (d >= 0.2 mm) break in turn. Gravity and cylinder off; Table 1 material.\n"
       "Writes a CSV: step, time_s, travel_m, force_N (top platen), grains_broken, bonds_broken,\n"
       "bonds_dropped, spheres, particles, volume_lost_m3; prints every split.\n\n"
-      "Example:\n  tomograin dem crush -d 1.2e-3 --travel 0.1 -o crush.csv");
+      "With --model CONFIG the material, contact, damping and breakage options (sigma_t0, m, lambda,\n"
+      "bond strengths, ...) are an oedometer config's, as `dem calibrate`'s crush term uses them (d0 = 0\n"
+      "there means d); options given here still win.\n\n"
+      "Examples:\n  tomograin dem crush -d 1.2e-3 --travel 0.1 -o crush.csv\n"
+      "  tomograin dem crush --model dem/examples/oedometer_calibrated.toml --seed 7 -o crush.csv");
   crush->add_option("-d,--diameter", o->crush.diameter_m, "Grain diameter, m (default 1.2e-3)");
   crush->add_option("--speed", o->crush.platen_speed_m_s, "Platen speed, m/s (default 0.1)");
   crush->add_option("--travel", o->crush.final_travel_fraction, "Final platen travel / d (default 0.4)");
@@ -99,6 +104,7 @@ static tg::app::Registrar reg{{"dem", 60,
                     "Bond radius multiplier lambda of the fragments (default 1.25)");
   crush->add_option("--min-dt", o->crush.breakage.min_time_step_s,
                     "Density scaling: new spheres are made heavy enough for this time step, s (default 1e-8; 0 = off)");
+  crush->add_option("--model", o->crush_model, "Oedometer TOML config whose material, contact and breakage options to use");
   crush->add_option("-o,--output", o->out, "History CSV to write")->required();
   CLI::App* cal = sub->add_subcommand(
       "calibrate",
@@ -166,6 +172,18 @@ static tg::app::Registrar reg{{"dem", 60,
       return 0;
     }
     if (crush->parsed()) {
+      if (!o->crush_model.empty()) {
+        // The config's model, then the options given on the command line on top.
+        const tg::dem::breakage::CrushOptions& given = o->crush;
+        tg::dem::breakage::CrushOptions c = tg::dem::calibration::crush_options(
+            load(o->crush_model), given.diameter_m, given.final_travel_fraction, given.breakage.strength.seed);
+        c.platen_speed_m_s = given.platen_speed_m_s;
+        if (crush->count("--d0")) c.breakage.strength.d0_m = given.breakage.strength.d0_m;
+        if (crush->count("--min-split")) c.breakage.min_split_diameter_m = given.breakage.min_split_diameter_m;
+        if (crush->count("--bond-radius-multiplier")) c.breakage.bond.radius_multiplier = given.breakage.bond.radius_multiplier;
+        if (crush->count("--min-dt")) c.breakage.min_time_step_s = given.breakage.min_time_step_s;
+        o->crush = c;
+      }
       const auto r = tg::dem::breakage::run_crush(o->crush);
       std::printf("grain strength %.4g MPa; dt %.3g s -> %.3g s\n", r.strength_Pa / 1e6, r.time_step_initial_s, r.time_step_final_s);
       for (const auto& e : r.splits)

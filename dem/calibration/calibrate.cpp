@@ -117,6 +117,18 @@ fs::path plot_script(const std::string& given) {
 
 }  // namespace calibrate_detail
 
+breakage::CrushOptions crush_options(const OedometerSetup& setup, double diameter_m, double travel_fraction,
+                                     uint64_t strength_seed) {
+  breakage::CrushOptions c;
+  c.diameter_m = diameter_m;
+  c.final_travel_fraction = travel_fraction;
+  c.engine = setup.engine;
+  c.breakage = setup.breakage_options;
+  if (c.breakage.strength.d0_m == 0) c.breakage.strength.d0_m = diameter_m;
+  c.breakage.strength.seed = strength_seed;
+  return c;
+}
+
 std::vector<CrushMean> crush_bonds_broken(const Target& t, const std::vector<OedometerSetup>& setups, int threads) {
   const int n = t.crush_grains;
   const int64_t tests = static_cast<int64_t>(setups.size()) * n;
@@ -124,14 +136,8 @@ std::vector<CrushMean> crush_bonds_broken(const Target& t, const std::vector<Oed
   std::vector<std::string> why(static_cast<size_t>(tests));
 #pragma omp parallel for schedule(dynamic) num_threads(std::max(1, threads))
   for (int64_t k = 0; k < tests; ++k) {
-    const OedometerSetup& s = setups[static_cast<size_t>(k / n)];
-    breakage::CrushOptions c;
-    c.diameter_m = t.crush_diameter_m;
-    c.final_travel_fraction = t.crush_travel;
-    c.engine = s.engine;
-    c.breakage = s.breakage_options;
-    if (c.breakage.strength.d0_m == 0) c.breakage.strength.d0_m = t.crush_diameter_m;
-    c.breakage.strength.seed = static_cast<uint64_t>(k % n + 1);
+    const breakage::CrushOptions c = crush_options(setups[static_cast<size_t>(k / n)], t.crush_diameter_m, t.crush_travel,
+                                                   static_cast<uint64_t>(k % n + 1));
     try {
       bonds[static_cast<size_t>(k)] = static_cast<double>(breakage::run_crush(c).final_record.bonds_broken);
     } catch (const std::exception& e) {  // that setup has no objective; say why

@@ -23,6 +23,7 @@
 #include <filesystem>
 #include <string>
 
+#include "dem/breakage/crush.hpp"
 #include "dem/calibration/objective.hpp"
 #include "dem/oedometer.hpp"
 #include "dem/calibration/surrogate.hpp"
@@ -62,6 +63,14 @@ CalibrationResult run_calibration(const CalibrateOptions& o);
 // a failed test has no mean (NaN: a mean over the other seeds would be a
 // different target); the count and the first failure's reason are kept so
 // that runs.csv can say why.
+// One crush test of a run's model: `setup`'s material, contact, damping and
+// breakage options, the grain of `diameter_m` crushed to `travel_fraction` of
+// it, strength drawn from `strength_seed`; breakage.d0_m = 0 (the packing's
+// mean diameter in the oedometer) is the crush diameter here. The crush term
+// below and `tomograin dem crush --model CONFIG` both build their tests here.
+breakage::CrushOptions crush_options(const OedometerSetup& setup, double diameter_m, double travel_fraction,
+                                     uint64_t strength_seed);
+
 struct CrushMean {
   double bonds_broken = 0;  // NaN when a test failed
   int failed = 0;           // tests that threw

@@ -287,8 +287,9 @@ def main():
         check(r.returncode == 2 and not os.path.exists("fresh/history.csv"),
               f"dem oedometer --restart without a checkpoint: exit {r.returncode}, nothing written")
         # Past the first split (5.3 % of d with the default strength draw).
-        run(["dem", "crush", "-o", "cr0.csv", "--travel", "0.08"])
+        base = run(["dem", "crush", "-o", "cr0.csv", "--travel", "0.08"])
         c0 = rows("cr0.csv")
+        strength = lambda r: float(r.stdout.split("grain strength ")[1].split()[0])
         last = lambda t, c: float(t[-1][c])
         for flags, ok in [
             (["-d", "1.0e-3"], lambda t: t != c0),
@@ -303,6 +304,18 @@ def main():
             args = ["dem", "crush", "-o", out] + (["--travel", "0.08"] if flags[0] != "--travel" else []) + flags
             run(args)
             check(os.path.exists(out) and ok(rows(out)), "dem crush " + " ".join(flags))
+        # --model: an oedometer config's breakage options (here sigma_t0 doubled, d0 as the
+        # command's default): the drawn strength is sigma_t0 times a factor of the seed and size,
+        # so it doubles; an option given on the command line still wins over the config.
+        open("model.toml", "w").write("[breakage]\nsigma_t0_Pa = 24.0e6\nd0_m = 1.0e-3\n")
+        rm = run(["dem", "crush", "-o", "crm.csv", "--travel", "0.08", "--model", "model.toml"])
+        check(abs(strength(rm) / strength(base) - 2) < 2e-3,
+              f"dem crush --model: strength {strength(rm)} MPa, twice {strength(base)} MPa")
+        r = run(["dem", "crush", "-o", "crm2.csv", "--travel", "0.08", "--model", "model.toml", "--d0", "2e-3"])
+        # Weibull size effect: strength ~ (d / d0)^(-3/m) with m = 3, so doubling d0 doubles it.
+        check(abs(strength(r) / strength(rm) - 2) < 2e-3, f"dem crush --model CONFIG --d0 2e-3: the option wins ({strength(r)} MPa)")
+        r = run(["dem", "crush", "-o", "crm3.csv", "--model", "missing.toml"], ok=False)
+        check(r.returncode == 2 and not os.path.exists("crm3.csv"), "dem crush --model missing.toml: exit 2, nothing written")
 
 
 main()

@@ -52,17 +52,6 @@ struct CalibrationResult {
 // search. A plotting failure is a ResourceError after every data file exists.
 CalibrationResult run_calibration(const CalibrateOptions& o);
 
-// The mean number of bonds broken by stress over the target's crush tests
-// (dem/breakage/crush.hpp, strength seeds 1..t.crush_grains, diameter and
-// travel from the target) run with the material, contact, damping and
-// breakage options of `setup` (a run's config: the candidate's σ_t0 and λ).
-// breakage.d0_m = 0 (the packing's mean diameter in the oedometer) means the
-// crush diameter here: the crush grain is the reference size. One result per
-// entry of `setups`, `threads` tests at a time; each test is single-threaded
-// and independent, so the result does not depend on `threads`. A setup with
-// a failed test has no mean (NaN: a mean over the other seeds would be a
-// different target); the count and the first failure's reason are kept so
-// that runs.csv can say why.
 // One crush test of a run's model: `setup`'s material, contact, damping and
 // breakage options, the grain of `diameter_m` crushed to `travel_fraction` of
 // it, strength drawn from `strength_seed`; breakage.d0_m = 0 (the packing's
@@ -71,6 +60,15 @@ CalibrationResult run_calibration(const CalibrateOptions& o);
 breakage::CrushOptions crush_options(const OedometerSetup& setup, double diameter_m, double travel_fraction,
                                      uint64_t strength_seed);
 
+// The mean number of bonds broken by stress over the target's crush tests
+// (crush_options above: strength seeds 1..t.crush_grains, diameter and
+// travel from the target; a run's config gives the candidate's σ_t0 and λ;
+// the crush grain is the reference size). One result per
+// entry of `setups`, `threads` tests at a time; each test is single-threaded
+// and independent, so the result does not depend on `threads`. A setup with
+// a failed test has no mean (NaN: a mean over the other seeds would be a
+// different target); the count and the first failure's reason are kept so
+// that runs.csv can say why.
 struct CrushMean {
   double bonds_broken = 0;  // NaN when a test failed
   int failed = 0;           // tests that threw

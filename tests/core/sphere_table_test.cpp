@@ -20,6 +20,19 @@ fs::path scratch(const std::string& name) {
   return d / name;
 }
 
+// Writes body to `file` and expects read_spheres to refuse it with an
+// InputError naming the file and holding `needle`.
+void expect_error(const std::string& file, const std::string& body, const std::string& needle) {
+  { std::ofstream(scratch(file)) << body; }
+  try {
+    read_spheres(scratch(file).string());
+    ADD_FAILURE() << "no error for " << body;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(file), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+  }
+}
+
 TEST(SphereTable, CsvAndHdf5RoundTripKeepParticleIds) {
   SphereTable s;
   s.push_back(1e-3, -2e-3, 0.68e-3, 0.68e-3, 7);
@@ -51,21 +64,11 @@ TEST(SphereTable, ClusterIsASynonymAndNoIdMeansOneParticlePerSphere) {
 }
 
 TEST(SphereTable, BadRowsNameFileAndRow) {
-  auto expect_error = [&](const std::string& body, const std::string& needle) {
-    { std::ofstream(scratch("b.csv")) << body; }
-    try {
-      read_spheres(scratch("b.csv").string());
-      ADD_FAILURE() << "no error for " << body;
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find("b.csv"), std::string::npos) << e.what();
-    }
-  };
-  expect_error("x_m,y_m,z_m,r_m\n0,0,1,0.5\n0,0,1,-1\n", "row 3: r_m must be > 0");
-  expect_error("x_m,y_m,z_m,r_m\n0,nan,1,0.5\n", "row 2: sphere position must be finite");
-  expect_error("x_m,y_m,z_m,r_m,particle\n0,0,1,0.5,1.5\n", "row 2: particle id must be an integer");
-  expect_error("x_m,y_m,z_m,r_m\n", "no spheres");
-  expect_error("x_m,y_m,r_m\n0,0,1\n", "missing column 'z_m'");
+  expect_error("b.csv", "x_m,y_m,z_m,r_m\n0,0,1,0.5\n0,0,1,-1\n", "row 3: r_m must be > 0");
+  expect_error("b.csv", "x_m,y_m,z_m,r_m\n0,nan,1,0.5\n", "row 2: sphere position must be finite");
+  expect_error("b.csv", "x_m,y_m,z_m,r_m,particle\n0,0,1,0.5,1.5\n", "row 2: particle id must be an integer");
+  expect_error("b.csv", "x_m,y_m,z_m,r_m\n", "no spheres");
+  expect_error("b.csv", "x_m,y_m,r_m\n0,0,1\n", "missing column 'z_m'");
 }
 
 // A LAMMPS/LIGGGHTS text dump as `dump custom` writes it from two MPI ranks
@@ -134,27 +137,17 @@ TEST(SphereTable, YadeTextExport) {
 }
 
 TEST(SphereTable, BadDumpsNameFileAndLine) {
-  auto expect_error = [&](const std::string& body, const std::string& needle) {
-    { std::ofstream(scratch("bad.dump")) << body; }
-    try {
-      read_spheres(scratch("bad.dump").string());
-      ADD_FAILURE() << "no error for " << body;
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("bad.dump"), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-    }
-  };
   const std::string head = "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n2\nITEM: BOX BOUNDS ff ff ff\n0 1\n0 1\n0 1\n";
-  expect_error(head + "ITEM: ATOMS id x y z radius\n1 0 0 0 0.1\n", "truncated dump");
-  expect_error(head + "ITEM: ATOMS id x y z\n1 0 0 0\n2 0 0 1\n", "no radius or diameter column");
-  expect_error(head + "ITEM: ATOMS id x y radius\n1 0 0 0.1\n2 0 0 0.1\n", "no z column");
-  expect_error(head + "ITEM: ATOMS id x y z radius\n1 0 0 0 0.1\n1 0 0 1 0.1\n", "atom id 1 appears twice");
-  expect_error(head + "ITEM: ATOMS id x y z radius\n1 0 0 0 0.1\n2 0 0 1 -0.1\n", ":11: radius must be > 0");
-  expect_error(head + "ITEM: ATOMS id x y z radius\n1 0 0 0 0.1\n2 0 zz 1 0.1\n", ":11: position is not a number");
-  expect_error(head + "ITEM: ATOMS id x y z radius\n1 0 0 0 0.1\n2 0 0\n", ":11: atom row has 3 values");
-  expect_error("ITEM: UNITS\nlj\nITEM: TIMESTEP\n0\n", "unit style 'lj'");
-  expect_error(head + "ITEM: ATOMS id x y z radius\n1 0 0 0 0.1\n2 0 0 1 0.1\nnot an item\n", ":12: expected an 'ITEM:' line");
-  expect_error("ITEM: TIMESTEP\nten\n", ":2: the timestep is not an integer");
+  expect_error("bad.dump", head + "ITEM: ATOMS id x y z radius\n1 0 0 0 0.1\n", "truncated dump");
+  expect_error("bad.dump", head + "ITEM: ATOMS id x y z\n1 0 0 0\n2 0 0 1\n", "no radius or diameter column");
+  expect_error("bad.dump", head + "ITEM: ATOMS id x y radius\n1 0 0 0.1\n2 0 0 0.1\n", "no z column");
+  expect_error("bad.dump", head + "ITEM: ATOMS id x y z radius\n1 0 0 0 0.1\n1 0 0 1 0.1\n", "atom id 1 appears twice");
+  expect_error("bad.dump", head + "ITEM: ATOMS id x y z radius\n1 0 0 0 0.1\n2 0 0 1 -0.1\n", ":11: radius must be > 0");
+  expect_error("bad.dump", head + "ITEM: ATOMS id x y z radius\n1 0 0 0 0.1\n2 0 zz 1 0.1\n", ":11: position is not a number");
+  expect_error("bad.dump", head + "ITEM: ATOMS id x y z radius\n1 0 0 0 0.1\n2 0 0\n", ":11: atom row has 3 values");
+  expect_error("bad.dump", "ITEM: UNITS\nlj\nITEM: TIMESTEP\n0\n", "unit style 'lj'");
+  expect_error("bad.dump", head + "ITEM: ATOMS id x y z radius\n1 0 0 0 0.1\n2 0 0 1 0.1\nnot an item\n", ":12: expected an 'ITEM:' line");
+  expect_error("bad.dump", "ITEM: TIMESTEP\nten\n", ":2: the timestep is not an integer");
 }
 
 }  // namespace

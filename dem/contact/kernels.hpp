@@ -451,6 +451,37 @@ void wall_lanes(const GatherArgs& a, const HertzMindlin& law, WallList& w) {
   }
 }
 
+// What the gather's last pass does to one sphere (T = double) or to W of
+// them (T = V) with one text: lane l of a V result is the double result.
+[[gnu::always_inline]] inline double lane(double v, int) { return v; }
+template <class V>
+[[gnu::always_inline]] inline double lane(V v, int l) { return v[l]; }
+// Lanes' mask from -1 / 0 entries (one sphere: a bool).
+[[gnu::always_inline]] inline bool lane_mask_of(double, const int64_t* m) { return *m != 0; }
+template <class V>
+[[gnu::always_inline]] inline LaneIndex<V> lane_mask_of(V, const int64_t* m) {
+  LaneIndex<V> o;
+  std::memcpy(&o, m, sizeof o);
+  return o;
+}
+[[gnu::always_inline]] inline bool any_not(bool m) { return !m; }
+template <class M>
+[[gnu::always_inline]] inline bool any_not(M m) { return any(~m); }
+// local_damping() lane by lane: the same sign and the same |f| (the sign bit
+// cleared, as fabs does), so the same bits.
+[[gnu::always_inline]] inline double damp(double f, double v, double alpha) { return local_damping(f, v, alpha); }
+template <class V>
+[[gnu::always_inline]] inline V damp(V f, V v, double alpha) {
+  const V one = V{} + 1.0, zero{};
+  const V sign = select(v > zero, one, zero) - select(v < zero, one, zero);
+  LaneIndex<V> bits;
+  std::memcpy(&bits, &f, sizeof bits);
+  bits &= INT64_MAX;
+  V abs_f;
+  std::memcpy(&abs_f, &bits, sizeof abs_f);
+  return f - sign * (alpha * abs_f);
+}
+
 template <class V>
 int gather_block(const GatherArgs& a, int64_t from, int64_t to) {
   const double lim = a.overlap_limit;
@@ -458,8 +489,36 @@ int gather_block(const GatherArgs& a, int64_t from, int64_t to) {
   WallList platen, cyl;
   int eb[kSphereBlock], et[kSphereBlock], ec[kSphereBlock];  // each sphere's contacts (-1: none)
   // 1. Which spheres touch which wall; histories of the others forgotten.
+  //    W spheres a time are tested for being near a wall or having been on
+  //    one (most spheres of a specimen are neither); only such groups go
+  //    through the per-sphere code below.
+  static constexpr int W = sizeof(V) / sizeof(double);
+  const auto near_a_wall = [&](int64_t s) __attribute__((always_inline)) {
+    V r, z, x, y;
+    std::memcpy(&r, a.r + s, sizeof r);
+    std::memcpy(&z, a.z + s, sizeof z);
+    std::memcpy(&x, a.x + s, sizeof x);
+    std::memcpy(&y, a.y + s, sizeof y);
+    const V inner = a.cylinder_radius - r, zero{};
+    // All ones on every lane where the wall is there, zero where it is not.
+    const LaneIndex<V> bottom = LaneIndex<V>{} - int64_t(a.bottom), top = LaneIndex<V>{} - int64_t(a.top);
+    const LaneIndex<V> cylinder = LaneIndex<V>{} - int64_t(a.cylinder);
+    // Not finite: near (the per-sphere code decides, as before).
+    auto near = ~(r - z <= zero) & bottom;
+    near |= ~(z + r - a.top_z <= zero) & top;
+    near |= ~((inner > zero) & (x * x + y * y <= inner * inner)) & cylinder;
+    uint8_t was[W];
+    std::memcpy(was, a.wall_state + s, W);
+    for (int l = 0; l < W; ++l) near[l] |= -int64_t(was[l] != 0);  // all ones: any() may read sign bits only
+    return any(near);
+  };
   for (int64_t s = from; s < to; ++s) {
     const int q = static_cast<int>(s - from);
+    if ((q % W) == 0 && s + W <= to && !near_a_wall(s)) {
+      for (int l = 0; l < W; ++l) eb[q + l] = et[q + l] = ec[q + l] = -1;
+      s += W - 1;
+      continue;
+    }
     const double r = a.r[s];
     const double db = r - a.z[s];
     const uint8_t was = a.wall_state[s];
@@ -491,9 +550,14 @@ int gather_block(const GatherArgs& a, int64_t from, int64_t to) {
   // 2. The wall contacts, W a time.
   wall_lanes<V>(a, a.law_platen, platen);
   wall_lanes<V>(a, a.law_cyl, cyl);
-  // 3. Each sphere: its parts, then its bottom, top and cylinder contacts.
-  const double half = 0.5 * a.dt, alpha = a.local_damping;
-  int any_bad = 0, moved = 0;
+  // 3. Each sphere's force and torque: its parts, then its bottom, top and
+  //    cylinder contacts, into the block's arrays (scalar: the parts' sums
+  //    are 64 bytes apart, and few spheres touch a wall).
+  alignas(64) double F[6][kSphereBlock];
+  alignas(64) int64_t kickable[kSphereBlock];  // -1: kicked, 0: fixed (a lane mask)
+  const uint32_t* __restrict flags = a.flags;
+  uint8_t* __restrict wall_state = a.wall_state;
+  double* __restrict wall_f = a.wall_f;
   for (int64_t s = from; s < to; ++s) {
     const int q = static_cast<int>(s - from);
     Vec3 f, t;
@@ -503,59 +567,102 @@ int gather_block(const GatherArgs& a, int64_t from, int64_t to) {
       f = f + Vec3{c[0], c[1], c[2]};
       t = t + Vec3{c[3], c[4], c[5]};
     }
-    double fw[3] = {0, 0, 0};
-    const auto apply = [&](const WallList& w, int e, int slot, bool radial) __attribute__((always_inline)) {
-      if (e < 0) return;
-      const Vec3 F{w.fx[e], w.fy[e], w.fz[e]};
-      f = f - F;
-      t = t + Vec3{w.tx[e], w.ty[e], w.tz[e]};
-      fw[slot] = radial ? dot(F, Vec3{w.nx[e], w.ny[e], w.nz[e]}) : F.z;
-    };
-    apply(platen, eb[q], 0, false);
-    apply(platen, et[q], 1, false);
-    apply(cyl, ec[q], 2, true);
-    if (eb[q] >= 0) a.hbx[s] = platen.hx[eb[q]], a.hby[s] = platen.hy[eb[q]], a.hbz[s] = platen.hz[eb[q]];
-    if (et[q] >= 0) a.htx[s] = platen.hx[et[q]], a.hty[s] = platen.hy[et[q]], a.htz[s] = platen.hz[et[q]];
-    if (ec[q] >= 0) a.hcx[s] = cyl.hx[ec[q]], a.hcy[s] = cyl.hy[ec[q]], a.hcz[s] = cyl.hz[ec[q]];
     const uint8_t now = uint8_t((eb[q] >= 0) | (et[q] >= 0) << 1 | (ec[q] >= 0) << 2);
-    if (now | a.wall_state[s]) {
-      a.wall_f[3 * s] = fw[0];
-      a.wall_f[3 * s + 1] = fw[1];
-      a.wall_f[3 * s + 2] = fw[2];
-      a.wall_state[s] = now;
-    }
-    if (alpha > 0) {  // PFC local damping: oppose the velocity with α|F|
-      f = {local_damping(f.x, a.vx[s], alpha), local_damping(f.y, a.vy[s], alpha), local_damping(f.z, a.vz[s], alpha)};
-      t = {local_damping(t.x, a.wx[s], alpha), local_damping(t.y, a.wy[s], alpha), local_damping(t.z, a.wz[s], alpha)};
-    }
-    a.fx[s] = f.x, a.fy[s] = f.y, a.fz[s] = f.z;
-    a.tx[s] = t.x, a.ty[s] = t.y, a.tz[s] = t.z;
-    if (a.kick && !(a.flags[s] & a.fixed_flag)) {
-      const double hm = half * a.inv_m[s], hi = half * a.inv_i[s];
-      const auto half_kick = [&] __attribute__((always_inline)) {
-        a.vx[s] += hm * f.x;
-        a.vy[s] += hm * f.y;
-        a.vz[s] += hm * f.z;
-        a.wx[s] += hi * t.x;
-        a.wy[s] += hi * t.y;
-        a.wz[s] += hi * t.z;
+    if (now | wall_state[s]) {
+      double fw[3] = {0, 0, 0};
+      const auto apply = [&](const WallList& w, int e, int slot, bool radial) __attribute__((always_inline)) {
+        if (e < 0) return;
+        const Vec3 Fw{w.fx[e], w.fy[e], w.fz[e]};
+        f = f - Fw;
+        t = t + Vec3{w.tx[e], w.ty[e], w.tz[e]};
+        fw[slot] = radial ? dot(Fw, Vec3{w.nx[e], w.ny[e], w.nz[e]}) : Fw.z;
       };
-      half_kick();  // as the engine's closing half kick
-      if (a.drift) {  // the next step's opening half kick and drift, as the engine's
-        half_kick();
-        a.x[s] += a.dt * a.vx[s];
-        a.y[s] += a.dt * a.vy[s];
-        a.z[s] += a.dt * a.vz[s];
-      }
+      apply(platen, eb[q], 0, false);
+      apply(platen, et[q], 1, false);
+      apply(cyl, ec[q], 2, true);
+      if (eb[q] >= 0) a.hbx[s] = platen.hx[eb[q]], a.hby[s] = platen.hy[eb[q]], a.hbz[s] = platen.hz[eb[q]];
+      if (et[q] >= 0) a.htx[s] = platen.hx[et[q]], a.hty[s] = platen.hy[et[q]], a.htz[s] = platen.hz[et[q]];
+      if (ec[q] >= 0) a.hcx[s] = cyl.hx[ec[q]], a.hcy[s] = cyl.hy[ec[q]], a.hcz[s] = cyl.hz[ec[q]];
+      wall_f[3 * s] = fw[0];
+      wall_f[3 * s + 1] = fw[1];
+      wall_f[3 * s + 2] = fw[2];
+      wall_state[s] = now;
     }
-    if (a.drift && s < a.n_built) {
-      const double dx = a.x[s] - a.x0[s], dy = a.y[s] - a.y0[s], dz = a.z[s] - a.z0[s];
-      const double d2 = dx * dx + dy * dy + dz * dz;
-      if (!(d2 <= a.skin_lim2)) moved |= __builtin_isfinite(d2) ? 1 : 3;
-    }
-    if (!__builtin_isfinite(f.x + f.y + f.z + t.x + t.y + t.z)) a.bad[s] = 2;
-    any_bad |= int(a.bad[s] != 0);
+    F[0][q] = f.x, F[1][q] = f.y, F[2][q] = f.z, F[3][q] = t.x, F[4][q] = t.y, F[5][q] = t.z;
+    kickable[q] = (flags[s] & a.fixed_flag) ? 0 : -1;
   }
+  // 4. Damping, the stores, the closing half kick and (drift) the next
+  //    step's opening half kick, drift and skin test: W spheres a time (the
+  //    last few one a time), each lane the scalar arithmetic of one sphere.
+  //    Written per sphere as before, with a.vx etc. read through the
+  //    argument struct, this was a third of a step on one thread: every
+  //    byte store (wall state, bad flags) made the compiler reload the
+  //    struct's fields.
+  const double half = 0.5 * a.dt, dt = a.dt, alpha = a.local_damping, lim2 = a.skin_lim2;
+  const bool kick = a.kick, drift = a.drift;
+  const int64_t n_built = a.n_built;
+  double *__restrict vx = a.vx, *__restrict vy = a.vy, *__restrict vz = a.vz;
+  double *__restrict wx = a.wx, *__restrict wy = a.wy, *__restrict wz = a.wz;
+  double *__restrict x = a.x, *__restrict y = a.y, *__restrict z = a.z;
+  double *__restrict fx = a.fx, *__restrict fy = a.fy, *__restrict fz = a.fz;
+  double *__restrict tx = a.tx, *__restrict ty = a.ty, *__restrict tz = a.tz;
+  const double *__restrict inv_m = a.inv_m, *__restrict inv_i = a.inv_i;
+  const double *__restrict x0 = a.x0, *__restrict y0 = a.y0, *__restrict z0 = a.z0;
+  uint8_t* __restrict bad = a.bad;
+  int moved = 0;
+  // Spheres s .. s + width - 1 (q their first block index) as lanes of T
+  // (V, or double for one sphere); `skin`: test them against the skin.
+  const auto spheres = [&](auto lanes, int64_t s, int q, bool skin) __attribute__((always_inline)) {
+    using T = decltype(lanes);
+    const auto ld = [](const double* p) __attribute__((always_inline)) {
+      T o;
+      std::memcpy(&o, p, sizeof o);
+      return o;
+    };
+    const auto st = [](double* p, T o) __attribute__((always_inline)) { std::memcpy(p, &o, sizeof o); };
+    const T v[3] = {ld(vx + s), ld(vy + s), ld(vz + s)}, w[3] = {ld(wx + s), ld(wy + s), ld(wz + s)};
+    T f[3] = {ld(F[0] + q), ld(F[1] + q), ld(F[2] + q)}, t[3] = {ld(F[3] + q), ld(F[4] + q), ld(F[5] + q)};
+    if (alpha > 0)  // PFC local damping: oppose the velocity with α|F|
+      for (int c = 0; c < 3; ++c) f[c] = damp(f[c], v[c], alpha), t[c] = damp(t[c], w[c], alpha);
+    st(fx + s, f[0]), st(fy + s, f[1]), st(fz + s, f[2]);
+    st(tx + s, t[0]), st(ty + s, t[1]), st(tz + s, t[2]);
+    if (kick) {
+      const auto on = lane_mask_of(lanes, kickable + q);
+      const T hm = half * ld(inv_m + s), hi = half * ld(inv_i + s);
+      T nv[3] = {v[0], v[1], v[2]}, nw[3] = {w[0], w[1], w[2]};
+      for (int c = 0; c < 3; ++c) nv[c] += hm * f[c], nw[c] += hi * t[c];  // as the engine's closing half kick
+      if (drift) {  // the next step's opening half kick and drift, as the engine's
+        for (int c = 0; c < 3; ++c) nv[c] += hm * f[c], nw[c] += hi * t[c];
+        st(x + s, select(on, ld(x + s) + dt * nv[0], ld(x + s)));
+        st(y + s, select(on, ld(y + s) + dt * nv[1], ld(y + s)));
+        st(z + s, select(on, ld(z + s) + dt * nv[2], ld(z + s)));
+      }
+      st(vx + s, select(on, nv[0], v[0])), st(vy + s, select(on, nv[1], v[1])), st(vz + s, select(on, nv[2], v[2]));
+      st(wx + s, select(on, nw[0], w[0])), st(wy + s, select(on, nw[1], w[1])), st(wz + s, select(on, nw[2], w[2]));
+    }
+    if (skin) {
+      const T dx = ld(x + s) - ld(x0 + s), dy = ld(y + s) - ld(y0 + s), dz = ld(z + s) - ld(z0 + s);
+      const T d2 = dx * dx + dy * dy + dz * dz;
+      if (any_not(d2 <= lim2))
+        for (int l = 0; l < int(sizeof(T) / sizeof(double)); ++l)
+          if (!(lane(d2, l) <= lim2)) moved |= __builtin_isfinite(lane(d2, l)) ? 1 : 3;
+    }
+    const T sum = f[0] + f[1] + f[2] + t[0] + t[1] + t[2];
+    if (any_not(sum - sum == 0.0))  // not finite
+      for (int l = 0; l < int(sizeof(T) / sizeof(double)); ++l)
+        if (!__builtin_isfinite(lane(sum, l))) bad[s + l] = 2;
+  };
+  const int count = static_cast<int>(to - from);
+  int q = 0;
+  for (; q + W <= count; q += W) {
+    const int64_t s = from + q;
+    if (!drift || s + W <= n_built || s >= n_built) spheres(V{}, s, q, drift && s + W <= n_built);
+    else
+      for (int l = 0; l < W; ++l) spheres(0.0, s + l, q + l, s + l < n_built);
+  }
+  for (; q < count; ++q) spheres(0.0, from + q, q, drift && from + q < n_built);
+  int any_bad = 0;
+  for (int64_t s = from; s < to; ++s) any_bad |= int(bad[s] != 0);
   return any_bad | moved << 1;
 }
 

@@ -21,12 +21,14 @@
 # /usr/bin/python3 with numpy, scipy, matplotlib. Run from the repository root:
 #   sh bench/dem/scaling.sh BUILD_DIR OUT_DIR ["10000 100000 1000000"]
 # Environment: PSTEPS (particle-steps per run, default 3e8: ~40-60 s of one
-# tomograin thread), LG_MAX (largest N given to LIGGGHTS, default 100000).
+# tomograin thread), LG_MAX (largest N given to LIGGGHTS, default 100000),
+# REPEATS (runs of each code and core count per N, interleaved; default 1:
+# the report gives medians and the range of the paired ratios).
 # Also for each N: tomograin, 1 thread, skin 0 (a neighbour search every
 # step), PSTEPS / 10 particle-steps: the search's cost per sphere against N.
 set -eu
 BUILD=${1:-build/release}; OUT=${2:-out/bench_dem_scaling}; SIZES=${3:-"10000 100000 1000000"}
-PSTEPS=${PSTEPS:-300000000}; LG_MAX=${LG_MAX:-100000}
+PSTEPS=${PSTEPS:-300000000}; LG_MAX=${LG_MAX:-100000}; REPEATS=${REPEATS:-1}
 ROOT=$(pwd); TG="$ROOT/$BUILD/apps/tomograin"; PY=/usr/bin/python3
 [ -x "$TG" ] || TG="$ROOT/$BUILD/tomograin"
 MKPLATE=/work/shared/peers/liggghts/make_plate.py  # the LIGGGHTS peer's platen mesh
@@ -37,7 +39,7 @@ mkdir -p "$OUT"; cd "$OUT"
   echo "liggghts $(dpkg-query -W -f='${Version}' liggghts 2>/dev/null || echo '?')"
   echo "started $(date -u +%FT%TZ); uptime:$(uptime)"
   echo "cpu $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2), $(nproc) cores"
-  echo "PSTEPS $PSTEPS LG_MAX $LG_MAX"
+  echo "PSTEPS $PSTEPS LG_MAX $LG_MAX REPEATS $REPEATS"
 } > conditions.txt
 cat conditions.txt
 
@@ -102,11 +104,19 @@ tg_run 10 1 tg_10_t1 "pack_10.csv" "$R" "$H0" 1000
 for N in $SIZES; do
   prepare "$N"
   STEPS=$(( PSTEPS / N ))
-  echo "N = $N: $STEPS steps (uptime:$(uptime | sed 's/.*average://'))"
-  tg_run "$N" 1 "tg_${N}_t1" "pack_$N.csv" "$R" "$H0" "$STEPS"
-  [ "$N" -le "$LG_MAX" ] && lg_run "$N" 1 "lg_${N}_np1" "pack_$N.data" "plate_$N.stl" "$R" "$STEPS"
-  tg_run "$N" 2 "tg_${N}_t2" "pack_$N.csv" "$R" "$H0" "$STEPS"
-  [ "$N" -le "$LG_MAX" ] && lg_run "$N" 2 "lg_${N}_np2" "pack_$N.data" "plate_$N.stl" "$R" "$STEPS"
+  rep=1
+  while [ "$rep" -le "$REPEATS" ]; do
+    # Repeats interleaved, each code's run beside the other's, so that a
+    # ratio compares runs made a minute apart (this VM's speed drifts by
+    # half over minutes: bench/dem/RESULTS.md).
+    sfx=""; [ "$rep" -gt 1 ] && sfx="_r$rep"
+    echo "N = $N: $STEPS steps, repeat $rep of $REPEATS (uptime:$(uptime | sed 's/.*average://'))"
+    tg_run "$N" 1 "tg_${N}_t1$sfx" "pack_$N.csv" "$R" "$H0" "$STEPS"
+    [ "$N" -le "$LG_MAX" ] && lg_run "$N" 1 "lg_${N}_np1$sfx" "pack_$N.data" "plate_$N.stl" "$R" "$STEPS"
+    tg_run "$N" 2 "tg_${N}_t2$sfx" "pack_$N.csv" "$R" "$H0" "$STEPS"
+    [ "$N" -le "$LG_MAX" ] && lg_run "$N" 2 "lg_${N}_np2$sfx" "pack_$N.data" "plate_$N.stl" "$R" "$STEPS"
+    rep=$((rep + 1))
+  done
   # Neighbour search at every step (skin 0: the list is rebuilt whenever a
   # sphere has moved): its cost per sphere against N, one thread.
   tg_run "$N" 1 "tgskin0_${N}_t1" "pack_$N.csv" "$R" "$H0" "$(( PSTEPS / 10 / N ))" 0

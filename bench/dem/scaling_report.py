@@ -4,6 +4,9 @@ table.md (the table for RESULTS.md) and scaling.png (particle-steps/s and
 bytes per sphere against N, both codes, 1 and 2 cores).
 Usage: scaling_report.py OUT_DIR
 
+With repeats (scaling.sh's REPEATS), the table and the plot give each code,
+N and core count's run of median loop time; results.csv has every run.
+
 Per run: wall, user, system, CPU share and peak RSS from /usr/bin/time -v;
 steps and the stepping loop's wall time (tomograin's summary line, LIGGGHTS'
 "Loop time"); particle-steps/s = N steps / loop time; bytes per sphere =
@@ -68,15 +71,23 @@ def liggghts_run(d, n, workers):
 def main():
     out = sys.argv[1]
     runs = []
-    for d in sorted(glob.glob(os.path.join(out, "tg_*_t[12]")) + glob.glob(os.path.join(out, "tgskin0_*_t1"))):
-        tag, n, t = os.path.basename(d).split("_")
-        runs.append(tomograin_run(d, int(n), int(t[1:])))
+    # Run folders: CODE_N_WORKERS, and CODE_N_WORKERS_rK for repeat K > 1.
+    def name(d):
+        parts = os.path.basename(d).split("_")
+        return parts[0], int(parts[1]), parts[2], int(parts[3][1:]) if len(parts) > 3 else 1
+    def folders(*patterns):  # the run folders (tomograin's inputs are in FOLDER.in)
+        return sorted(d for p in patterns for d in glob.glob(os.path.join(out, p)) if not d.endswith(".in"))
+    for d in folders("tg_*_t[12]", "tg_*_t[12]_r*", "tgskin0_*_t1"):
+        tag, n, t, rep = name(d)
+        runs.append(tomograin_run(d, n, int(t[1:])))
+        runs[-1]["repeat"] = rep
         if tag == "tgskin0":
             runs[-1]["code"] = "tomograin skin 0"
-    for d in sorted(glob.glob(os.path.join(out, "lg_*_np[12]"))):
-        _, n, p = os.path.basename(d).split("_")
+    for d in folders("lg_*_np[12]", "lg_*_np[12]_r*"):
+        _, n, p, rep = name(d)
         if os.path.exists(os.path.join(d, "time.txt")):
-            runs.append(liggghts_run(d, int(n), int(p[2:])))
+            runs.append(liggghts_run(d, n, int(p[2:])))
+            runs[-1]["repeat"] = rep
     base = {r["code"]: r["rss_kb"] for r in runs if r["n"] == 10}
     base["tomograin skin 0"] = base.get("tomograin", 0)
     runs = [r for r in runs if r["n"] > 10]
@@ -84,21 +95,39 @@ def main():
         r["psteps_per_s"] = r["n"] * r["steps"] / r["loop_s"]
         r["ns_per_sphere_step"] = 1e9 / r["psteps_per_s"]
         r["bytes_per_sphere"] = (r["rss_kb"] - r["processes"] * base.get(r["code"], 0)) * 1024 / r["n"]
-    runs.sort(key=lambda r: (r["code"] == "tomograin skin 0", r["n"], r["workers"], r["code"] != "tomograin"))
-    cols = ["code", "n", "workers", "steps", "loop_s", "wall_s", "user_s", "sys_s", "cpu_pct", "rss_kb", "psteps_per_s",
+    runs.sort(key=lambda r: (r["code"] == "tomograin skin 0", r["n"], r["workers"], r["code"] != "tomograin", r["repeat"]))
+    cols = ["code", "n", "workers", "repeat", "steps", "loop_s", "wall_s", "user_s", "sys_s", "cpu_pct", "rss_kb", "psteps_per_s",
             "bytes_per_sphere", "cn", "ns_per_sphere_step"]
     with open(os.path.join(out, "results.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=cols, extrasaction="ignore")
         w.writeheader()
         w.writerows(runs)
-    key = {(r["code"], r["n"], r["workers"]): r for r in runs}
-    lines = ["| N | cores | code | steps | loop s | process wall s | user s | CPU | peak RSS MB | bytes/sphere | "
-             "particle-steps/s | tomograin / LIGGGHTS | mean CN |", "|" + "---|" * 13]
+    # One row per code, N and core count: the run of median loop time (the
+    # range over the repeats beside it), and the ratio of the medians with
+    # the range of the paired ratios (repeat K of one code against repeat K
+    # of the other, made a minute apart).
+    groups = {}
     for r in runs:
-        other = key.get(("liggghts", r["n"], r["workers"]))
-        ratio = "**%.2fx**" % (r["psteps_per_s"] / other["psteps_per_s"]) if r["code"] == "tomograin" and other else ""
-        lines.append("| %d | %d | %s | %d | %.2f | %.1f | %.1f | %d %% | %.0f | %.0f | %.3g | %s | %.2f |" % (
-            r["n"], r["workers"], r["code"], r["steps"], r["loop_s"], r["wall_s"], r["user_s"], r["cpu_pct"],
+        groups.setdefault((r["code"], r["n"], r["workers"]), []).append(r)
+
+    def median_run(rs):
+        return sorted(rs, key=lambda r: r["loop_s"])[(len(rs) - 1) // 2]
+
+    lines = ["| N | cores | code | runs | steps | loop s (median; range) | process wall s | user s | CPU | peak RSS MB | "
+             "bytes/sphere | particle-steps/s | tomograin / LIGGGHTS (medians; paired range) | mean CN |", "|" + "---|" * 14]
+    for (code, n, workers), rs in groups.items():
+        r = median_run(rs)
+        other = groups.get(("liggghts", n, workers))
+        ratio = ""
+        if code == "tomograin" and other:
+            ratio = "**%.2fx**" % (median_run(other)["loop_s"] / r["loop_s"])
+            lg = {o["repeat"]: o for o in other}
+            paired = sorted(lg[t["repeat"]]["loop_s"] / t["loop_s"] for t in rs if t["repeat"] in lg)
+            if len(paired) > 1:
+                ratio += " (%.2f-%.2f)" % (paired[0], paired[-1])
+        spread = " (%.2f-%.2f)" % (min(t["loop_s"] for t in rs), max(t["loop_s"] for t in rs)) if len(rs) > 1 else ""
+        lines.append("| %d | %d | %s | %d | %d | %.2f%s | %.1f | %.1f | %d %% | %.0f | %.0f | %.3g | %s | %.2f |" % (
+            n, workers, code, len(rs), r["steps"], r["loop_s"], spread, r["wall_s"], r["user_s"], r["cpu_pct"],
             r["rss_kb"] / 1024, r["bytes_per_sphere"], r["psteps_per_s"], ratio, r["cn"]))
     lines.append("")
     lines.append("Baselines (10 spheres): " + ", ".join("%s %.1f MB" % (k, v / 1024) for k, v in sorted(base.items())))
@@ -108,7 +137,7 @@ def main():
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
     for code, mk in (("tomograin", "o"), ("liggghts", "s"), ("tomograin skin 0", "^")):
         for wk, ls in ((1, "-"), (2, "--")):
-            rs = sorted((r for r in runs if r["code"] == code and r["workers"] == wk), key=lambda r: r["n"])
+            rs = sorted((median_run(g) for (c, _, w), g in groups.items() if c == code and w == wk), key=lambda r: r["n"])
             if not rs:
                 continue
             lab = "%s, %d %s" % ("LIGGGHTS 3.8" if code == "liggghts" else code, wk,

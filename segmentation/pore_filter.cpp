@@ -142,10 +142,35 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
   for (int64_t p = 1; p < slabs; ++p)
     for (int64_t j = 0; j < ny; ++j)
       for (int64_t dj = -slack; dj <= slack; ++dj) unite_with(slab_begin(p), j, slab_begin(p) - 1, j + dj);
-  // Component numbers in raster order of their first run (parent[p] <= p).
+  // Component numbers in raster order of their first run (a root is its
+  // component's first run: parent[p] <= p): the roots numbered in order
+  // (per-chunk counts, then each chunk from its start), then every run
+  // takes its root's number. In parallel: the serial loop, one dependent
+  // load per run, was 15 ms of a 0.12 s stage at 256^3.
   const std::unique_ptr<int64_t[]> comp(new int64_t[size_t(R)]);
-  int64_t count = 0;
-  for (int64_t p = 0; p < R; ++p) comp[size_t(p)] = parent[size_t(p)] == p ? count++ : comp[size_t(parent[size_t(p)])];
+  constexpr int64_t kChunks = 256;
+  std::vector<int64_t> roots_before(size_t(kChunks) + 1, 0);
+  auto chunk_begin = [&](int64_t c) { return R * c / kChunks; };
+#pragma omp parallel for schedule(static)
+  for (int64_t c = 0; c < kChunks; ++c) {
+    int64_t n = 0;
+    for (int64_t p = chunk_begin(c); p < chunk_begin(c + 1); ++p) n += parent[size_t(p)] == p;
+    roots_before[size_t(c) + 1] = n;
+  }
+  for (int64_t c = 0; c < kChunks; ++c) roots_before[size_t(c) + 1] += roots_before[size_t(c)];
+  const int64_t count = roots_before[size_t(kChunks)];
+#pragma omp parallel for schedule(static)
+  for (int64_t c = 0; c < kChunks; ++c) {
+    int64_t next = roots_before[size_t(c)];
+    for (int64_t p = chunk_begin(c); p < chunk_begin(c + 1); ++p)
+      if (parent[size_t(p)] == p) comp[size_t(p)] = next++;
+  }
+#pragma omp parallel for schedule(static)
+  for (int64_t p = 0; p < R; ++p) {
+    int64_t r = p;
+    while (parent[size_t(r)] != r) r = parent[size_t(r)];
+    if (r != p) comp[size_t(p)] = comp[size_t(r)];
+  }
   parent.reset();
   res.void_components = count;
 

@@ -86,7 +86,7 @@ std::vector<double> scale(const std::vector<Parameter>& p, const Point& u) {
 void write_runs_csv(const fs::path& out, const std::vector<Parameter>& params, const std::vector<RunRecord>& runs) {
   std::vector<std::string> names{"run"};
   for (const auto& p : params) names.push_back(p.name);
-  for (const char* n : {"objective", "curve_misfit", "yield_misfit", "broken_misfit", "broken_stress_misfit", "crush_misfit", "yield_stress_Pa",
+  for (const char* n : {"objective", "curve_misfit", "yield_misfit", "broken_misfit", "broken_stress_misfit", "bonds_misfit", "crush_misfit", "yield_stress_Pa",
                         "peak_stress_Pa", "final_strain", "final_broken_fraction", "crush_bonds_broken", "seconds"})
     names.push_back(n);
   names.push_back("status");
@@ -98,7 +98,7 @@ void write_runs_csv(const fs::path& out, const std::vector<Parameter>& params, c
     std::vector<double> row{static_cast<double>(i)};
     row.insert(row.end(), r.params.begin(), r.params.end());
     for (double v : {r.score.objective, r.score.curve_misfit, r.score.yield_misfit, r.score.broken_misfit,
-                     r.score.broken_stress_misfit, r.score.crush_misfit, r.score.yield_stress_Pa, r.score.peak_stress_Pa, r.score.final_strain,
+                     r.score.broken_stress_misfit, r.score.bonds_misfit, r.score.crush_misfit, r.score.yield_stress_Pa, r.score.peak_stress_Pa, r.score.final_strain,
                      r.score.final_broken_fraction, r.score.crush_bonds_broken, r.seconds})
       row.push_back(v);
     for (size_t c = 0; c < row.size(); ++c) cols[c].push_back(row[c]);
@@ -323,23 +323,26 @@ CalibrationResult run_calibration(const CalibrateOptions& o) {
   nlohmann::json j;
   j["objective"] = {
       {"definition", "J = w_curve*m_curve + w_yield*m_yield + w_broken*m_broken + w_broken_stress*m_broken_stress + "
-                     "w_crush*m_crush over the targets given"},
+                     "w_bonds*m_bonds + w_crush*m_crush over the targets given"},
       {"m_curve", "RMS_i(sigma_run(eps_i) - sigma_i) / RMS_i(sigma_i), top platen stress interpolated in history.csv"},
       {"m_yield", "|yield_run - yield_target| / yield_target (bilinear strain-log10 stress fit above 0.1 MPa; 1 if none)"},
       {"m_broken", "RMS_j(grains_broken/grains at eps_j - target fraction)"},
       {"m_broken_stress", "RMS_k(grains_broken/grains at the first row with top stress >= sigma_k - target fraction); "
                           "1 for a stress never reached"},
+      {"m_bonds", "RMS_k min(1, |log10((bonds_broken + 1) / (target + 1))|) at the same rows; 1 for a stress never reached"},
       {"m_crush", "|b_run - b_target| / b_target, b = mean bonds broken by stress over single-grain crush tests "
                   "(strength seeds 1..grains) run with the candidate's config"},
       {"weights", {{"stress_strain", t.curve_strain.empty() ? 0.0 : t.w_curve},
                    {"yield_stress", t.yield_stress_Pa > 0 ? t.w_yield : 0.0},
                    {"broken_fraction", t.broken_strain.empty() ? 0.0 : t.w_broken},
-                   {"broken_at_stress", t.broken_stress_Pa.empty() ? 0.0 : t.w_broken_stress},
+                   {"broken_at_stress", t.broken_fraction_at_stress.empty() ? 0.0 : t.w_broken_stress},
+                   {"bonds_at_stress", t.bonds_broken_at_stress.empty() ? 0.0 : t.w_bonds},
                    {"crush", t.crush_bonds_broken > 0 ? t.w_crush : 0.0}}}};
   j["target"] = {{"file", t.source}, {"stress_strain_csv", t.curve_file}, {"curve_points", t.curve_strain.size()},
                  {"yield_stress_Pa", t.yield_stress_Pa}, {"broken_strain", t.broken_strain},
                  {"broken_fraction", t.broken_fraction}, {"broken_at_stress_Pa", t.broken_stress_Pa},
-                 {"broken_fraction_at_stress", t.broken_fraction_at_stress}};
+                 {"broken_fraction_at_stress", t.broken_fraction_at_stress},
+                 {"bonds_broken_at_stress", t.bonds_broken_at_stress}};
   if (t.crush_bonds_broken > 0)
     j["target"]["crush"] = {{"bonds_broken", t.crush_bonds_broken}, {"grains", t.crush_grains},
                             {"diameter_m", t.crush_diameter_m}, {"travel", t.crush_travel}};

@@ -71,10 +71,12 @@ Target read_target(const std::filesystem::path& path) {
   t.broken_fraction = cfg.get("target.broken_fraction", std::vector<double>{});
   t.broken_stress_Pa = cfg.get("target.broken_at_stress_Pa", std::vector<double>{});
   t.broken_fraction_at_stress = cfg.get("target.broken_fraction_at_stress", std::vector<double>{});
+  t.bonds_broken_at_stress = cfg.get("target.bonds_broken_at_stress", std::vector<double>{});
   t.w_curve = cfg.get("weights.stress_strain", t.w_curve);
   t.w_yield = cfg.get("weights.yield_stress", t.w_yield);
   t.w_broken = cfg.get("weights.broken_fraction", t.w_broken);
   t.w_broken_stress = cfg.get("weights.broken_at_stress", t.w_broken_stress);
+  t.w_bonds = cfg.get("weights.bonds_at_stress", t.w_bonds);
   t.w_crush = cfg.get("weights.crush", t.w_crush);
   const bool crush = cfg.has("crush.bonds_broken");
   t.crush_bonds_broken = cfg.get("crush.bonds_broken", t.crush_bonds_broken);
@@ -97,18 +99,25 @@ Target read_target(const std::filesystem::path& path) {
     cfg.require(t.broken_fraction[i] >= 0 && t.broken_fraction[i] <= 1, "target.broken_fraction",
                 "must be fractions in [0, 1]");
   }
-  cfg.require(t.broken_stress_Pa.size() == t.broken_fraction_at_stress.size(), "target.broken_fraction_at_stress",
+  // At the stresses: grains, bonds or both, each list one value per stress.
+  const size_t ns = t.broken_stress_Pa.size();
+  cfg.require(ns == 0 ? t.broken_fraction_at_stress.empty() : t.broken_fraction_at_stress.size() == ns ||
+                                                                  (t.broken_fraction_at_stress.empty() && !t.bonds_broken_at_stress.empty()),
+              "target.broken_fraction_at_stress", "must have one value per target.broken_at_stress_Pa");
+  cfg.require(t.bonds_broken_at_stress.empty() || t.bonds_broken_at_stress.size() == ns, "target.bonds_broken_at_stress",
               "must have one value per target.broken_at_stress_Pa");
-  for (size_t i = 0; i < t.broken_stress_Pa.size(); ++i) {
+  for (size_t i = 0; i < ns; ++i)
     cfg.require(t.broken_stress_Pa[i] > 0 && std::isfinite(t.broken_stress_Pa[i]), "target.broken_at_stress_Pa",
                 "must be stresses > 0 (Pa)");
-    cfg.require(t.broken_fraction_at_stress[i] >= 0 && t.broken_fraction_at_stress[i] <= 1,
-                "target.broken_fraction_at_stress", "must be fractions in [0, 1]");
-  }
+  for (double f : t.broken_fraction_at_stress)
+    cfg.require(f >= 0 && f <= 1, "target.broken_fraction_at_stress", "must be fractions in [0, 1]");
+  for (double n : t.bonds_broken_at_stress)
+    cfg.require(n >= 0 && std::isfinite(n), "target.bonds_broken_at_stress", "must be bond counts >= 0");
   cfg.require(t.w_curve >= 0, "weights.stress_strain", "must be >= 0");
   cfg.require(t.w_yield >= 0, "weights.yield_stress", "must be >= 0");
   cfg.require(t.w_broken >= 0, "weights.broken_fraction", "must be >= 0");
   cfg.require(t.w_broken_stress >= 0, "weights.broken_at_stress", "must be >= 0");
+  cfg.require(t.w_bonds >= 0, "weights.bonds_at_stress", "must be >= 0");
   cfg.require(t.w_crush >= 0, "weights.crush", "must be >= 0");
   cfg.require(!crush || t.crush_bonds_broken > 0, "crush.bonds_broken", "must be > 0 (or left out)");
   cfg.require(t.crush_grains >= 1, "crush.grains", "must be >= 1");
@@ -121,11 +130,13 @@ Target read_target(const std::filesystem::path& path) {
   }
   const bool any = (!t.curve_strain.empty() && t.w_curve > 0) || (t.yield_stress_Pa > 0 && t.w_yield > 0) ||
                    (!t.broken_strain.empty() && t.w_broken > 0) ||
-                   (!t.broken_stress_Pa.empty() && t.w_broken_stress > 0) || (t.crush_bonds_broken > 0 && t.w_crush > 0);
+                   (!t.broken_fraction_at_stress.empty() && t.w_broken_stress > 0) ||
+                   (!t.bonds_broken_at_stress.empty() && t.w_bonds > 0) || (t.crush_bonds_broken > 0 && t.w_crush > 0);
   if (!any)
     throw InputError(src + ": no target with a positive weight (give target.stress_strain_csv, "
                            "target.yield_stress_Pa, target.broken_strain/broken_fraction, "
-                           "target.broken_at_stress_Pa/broken_fraction_at_stress or crush.bonds_broken)");
+                           "target.broken_at_stress_Pa with broken_fraction_at_stress or bonds_broken_at_stress, "
+                           "or crush.bonds_broken)");
   return t;
 }
 
@@ -180,19 +191,34 @@ RunScore score_run(const Target& t, const Table& history, double initial_grains,
     s.broken_misfit = rms(d);
     j += t.w_broken * s.broken_misfit;
   }
-  if (!t.broken_stress_Pa.empty()) {
+  // The first row at or above each target stress (-1: never reached). A
+  // run that never reaches it misses by 1, the largest difference of two
+  // fractions: failing to harden that far is as wrong as a count can be.
+  std::vector<long> at_stress;
+  for (double x : t.broken_stress_Pa) {
+    const auto row = std::find_if(sig.begin(), sig.end(), [&](double v) { return v >= x; });
+    at_stress.push_back(row == sig.end() ? -1L : static_cast<long>(row - sig.begin()));
+  }
+  if (!t.broken_fraction_at_stress.empty()) {
     if (!broken) throw InputError(history.source + ": no grains_broken column (breakage off?) for the broken-at-stress target");
     const std::vector<double>& g = history.num("grains_broken");
     std::vector<double> d;
-    for (size_t i = 0; i < t.broken_stress_Pa.size(); ++i) {
-      // The first row at or above the stress; a run that never reaches it
-      // misses by 1, the largest difference of two fractions: failing to
-      // harden that far is as wrong as a broken count can be.
-      const auto row = std::find_if(sig.begin(), sig.end(), [&](double x) { return x >= t.broken_stress_Pa[i]; });
-      d.push_back(row == sig.end() ? 1.0 : g[static_cast<size_t>(row - sig.begin())] / initial_grains - t.broken_fraction_at_stress[i]);
-    }
+    for (size_t i = 0; i < at_stress.size(); ++i)
+      d.push_back(at_stress[i] < 0 ? 1.0 : g[static_cast<size_t>(at_stress[i])] / initial_grains - t.broken_fraction_at_stress[i]);
     s.broken_stress_misfit = rms(d);
     j += t.w_broken_stress * s.broken_stress_misfit;
+  }
+  if (!t.bonds_broken_at_stress.empty()) {
+    if (!history.has("bonds_broken"))
+      throw InputError(history.source + ": no bonds_broken column (breakage off?) for the bonds-at-stress target");
+    const std::vector<double>& b = history.num("bonds_broken");
+    std::vector<double> d;
+    for (size_t i = 0; i < at_stress.size(); ++i)
+      d.push_back(at_stress[i] < 0 ? 1.0
+                                   : std::min(1.0, std::abs(std::log10((b[static_cast<size_t>(at_stress[i])] + 1) /
+                                                                       (t.bonds_broken_at_stress[i] + 1)))));
+    s.bonds_misfit = rms(d);
+    j += t.w_bonds * s.bonds_misfit;
   }
   if (t.crush_bonds_broken > 0) {
     if (!std::isfinite(crush_bonds_broken)) {

@@ -11,6 +11,9 @@
 //   yield_stress_Pa = 2.0e6          # the yield rule of dem/yield_stress.hpp
 //   broken_strain = [0.044, 0.1548]  # broken fraction of the initial grains
 //   broken_fraction = [0.05, 0.35]   # (grains_broken / grains) at these strains
+//   broken_at_stress_Pa = [2e6, 4e6] # when the top stress first reaches these:
+//   broken_fraction_at_stress = [0.022, 0.31]  # grains broken / grains, and/or
+//   bonds_broken_at_stress = [300, 10000]      # bonds broken by stress
 //   [crush]                          # single-grain crush tests (dem/breakage/crush.hpp)
 //   bonds_broken = 134.0             # mean bonds broken by stress over the tests
 //   grains = 30                      # tests, strength seeds 1..grains (default 30)
@@ -20,6 +23,8 @@
 //   stress_strain = 1.0
 //   yield_stress = 1.0
 //   broken_fraction = 1.0
+//   broken_at_stress = 1.0
+//   bonds_at_stress = 1.0
 //   crush = 1.0
 //   [parameters]                     # searched ranges [min, max]
 //   sigma_t0_Pa = [6.0e6, 24.0e6]           # breakage.sigma_t0_Pa
@@ -32,6 +37,13 @@
 //   m_yield  = |σ_y,run − σ_y| / σ_y; 1 when the run's curve has no yield.
 //   m_broken = RMS_j(f_run(ε_j) − f_j), f = grains broken / initial grains
 //              (a fraction already, so not divided again).
+//   m_broken_stress = RMS_k(f_run at σ_k − f_k), f_run read at the first
+//              history row whose top stress is >= σ_k; 1 for σ_k never reached.
+//   m_bonds  = RMS_k min(1, |log10((n_run + 1) / (n_k + 1))|), n = bonds broken
+//              by stress at the same rows (the study's Fig. 10: 300 at its
+//              2 MPa yield, 10 000 at 4 MPa); a ratio, since bond counts span
+//              decades: a factor of 2 scores 0.30, of 10 or more (or σ_k never
+//              reached) 1.
 //   m_crush  = |b_run − b| / b, b = the mean number of bonds broken by stress
 //              over the crush tests, b_run the same tests run with the
 //              candidate's parameters (the oedometer bonds' λ acts on the
@@ -68,10 +80,11 @@ struct Target {
   // Grains broken when the top stress first reaches each of these (the
   // study's Fig. 10: 20 of 910 at its 2 MPa yield, 280 at 4 MPa).
   std::vector<double> broken_stress_Pa, broken_fraction_at_stress;
+  std::vector<double> bonds_broken_at_stress;  // bonds broken by stress there (empty: no bond target)
   double crush_bonds_broken = 0;  // 0: no crush target
   int crush_grains = 30;
   double crush_diameter_m = 1.2e-3, crush_travel = 0.4;
-  double w_curve = 1, w_yield = 1, w_broken = 1, w_broken_stress = 1, w_crush = 1;
+  double w_curve = 1, w_yield = 1, w_broken = 1, w_broken_stress = 1, w_bonds = 1, w_crush = 1;
   std::vector<Parameter> parameters = default_parameters();
   double largest_strain() const;  // of any target point
 };
@@ -84,7 +97,7 @@ struct Target {
 Target read_target(const std::filesystem::path& path);
 
 struct RunScore {
-  double curve_misfit = 0, yield_misfit = 0, broken_misfit = 0, broken_stress_misfit = 0, crush_misfit = 0;
+  double curve_misfit = 0, yield_misfit = 0, broken_misfit = 0, broken_stress_misfit = 0, bonds_misfit = 0, crush_misfit = 0;
   double crush_bonds_broken = 0;  // the run's mean over the crush tests (NaN: none run)
   double yield_stress_Pa = 0;   // the run's (NaN when its curve has none)
   double final_strain = 0, peak_stress_Pa = 0, final_broken_fraction = 0;
@@ -92,7 +105,7 @@ struct RunScore {
 };
 
 // Scores a run from its history (columns strain, top_stress_Pa and, for a
-// broken-fraction target, grains_broken) and its initial grain count, and,
+// broken-fraction target, grains_broken; for a bond target, bonds_broken) and its initial grain count, and,
 // for a crush target, the candidate's mean bonds broken over the crush tests
 // (NaN, e.g. when the tests failed: no objective).
 RunScore score_run(const Target& t, const Table& history, double initial_grains,

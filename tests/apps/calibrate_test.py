@@ -70,7 +70,7 @@ def main():
         H.check(meta["best"]["run"] == f"run_{best:03d}" and abs(meta["best"]["objective"] - j[best]) < 1e-12,
                 f"calibration.json names the lowest objective ({meta['best']['run']}, {j})")
         H.check(meta["objective"]["weights"] == {"stress_strain": 1.0, "yield_stress": 0.0, "broken_fraction": 0.0,
-                                                 "broken_at_stress": 0.0, "crush": 0.0},
+                                                 "broken_at_stress": 0.0, "bonds_at_stress": 0.0, "crush": 0.0},
                 f"weights stated ({meta['objective']['weights']})")
         # best.toml sets the best run's parameters and runs as it is.
         b = tomllib.load(open(os.path.join(out, "best.toml"), "rb"))["breakage"]

@@ -89,6 +89,56 @@ TEST(CalibrationObjective, BrokenAtStressHandComputed) {
   EXPECT_NEAR(cal::score_run(t, h, 100).broken_stress_misfit, 1.0, 1e-12);
 }
 
+TEST(CalibrationObjective, BondsAtStressHandComputed) {
+  cal::Target t;
+  t.broken_stress_Pa = {2e6, 4e6};
+  t.bonds_broken_at_stress = {299, 9999};
+  t.w_bonds = 3;
+  tg::Table h;
+  h.add("strain", {0.0, 0.02, 0.04, 0.06});
+  h.add("top_stress_Pa", {0.0, 2.5e6, 1.9e6, 4.0e6});
+  h.add("grains_broken", {0, 4, 12, 25});
+  h.add("bonds_broken", {0, 599, 800, 999});
+  // Rows 1 and 3: 600 / 300 = 2 (log10 0.30103), 1000 / 10000 = 0.1 (-1,
+  // the cap). No grain target given: only the bond term counts.
+  const cal::RunScore s = cal::score_run(t, h, 100);
+  const double l2 = std::log10(2.0);
+  EXPECT_NEAR(s.bonds_misfit, std::sqrt((l2 * l2 + 1.0) / 2), 1e-12);
+  EXPECT_DOUBLE_EQ(s.broken_stress_misfit, 0.0);
+  EXPECT_NEAR(s.objective, 3 * s.bonds_misfit, 1e-12);
+  // Exactly on target scores 0; a stress never reached scores 1.
+  t.bonds_broken_at_stress = {599, 999};
+  EXPECT_NEAR(cal::score_run(t, h, 100).bonds_misfit, 0.0, 1e-12);
+  t.broken_stress_Pa = {2e6, 5e6};
+  EXPECT_NEAR(cal::score_run(t, h, 100).bonds_misfit, std::sqrt(0.5), 1e-12);
+  // Without the column (breakage off) the target is an error, not a zero.
+  tg::Table h2;
+  h2.add("strain", {0.0, 0.06});
+  h2.add("top_stress_Pa", {0.0, 4e6});
+  h2.add("grains_broken", {0, 1});
+  EXPECT_THROW(cal::score_run(t, h2, 100), tg::InputError);
+}
+
+TEST(CalibrationObjective, ReadsBondsAtStressTarget) {
+  TmpDir d;
+  const cal::Target t = cal::read_target(
+      d.write("b.toml", "[target]\nbroken_at_stress_Pa = [2e6, 4e6]\nbonds_broken_at_stress = [300, 10000]\n"
+                        "[weights]\nbonds_at_stress = 0.5\n"));
+  ASSERT_EQ(t.bonds_broken_at_stress.size(), 2u);
+  EXPECT_DOUBLE_EQ(t.bonds_broken_at_stress[1], 10000);
+  EXPECT_TRUE(t.broken_fraction_at_stress.empty());
+  EXPECT_DOUBLE_EQ(t.w_bonds, 0.5);
+  EXPECT_NE(error_of(d.write("c.toml", "[target]\nbroken_at_stress_Pa = [2e6, 4e6]\nbonds_broken_at_stress = [300]\n"))
+                .find("one value per target.broken_at_stress_Pa"),
+            std::string::npos);
+  EXPECT_NE(error_of(d.write("e.toml", "[target]\nbroken_at_stress_Pa = [2e6]\nbonds_broken_at_stress = [-3]\n"))
+                .find("bond counts >= 0"),
+            std::string::npos);
+  // Stresses with neither list: an error naming the missing list.
+  EXPECT_NE(error_of(d.write("f.toml", "[target]\nbroken_at_stress_Pa = [2e6]\n")).find("target.broken_fraction_at_stress"),
+            std::string::npos);
+}
+
 TEST(CalibrationObjective, ReadsBrokenAtStressTarget) {
   TmpDir d;
   const cal::Target t = cal::read_target(d.write(

@@ -69,15 +69,22 @@ TEST(CalibrationObjective, HandComputedMisfits) {
   EXPECT_TRUE(std::isnan(cal::score_run(t, h, 100).objective));
 }
 
+// A loading history that reaches 2 MPa at row 1, drops below it, and reaches
+// 4 MPa exactly at row 3 (the rows the at-stress targets read).
+static tg::Table stress_history() {
+  tg::Table h;
+  h.add("strain", {0.0, 0.02, 0.04, 0.06});
+  h.add("top_stress_Pa", {0.0, 2.5e6, 1.9e6, 4.0e6});
+  h.add("grains_broken", {0, 4, 12, 25});
+  return h;
+}
+
 TEST(CalibrationObjective, BrokenAtStressHandComputed) {
   cal::Target t;
   t.broken_stress_Pa = {2e6, 4e6};
   t.broken_fraction_at_stress = {0.05, 0.3};
   t.w_broken_stress = 2;
-  tg::Table h;
-  h.add("strain", {0.0, 0.02, 0.04, 0.06});
-  h.add("top_stress_Pa", {0.0, 2.5e6, 1.9e6, 4.0e6});
-  h.add("grains_broken", {0, 4, 12, 25});
+  tg::Table h = stress_history();
   // 2 MPa is first reached at row 1 (4 / 100 = 0.04 vs 0.05), 4 MPa at row 3
   // (exactly: 0.25 vs 0.3): RMS of (-0.01, -0.05).
   const cal::RunScore s = cal::score_run(t, h, 100);
@@ -94,10 +101,7 @@ TEST(CalibrationObjective, BondsAtStressHandComputed) {
   t.broken_stress_Pa = {2e6, 4e6};
   t.bonds_broken_at_stress = {299, 9999};
   t.w_bonds = 3;
-  tg::Table h;
-  h.add("strain", {0.0, 0.02, 0.04, 0.06});
-  h.add("top_stress_Pa", {0.0, 2.5e6, 1.9e6, 4.0e6});
-  h.add("grains_broken", {0, 4, 12, 25});
+  tg::Table h = stress_history();
   h.add("bonds_broken", {0, 599, 800, 999});
   // Rows 1 and 3: 600 / 300 = 2 (log10 0.30103), 1000 / 10000 = 0.1 (-1,
   // the cap). No grain target given: only the bond term counts.

@@ -101,8 +101,8 @@ Target read_target(const std::filesystem::path& path) {
   }
   // At the stresses: grains, bonds or both, each list one value per stress.
   const size_t ns = t.broken_stress_Pa.size();
-  cfg.require(ns == 0 ? t.broken_fraction_at_stress.empty() : t.broken_fraction_at_stress.size() == ns ||
-                                                                  (t.broken_fraction_at_stress.empty() && !t.bonds_broken_at_stress.empty()),
+  cfg.require(t.broken_fraction_at_stress.empty() ? ns == 0 || !t.bonds_broken_at_stress.empty()
+                                                  : t.broken_fraction_at_stress.size() == ns,
               "target.broken_fraction_at_stress", "must have one value per target.broken_at_stress_Pa");
   cfg.require(t.bonds_broken_at_stress.empty() || t.bonds_broken_at_stress.size() == ns, "target.bonds_broken_at_stress",
               "must have one value per target.broken_at_stress_Pa");

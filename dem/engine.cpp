@@ -373,8 +373,8 @@ void Engine::compute_pair_forces() {
         const int64_t i = pi_[k], j = list_.j[k];
         const double dist = std::sqrt(std::pow(p.x[j] - p.x[i], 2) + std::pow(p.y[j] - p.y[i], 2) + std::pow(p.z[j] - p.z[i], 2));
         std::ostringstream os;
-        os << "spheres " << i << " and " << j << " overlap by " << (p.r[i] + p.r[j] - dist) / std::min(p.r[i], p.r[j])
-           << " of the smaller radius (limit " << lim << ")";
+        os << "spheres " << i << " (r = " << p.r[i] << " m) and " << j << " (r = " << p.r[j] << " m) overlap by "
+           << (p.r[i] + p.r[j] - dist) / std::min(p.r[i], p.r[j]) << " of the smaller radius (limit " << lim << ")";
         explode(os.str());
       }
   }
@@ -430,9 +430,12 @@ void Engine::gather_forces(bool kick, bool drift_next, double alpha) {
   pending_moved_ = flags >> 1;
   if (flags & 1) {
     for (int64_t s = 0; s < n; ++s)
-      if (bad_[s])
-        explode("sphere " + std::to_string(s) +
-                (bad_[s] == 2 ? " has a non-finite force" : " overlaps a wall by more than the limit"));
+      if (bad_[s]) {
+        std::ostringstream os;
+        os << "sphere " << s << " (r = " << p.r[s] << " m, at z = " << p.z[s] << " m)"
+           << (bad_[s] == 2 ? " has a non-finite force" : " overlaps a wall by more than the limit");
+        explode(os.str());
+      }
   }
   // Serial, fixed order: the wall reactions do not depend on threads. The
   // spheres off the walls add exact zeros (the sum, from +0, is unchanged).

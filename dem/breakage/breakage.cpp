@@ -209,7 +209,7 @@ int BreakageModel::check() {
   const bool remove = opt_.sublimit != SublimitPolicy::kKeep;
   const bool remove_over = opt_.sublimit == SublimitPolicy::kRemove;
   std::vector<double> overlap;
-  if (remove) overlap = max_overlap_ratios();
+  if (remove || !opt_.split_bonded) overlap = max_overlap_ratios();
   std::vector<uint8_t> bonded;  // split_bonded = false: spheres with an intact bond
   if (!opt_.split_bonded) {
     bonded.assign(n, 0);
@@ -226,7 +226,9 @@ int BreakageModel::check() {
       if (remove && ((remove_over && over) || overlap[s] > opt_.fines_overlap)) fines.push_back(s);
       continue;
     }
-    if (!over || (!opt_.split_bonded && bonded[s])) continue;
+    // split_bonded = false: a bonded sphere splits only once squeezed past
+    // fines_overlap × r (its bonds cannot hold it off: breakage.hpp).
+    if (!over || (!opt_.split_bonded && bonded[s] && overlap[s] <= opt_.fines_overlap)) continue;
     over_strength.push_back(s);
   }
   const std::vector<std::vector<ContactLoad>> loads = contact_loads(over_strength);

@@ -14,7 +14,7 @@
 //   bond breaks the plain contact is all that remains.
 // Every `check_interval` steps (check()):
 //   for every sphere with d ≥ min_split_diameter (and, with split_bonded
-//   false, no intact bond), F_max = its largest normal
+//   false, no intact bond or an overlap past fines_overlap × r), F_max = its largest normal
 //   contact force (sphere and wall contacts, last force evaluation);
 //   σ = F_max/d² is compared with its strength (strength.hpp). Each sphere
 //   over its strength (ascending index) is split: splitting plane from its
@@ -103,7 +103,12 @@ struct BreakageOptions {
   // min_split_diameter (cluster elements too); false, only spheres with no
   // intact bond (grains, and fragment elements whose bonds have all broken):
   // the study's reading, replacement for grains, bond breakage for fragments
-  // ("isolated spherical grains can always break").
+  // ("isolated spherical grains can always break"). Except that a bonded
+  // sphere over its strength and squeezed past fines_overlap × r (by a
+  // neighbour or a wall) splits all the same, its bonds dropped with it:
+  // bonds only carry compression there, so nothing else stops a bonded
+  // 0.2 mm element from being pushed through the grain that crushes it
+  // (with λ ≥ 2 this stopped full runs on the engine's overlap limit).
   bool split_bonded = true;
   SublimitPolicy sublimit = SublimitPolicy::kRemove;
   // kRemove, kKeepUnbreakable: a sub-limit sphere whose largest contact overlap exceeds this

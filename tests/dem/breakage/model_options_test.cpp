@@ -155,6 +155,51 @@ TEST(BreakageOptions, SplitBondedFalseSplitsOnlySpheresWithoutBonds) {
   }
 }
 
+// ... except a bonded sphere squeezed past fines_overlap × r: nothing else
+// stops it being pushed through (its bonds carry only compression there).
+// A, bonded to B, sits in the bottom platen by 0.29 r (kept whole) or 0.31 r
+// (split, its bond to B dropped with it: only the fragments' 2 × 40 bonds of
+// each split remain); B, bonded and pressed by 1 µm, never splits; C, alone,
+// always does.
+TEST(BreakageOptions, SplitBondedFalseSplitsABondedSphereSqueezedPastFinesOverlap) {
+  const double d = 1e-3, r = d / 2, delta = 1e-6;
+  for (double squeeze : {0.29, 0.31}) {
+    Particles p;
+    p.append_sphere(0, 0, r - squeeze * r, r, kDensity, 0);  // A, in the bottom platen
+    p.append_sphere(d, 0, r - delta, r, kDensity, 1);        // B, bonded to A
+    p.append_sphere(4 * d, 0, r - delta, r, kDensity, 2);    // C, alone
+    EngineOptions o;
+    o.gravity_z = 0;
+    o.walls.cylinder = false;
+    o.walls.top_z = d - 2 * delta;
+    o.time_step = 1e-9;
+    Engine eng(std::move(p), o);
+    BreakageOptions b;
+    b.strength.d0_m = 1e-3;
+    b.strength.sigma_t0_Pa = 1e3;
+    b.split_bonded = false;
+    b.sublimit = SublimitPolicy::kKeep;  // no fines: A's fragment spheres are born deep in the platen
+    ASSERT_DOUBLE_EQ(b.fines_overlap, 0.3);
+    BreakageModel model(eng, b);
+    model.add_bond(0, 1);
+    eng.step();
+    for (int64_t s = 0; s < 3; ++s) ASSERT_GT(model.max_normal_forces()[s] / (d * d), 10 * model.strength(s));
+    model.check();
+    if (squeeze < 0.3) {
+      ASSERT_EQ(model.events().size(), 1u);
+      EXPECT_EQ(model.events()[0].sphere, 2);       // C
+      EXPECT_EQ(model.bond_count(), 1 + 2 * 40);    // A–B and C's fragments
+    } else {
+      ASSERT_EQ(model.events().size(), 2u);
+      EXPECT_EQ(model.events()[0].sphere, 0);       // A
+      EXPECT_EQ(model.events()[1].sphere, 2);       // C
+      EXPECT_EQ(model.bond_count(), 2 * 2 * 40);    // A–B went with A
+      EXPECT_EQ(model.record().bonds_dropped, 1);
+      EXPECT_EQ(model.record().bonds_broken, 0);
+    }
+  }
+}
+
 // kKeepUnbreakable, the stable form of kKeep: a 0.15 mm sphere pressed by
 // the top platen onto a large unbreakable sphere is kept past its strength
 // (the study: sub-limit spheres do not break) and removed only when its

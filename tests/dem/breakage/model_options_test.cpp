@@ -121,22 +121,31 @@ TEST(BreakageOptions, BondRadiusRuleMeanOrMin) {
 // 1 µm into each platen by the top one (F ≈ 0.087 N each, F/d² ≈ 87 kPa,
 // far above strengths drawn with σt0 = 1 kPa): A and B side by side and
 // bonded, C alone. split_bonded = true splits all three; false only C.
-TEST(BreakageOptions, SplitBondedFalseSplitsOnlySpheresWithoutBonds) {
-  const double d = 1e-3, r = d / 2, delta = 1e-6;
-  for (bool split_bonded : {true, false}) {
-    Particles p;
-    p.append_sphere(0, 0, r - delta, r, kDensity, 0);       // A
-    p.append_sphere(d, 0, r - delta, r, kDensity, 1);       // B, tangent to A
-    p.append_sphere(4 * d, 0, r - delta, r, kDensity, 2);   // C, alone
-    EngineOptions o;
+// The three spheres of the two tests below; A sunk `a_sink` × r into the bottom platen.
+struct ThreeSpheres {
+  Particles p;
+  EngineOptions o;
+  BreakageOptions b;
+  explicit ThreeSpheres(double a_sink) {
+    const double d = 1e-3, r = d / 2, delta = 1e-6;
+    p.append_sphere(0, 0, a_sink > 0 ? r - a_sink * r : r - delta, r, kDensity, 0);  // A
+    p.append_sphere(d, 0, r - delta, r, kDensity, 1);                               // B, tangent to A
+    p.append_sphere(4 * d, 0, r - delta, r, kDensity, 2);                           // C, alone
     o.gravity_z = 0;
     o.walls.cylinder = false;
     o.walls.top_z = d - 2 * delta;
     o.time_step = 1e-9;
-    Engine eng(std::move(p), o);
-    BreakageOptions b;
     b.strength.d0_m = 1e-3;
     b.strength.sigma_t0_Pa = 1e3;
+  }
+};
+
+TEST(BreakageOptions, SplitBondedFalseSplitsOnlySpheresWithoutBonds) {
+  const double d = 1e-3;
+  for (bool split_bonded : {true, false}) {
+    ThreeSpheres t(0);
+    Engine eng(std::move(t.p), t.o);
+    BreakageOptions b = t.b;
     b.split_bonded = split_bonded;
     BreakageModel model(eng, b);
     model.add_bond(0, 1);
@@ -162,21 +171,11 @@ TEST(BreakageOptions, SplitBondedFalseSplitsOnlySpheresWithoutBonds) {
 // each split remain); B, bonded and pressed by 1 µm, never splits; C, alone,
 // always does.
 TEST(BreakageOptions, SplitBondedFalseSplitsABondedSphereSqueezedPastFinesOverlap) {
-  const double d = 1e-3, r = d / 2, delta = 1e-6;
+  const double d = 1e-3;
   for (double squeeze : {0.29, 0.31}) {
-    Particles p;
-    p.append_sphere(0, 0, r - squeeze * r, r, kDensity, 0);  // A, in the bottom platen
-    p.append_sphere(d, 0, r - delta, r, kDensity, 1);        // B, bonded to A
-    p.append_sphere(4 * d, 0, r - delta, r, kDensity, 2);    // C, alone
-    EngineOptions o;
-    o.gravity_z = 0;
-    o.walls.cylinder = false;
-    o.walls.top_z = d - 2 * delta;
-    o.time_step = 1e-9;
-    Engine eng(std::move(p), o);
-    BreakageOptions b;
-    b.strength.d0_m = 1e-3;
-    b.strength.sigma_t0_Pa = 1e3;
+    ThreeSpheres t(squeeze);
+    Engine eng(std::move(t.p), t.o);
+    BreakageOptions b = t.b;
     b.split_bonded = false;
     b.sublimit = SublimitPolicy::kKeep;  // no fines: A's fragment spheres are born deep in the platen
     ASSERT_DOUBLE_EQ(b.fines_overlap, 0.3);

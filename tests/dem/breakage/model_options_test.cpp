@@ -117,20 +117,18 @@ TEST(BreakageOptions, BondRadiusRuleMeanOrMin) {
   EXPECT_DOUBLE_EQ(bond_section(p, 1e-4, 1e-4).radius, 1.25e-4);
 }
 
-// Which spheres may split. Three 1 mm spheres on the bottom platen, pressed
-// 1 µm into each platen by the top one (F ≈ 0.087 N each, F/d² ≈ 87 kPa,
-// far above strengths drawn with σt0 = 1 kPa): A and B side by side and
-// bonded, C alone. split_bonded = true splits all three; false only C.
-// The three spheres of the two tests below; A sunk `a_sink` × r into the bottom platen.
+// The three 1 mm spheres of the two tests below: A sunk `a_sink_m` into the
+// bottom platen, B beside it, C alone; B and C sunk 1 µm, the top platen 1 µm
+// into each.
 struct ThreeSpheres {
   Particles p;
   EngineOptions o;
   BreakageOptions b;
-  explicit ThreeSpheres(double a_sink) {
+  explicit ThreeSpheres(double a_sink_m = 1e-6) {
     const double d = 1e-3, r = d / 2, delta = 1e-6;
-    p.append_sphere(0, 0, a_sink > 0 ? r - a_sink * r : r - delta, r, kDensity, 0);  // A
-    p.append_sphere(d, 0, r - delta, r, kDensity, 1);                               // B, tangent to A
-    p.append_sphere(4 * d, 0, r - delta, r, kDensity, 2);                           // C, alone
+    p.append_sphere(0, 0, r - a_sink_m, r, kDensity, 0);   // A
+    p.append_sphere(d, 0, r - delta, r, kDensity, 1);      // B, tangent to A
+    p.append_sphere(4 * d, 0, r - delta, r, kDensity, 2);  // C, alone
     o.gravity_z = 0;
     o.walls.cylinder = false;
     o.walls.top_z = d - 2 * delta;
@@ -140,10 +138,14 @@ struct ThreeSpheres {
   }
 };
 
+// Which spheres may split. Three 1 mm spheres on the bottom platen, pressed
+// 1 µm into each platen by the top one (F ≈ 0.087 N each, F/d² ≈ 87 kPa,
+// far above strengths drawn with σt0 = 1 kPa): A and B side by side and
+// bonded, C alone. split_bonded = true splits all three; false only C.
 TEST(BreakageOptions, SplitBondedFalseSplitsOnlySpheresWithoutBonds) {
   const double d = 1e-3;
   for (bool split_bonded : {true, false}) {
-    ThreeSpheres t(0);
+    ThreeSpheres t;
     Engine eng(std::move(t.p), t.o);
     BreakageOptions b = t.b;
     b.split_bonded = split_bonded;
@@ -173,7 +175,7 @@ TEST(BreakageOptions, SplitBondedFalseSplitsOnlySpheresWithoutBonds) {
 TEST(BreakageOptions, SplitBondedFalseSplitsABondedSphereSqueezedPastFinesOverlap) {
   const double d = 1e-3;
   for (double squeeze : {0.29, 0.31}) {
-    ThreeSpheres t(squeeze);
+    ThreeSpheres t(squeeze * d / 2);
     Engine eng(std::move(t.p), t.o);
     BreakageOptions b = t.b;
     b.split_bonded = false;

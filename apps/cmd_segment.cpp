@@ -70,6 +70,7 @@ tg::SegmentOptions segment_options(const SegmentJob& o, const tg::Geometry& geom
   s.fill_pores = !o.no_pores;
   s.watershed_lines = !o.no_lines;
   s.merge = !o.no_merge;
+  s.split = !o.no_split;
   s.grey_evidence = !o.no_grey_evidence;
   if (o.grain_radius_vox > 0) {
     s.grain_radius_vox = o.grain_radius_vox;
@@ -349,6 +350,22 @@ static tg::app::Registrar reg{{"segment", 30,
   sub->add_option("--merge-ratio", o->seg.merge_ratio,
                   "Merge when the shared interface >= ratio * pi r^2 (r: smaller piece's equivalent radius)")
       ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  sub->add_flag("--no-split", o->no_split,
+                "Do not split labels whose smoothed grey holds two bright cores parted by a darker sheet (two "
+                "fragments whose gap blur and noise bridged)");
+  sub->add_option("--split-depth-sigmas", o->seg.split_depth_sigmas,
+                  "A piece's smoothed peak must stand this many smoothed-noise sigmas above the sheet between "
+                  "pieces (measured window on blind scans: 4-10)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--split-min-piece", o->seg.split_min_piece_fraction,
+                  "Smallest piece the split repair cuts off, as a share of the label's voxels (and >= 27 voxels)")
+      ->check(CLI::Range(0.0, 0.5))
+      ->capture_default_str();
+  sub->add_option("--split-smoothing-vox", o->seg.split_smoothing_vox,
+                  "Gaussian sigma, voxels, of the grey the split repair reads")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--min-size", o->seg.min_size_vox, "Smallest label kept, voxels")
       ->check(CLI::PositiveNumber)

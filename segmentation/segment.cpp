@@ -50,8 +50,10 @@ void validate(const SegmentOptions& o) {
 }
 
 // The threshold and the bright level from the histogram inside the field
-// of view (the local threshold's blocks need the volume: run_from_grey).
-void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist, const SegmentOptions& o) {
+// of view (the local threshold's blocks need the volume: run_from_grey);
+// the split repair's depth from the smoothed sample slices' histogram.
+void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist, const std::vector<int64_t>& smoothed,
+                              const SegmentOptions& o) {
   d.levels = screen_levels(hist, o.saturation_level);
   bool any = false;
   for (const int64_t c : hist) any = any || c > 0;
@@ -84,13 +86,26 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist, cons
     d.noise_sigma = peak.sigma;
     d.graded = d.bright > d.t.value;  // no dim band: the plain mask's chain (no second pore pass)
   }
+  if (o.split && o.threshold != ThresholdMethod::local && smoothed.size() == hist.size()) {
+    // The smoothed solid's noise from the upper side of its peak (as the
+    // raw one: partial volume only widens the lower side); the floor keeps
+    // a noiseless scan from splitting at every smoothing ripple.
+    const SolidPeak sm = solid_peak(smoothed, d.t.value);
+    const SolidPeak raw = solid_peak(hist, d.t.value);
+    d.smoothed_sigma = sm.sigma;
+    d.split_depth = std::max(o.split_depth_sigmas * sm.sigma,
+                             o.split_min_depth_contrast * std::max(0.0, raw.mode - double(d.t.value)));
+  }
 }
 
 GreyDecisions choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o) {
   GreyDecisions d;
   d.fov = find_field_of_view(grey, o.fov);
   auto hist = histogram_in_fov(grey, d.fov);
-  threshold_from_histogram(d, hist, o);
+  std::vector<int64_t> smoothed;
+  if (o.split && o.threshold != ThresholdMethod::local)
+    smoothed_sample_histogram(grey, 0, grey.shape().nz, d.fov, o.split_smoothing_vox, smoothed);
+  threshold_from_histogram(d, hist, smoothed, o);
   if (o.threshold == ThresholdMethod::local) {
     d.t.method = ThresholdMethod::local;
     const int64_t w = o.local_window_vox > 0 ? o.local_window_vox : default_local_window(o.grain_radius_vox);
@@ -106,7 +121,9 @@ struct SlabRun {
   SlabOutcome* out = nullptr;
 };
 
-SegmentResult segment_graded(Volume<uint8_t> mask, const SegmentOptions& opt, bool graded, SlabRun* slab = nullptr);
+// grey (or nullptr) and split_depth > 0: the split repair runs on the labels.
+SegmentResult segment_graded(Volume<uint8_t> mask, const SegmentOptions& opt, bool graded, SlabRun* slab = nullptr,
+                             const Volume<uint16_t>* grey = nullptr, double split_depth = 0);
 
 // grey -> mask with the decisions d, then the chain. The core's solid count
 // (slab) or the field of view's goes to *nsolid_out.
@@ -114,7 +131,10 @@ SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* ow
                               const SegmentOptions& opt, SlabRun* slab, int64_t* nsolid_out, StageClock& clock) {
   const ThresholdResult& t = d.t;
   const Shape shape = grey.shape();
-  // An owned scan becomes the mask in its own storage.
+  // An owned scan becomes the mask in its own storage, unless the split
+  // repair needs the grey after the watershed (2 B/voxel more at peak).
+  const bool keep_grey = d.split_depth > 0 && t.method != ThresholdMethod::local;
+  if (keep_grey) owned = nullptr;
   Volume<uint8_t> mask;
   if (t.method == ThresholdMethod::local) {
     mask = owned ? binarise_local(std::move(*owned), d.local, d.fov) : binarise_local(grey, d.local, d.fov);
@@ -137,7 +157,7 @@ SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* ow
   }
   *nsolid_out = nsolid;
   clock.lap("threshold");
-  return segment_graded(std::move(mask), opt, d.graded, slab);
+  return segment_graded(std::move(mask), opt, d.graded, slab, keep_grey ? &grey : nullptr, d.split_depth);
 }
 
 
@@ -166,6 +186,11 @@ void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& o
   r.threshold = t;
   r.bright_value = d.bright;
   r.solid_noise_sigma = d.noise_sigma;
+  r.smoothed_noise_sigma = d.smoothed_sigma;
+  if (opt.split && !r.split_used)
+    r.notes.push_back(t.method == ThresholdMethod::local
+                          ? "split repair off: it needs one global threshold (not --threshold local)"
+                          : "split repair off: no smoothed solid peak to set its depth");
   if (opt.grey_evidence && t.method != ThresholdMethod::local && !d.graded)
     r.notes.push_back("grey evidence off: the solid's noise (sigma " + std::to_string(long(d.noise_sigma)) +
                       " grey levels) leaves no dim band between the threshold and " +
@@ -192,14 +217,15 @@ void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& o
   r.local = std::move(d.local);
 }
 
-GreyDecisions decide_grey(FieldOfView fov, std::vector<int64_t> hist, const SegmentOptions& opt) {
+GreyDecisions decide_grey(FieldOfView fov, std::vector<int64_t> hist, const std::vector<int64_t>& smoothed_hist,
+                          const SegmentOptions& opt) {
   validate(opt);
   if (opt.threshold == ThresholdMethod::local)
     throw UsageError("segment: --threshold local needs the whole volume at once (its blocks' thresholds); it does not "
                      "run slab by slab under --memory-limit");
   GreyDecisions d;
   d.fov = std::move(fov);
-  threshold_from_histogram(d, hist, opt);
+  threshold_from_histogram(d, hist, smoothed_hist, opt);
   return d;
 }
 
@@ -251,7 +277,8 @@ namespace {
 
 // The chain from a mask: 0/nonzero (graded = false), or graded 0 void,
 // 1 dim, 2 bright (the header's grey evidence).
-SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in, bool graded, SlabRun* slab) {
+SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in, bool graded, SlabRun* slab,
+                             const Volume<uint16_t>* grey, double split_depth) {
   const SegmentOptions opt = opt_in.resolved();
   SegmentResult r;
   StageClock clock(r);
@@ -378,9 +405,27 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   r.merge.root = {};
   r.count = rl.count;
   r.dropped = rl.dropped;
+  clock.lap("relabel");
+  if (grey && split_depth > 0) {
+    // Split repair (split_labels.hpp), then raster order again (a chunked
+    // run numbers particles by their first voxel).
+    r.split_used = true;
+    r.split_depth = split_depth;
+    SplitOptions so;
+    so.smoothing_sigma_vox = opt.split_smoothing_vox;
+    so.depth = split_depth;
+    so.min_piece_fraction = opt.split_min_piece_fraction;
+    uint32_t count = r.count;
+    r.split = split_by_grey(lab, &count, *grey, so);
+    if (r.split.pieces_added > 0) {
+      rl = relabel_consecutive(lab, opt.min_size_vox);
+      r.count = rl.count;
+      r.dropped += rl.dropped;
+    }
+    clock.lap("split");
+  }
   r.labels = std::move(lab);
   if (slab) slab->out->sizes = std::move(rl.sizes);
-  clock.lap("relabel");
   r.peak_rss_bytes = peak_rss_bytes();
   return r;
 }
@@ -468,6 +513,19 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                 {"touching_pairs", r.merge.touching_pairs},
                 {"passing_pairs", r.merge.candidates},
                 {"merges", r.merge.merges}};
+  j["split"] = {{"enabled", r.split_used},
+                {"smoothing_sigma_vox", o.split_smoothing_vox},
+                {"smoothed_noise_sigma", r.smoothed_noise_sigma},
+                {"depth_sigmas", o.split_depth_sigmas},
+                {"min_depth_contrast", o.split_min_depth_contrast},
+                {"depth", r.split_depth},
+                {"min_piece_fraction", o.split_min_piece_fraction},
+                {"rule", "a label is split where its smoothed grey holds pieces of >= max(min_piece_fraction x its "
+                         "voxels, 27) voxels whose peaks stand >= depth grey levels above the sheet between them"},
+                {"labels_tested", r.split.tested},
+                {"labels_split", r.split.split},
+                {"pieces_added", r.split.pieces_added},
+                {"labels_too_large_to_test", r.split.skipped_large}};
   j["labels"] = {{"count", r.count}, {"min_size_vox", o.min_size_vox}, {"dropped", r.dropped}};
   json st = json::object();
   double total = 0;

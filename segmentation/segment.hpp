@@ -7,16 +7,22 @@
 //               then dim pockets) -> distance map to void or dim
 //            -> h-maxima markers -> watershed (lines) -> merge repair
 //               (bright interfaces, one best partner per label)
-//            -> consecutive labels with a size filter -> labels u32
+//            -> consecutive labels with a size filter
+//            -> split repair (a label whose smoothed grey holds two bright
+//               cores parted by a darker sheet: split_labels.hpp) -> labels u32
 //
 // Each stage is its own header (threshold, pore_filter, distance_transform,
 // markers, watershed, merge_labels, connected_components), with the method
 // and its reference there; this file only chains them and records what was
 // chosen, how long each stage took and the peak memory.
 //
-// Memory (why the stages are ordered and buffers reused this way): the grey
-// volume (2 B/voxel) is needed only for the histogram and the mask; the
-// rvalue overload writes the u8 mask over the grey volume's own storage.
+// Memory (why the stages are ordered and buffers reused this way): without
+// the split repair (--no-split, or a plain mask) the grey volume (2 B/voxel)
+// is needed only for the histograms and the mask, and the rvalue overload
+// writes the u8 mask over the grey volume's own storage. The split repair
+// reads the grey after the watershed, so with it (the default) the grey
+// stays and the mask is a volume of its own: 2 B/voxel more at peak
+// (8 B/voxel beside the markers; kSegmentBytesPerVoxel plans slabs for it).
 // The pore filter works on runs of void voxels (no label volume). Then the
 // float distance map (4 B) is made; the mask goes (the map is 0 exactly
 // on the void); the map becomes 16-bit fixed point over its own storage
@@ -24,7 +30,7 @@
 // back), the u32 markers (4 B) come; the flood levels (u8) are written over
 // the fixed-point map's storage; the watershed labels and the merge are in
 // place in the markers' volume. At most 6 B/voxel at peak (markers beside
-// the fixed-point map), plus the frontier queue (4 B per queued voxel, a
+// the fixed-point map; 8 with the grey kept), plus the frontier queue (4 B per queued voxel, a
 // small fraction of the volume) and the process itself. Measured (peak RSS
 // of the whole `tomograin segment` process): 7.4 B/voxel at 256^3 (the
 // process is ~1 B/voxel at that size), 6.03 B/voxel on a 1220^3 zeolite
@@ -86,6 +92,7 @@
 #include "segmentation/local_threshold.hpp"
 #include "segmentation/merge_labels.hpp"
 #include "segmentation/pore_filter.hpp"
+#include "segmentation/split_labels.hpp"
 #include "segmentation/threshold.hpp"
 #include "segmentation/watershed.hpp"
 
@@ -144,6 +151,15 @@ struct SegmentOptions {
 
   int64_t min_size_vox = 8;  // labels smaller than this become void (after merging)
 
+  // Split repair (split_labels.hpp): grey scans with a global threshold.
+  // depth = max(split_depth_sigmas x the smoothed solid's noise sigma,
+  // split_min_depth_contrast x (solid peak - threshold)).
+  bool split = true;
+  double split_smoothing_vox = 1.0;
+  double split_depth_sigmas = 6.0;
+  double split_min_depth_contrast = 0.1;  // floor for noiseless scans
+  double split_min_piece_fraction = 0.01;
+
   // Resolved values (derived defaults filled in), as the pipeline will use them.
   SegmentOptions resolved() const;
 };
@@ -166,6 +182,10 @@ struct SegmentResult {
   uint32_t markers = 0;
   double buckets_per_unit = 0;  // watershed levels per distance unit actually used (see quantise_levels)
   MergeResult merge;
+  bool split_used = false;        // the split repair ran (a grey scan, a global threshold, split on)
+  double smoothed_noise_sigma = 0;// the smoothed solid's noise sigma, grey levels (split_labels.hpp)
+  double split_depth = 0;         // grey levels
+  SplitResult split;
   uint32_t count = 0;       // final labels
   int64_t dropped = 0;      // labels removed by min_size_vox
   std::vector<std::pair<std::string, double>> stage_seconds;
@@ -197,13 +217,20 @@ struct GreyDecisions {
   bool graded = false;
   uint16_t bright = 0;
   double noise_sigma = 0;  // the solid peak's (graded only)
+  // Split repair: the smoothed solid's noise sigma (from the sample slices'
+  // histogram, smoothed_sample_histogram) and the depth it sets; 0: off.
+  double smoothed_sigma = 0;
+  double split_depth = 0;
 };
 
 // From the field of view (FovScan or given_field_of_view) and the 65536-bin
-// histogram of the voxels inside it (histogram_in_fov, summed over slabs).
+// histogram of the voxels inside it (histogram_in_fov, summed over slabs),
+// and that of the smoothed sample slices (smoothed_sample_histogram; empty
+// when opt.split is off).
 // UsageError for ThresholdMethod::local; InputError for an empty histogram
 // or a saturated scan, as segment().
-GreyDecisions decide_grey(FieldOfView fov, std::vector<int64_t> hist, const SegmentOptions& opt);
+GreyDecisions decide_grey(FieldOfView fov, std::vector<int64_t> hist, const std::vector<int64_t>& smoothed_hist,
+                          const SegmentOptions& opt);
 
 // Puts the decisions into a result: threshold, bright level, field of
 // view, level screen, and their notes (segment() does the same).

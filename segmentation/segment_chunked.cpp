@@ -89,25 +89,31 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
   FieldOfView fov = given_field_of_view(opt.fov, shape);
   const bool detect = !fov.active && opt.fov.detect && !(opt.fov.radius_vox > 0);
   FovScan scan(shape.ny, shape.nx);
-  std::vector<int64_t> hist(65536, 0);
-  auto add_hist = [&](const Volume<uint16_t>& g) {
+  std::vector<int64_t> hist(65536, 0), smoothed;
+  // The slabs start at multiples of 16 slices (step is one), so the
+  // smoothed sample slices find their neighbours in the slab
+  // (split_labels.hpp smoothed_sample_histogram): the same histograms as
+  // the one-piece run.
+  auto add_hist = [&](const Volume<uint16_t>& g, int64_t z0) {
     const auto h = histogram_in_fov(g, fov);
     for (size_t b = 0; b < hist.size(); ++b) hist[b] += h[b];
+    if (opt.split) smoothed_sample_histogram(g, z0, shape.nz, fov, opt.split_smoothing_vox, smoothed);
   };
   for (int64_t z0 = 0; z0 < shape.nz; z0 += step) {
     const Volume<uint16_t> g = read(z0, std::min(step, shape.nz - z0));
     if (detect) scan.add(g);
-    add_hist(g);
+    add_hist(g, z0);
   }
   if (detect) {
     fov = scan.finish(shape);
-    if (fov.active) {  // the histogram again, inside the field of view now known
+    if (fov.active) {  // the histograms again, inside the field of view now known
       cr.pass1_reads = 2;
       std::fill(hist.begin(), hist.end(), 0);
-      for (int64_t z0 = 0; z0 < shape.nz; z0 += step) add_hist(read(z0, std::min(step, shape.nz - z0)));
+      std::fill(smoothed.begin(), smoothed.end(), 0);
+      for (int64_t z0 = 0; z0 < shape.nz; z0 += step) add_hist(read(z0, std::min(step, shape.nz - z0)), z0);
     }
   }
-  GreyDecisions d = decide_grey(std::move(fov), std::move(hist), opt);
+  GreyDecisions d = decide_grey(std::move(fov), std::move(hist), smoothed, opt);
   cr.pass1_seconds = seconds_since(t1);
   if (talk)
     std::fprintf(stderr, "chunked: pass 1 (field of view, histogram, threshold %d) %.1f s; %lld slabs of %lld core + 2 x %lld margin slices\n",
@@ -124,6 +130,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
   auto q_for = [&](float dmax) { return levels_per_unit(dmax, opt.buckets_per_unit); };
   uint32_t running = 0;
   int64_t dropped = 0, core_solid = 0;
+  bool split_used = false;
   std::unordered_map<int64_t, OwnedParticle> owned;  // by the first voxel's linear index in the scan
   std::vector<std::pair<std::string, double>> stage_sum;
   for (int64_t s = 0; s < cr.plan.slabs; ++s) {
@@ -152,6 +159,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
     }
     dmax_seen = std::max(dmax_seen, out.core_dmax);
     core_solid += out.core_solid;
+    split_used = split_used || out.result.split_used;
     for (const auto& [name, sec] : out.result.stage_seconds) {
       auto it = std::find_if(stage_sum.begin(), stage_sum.end(), [&](const auto& p) { return p.first == name; });
       if (it == stage_sum.end()) stage_sum.emplace_back(name, sec);
@@ -235,6 +243,8 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
                       " voxels)");
   r.count = running;
   r.dropped = dropped;
+  r.split_used = split_used;
+  r.split_depth = d.split_depth;
   r.stage_seconds = std::move(stage_sum);
   r.stage_seconds.insert(r.stage_seconds.begin(), {"pass1", cr.pass1_seconds});
   record_decisions(r, std::move(d), opt, shape);
@@ -257,6 +267,7 @@ std::string summary_json(const ChunkedResult& cr, const SegmentOptions& opt) {
     j["grey_evidence"][k] = nullptr;
   j["markers"]["count"] = nullptr;
   for (const char* k : {"touching_pairs", "passing_pairs", "merges"}) j["merge"][k] = nullptr;
+  for (const char* k : {"labels_tested", "labels_split", "pieces_added", "labels_too_large_to_test"}) j["split"][k] = nullptr;
   json slabs = json::array();
   for (const auto& [range, sec] : cr.slab_seconds) slabs.push_back({{"core_slices", range}, {"seconds", sec}});
   j["chunked"] = {{"slabs", cr.plan.slabs},
@@ -271,7 +282,7 @@ std::string summary_json(const ChunkedResult& cr, const SegmentOptions& opt) {
                   {"peak_rss_bytes", cr.result.peak_rss_bytes},
                   {"peak_rss_bytes_per_voxel", j["peak_rss_bytes_per_voxel"]},
                   {"per_slab", slabs},
-                  {"null_counts", "pores, dim pockets, markers and merges are counted per slab, margins twice: left out"}};
+                  {"null_counts", "pores, dim pockets, markers, merges and splits are counted per slab, margins twice: left out"}};
   return j.dump(2);
 }
 

@@ -68,11 +68,12 @@
 namespace tg {
 
 // Bytes per voxel of segment()'s peak, process included (6.03 measured at
-// 1220^3 with the fixed-point distance map, segment.hpp; 1 more for the
-// frontier and the allocator's slack), and the process's own bytes: the
-// estimate behind the choice between segment() and the slabs, and the
-// slabs' thickness.
-inline constexpr double kSegmentBytesPerVoxel = 7.0;
+// 1220^3 with the fixed-point distance map, segment.hpp; 2 more for the
+// grey the split repair reads after the watershed; 1 more for the frontier
+// and the allocator's slack), and the process's own bytes: the estimate
+// behind the choice between segment() and the slabs, and the slabs'
+// thickness.
+inline constexpr double kSegmentBytesPerVoxel = 9.0;
 inline constexpr int64_t kSegmentFixedBytes = int64_t(128) << 20;
 
 struct ChunkedOptions {

@@ -217,8 +217,13 @@ TEST(GreyEvidence, SplitBallWithABridgedGapGivesTwoLabels) {
     EXPECT_NE(L(20, 20, 12), L(20, 20, 27));
     EXPECT_EQ(labels_of(L).size(), 2u);
     o.grey_evidence = false;
+    o.split = false;
     const auto plain = segment(split_ball_scan(seed), o);
     EXPECT_EQ(plain.count, 1u) << "seed " << seed << ": the solid mask alone joins the halves (why grey evidence)";
+    // The split repair (split_labels.hpp) reads the same gap in the
+    // smoothed grey: it parts them too, without the dim band.
+    o.split = true;
+    EXPECT_EQ(segment(split_ball_scan(seed), o).count, 2u) << "seed " << seed;
   }
 }
 

@@ -198,7 +198,7 @@ TEST(SegmentChunked, MarginTooSmallIsAnError) {
 TEST(SegmentChunked, LocalThresholdRefused) {
   SegmentOptions o = chunk_options();
   o.threshold = ThresholdMethod::local;
-  EXPECT_THROW(decide_grey({}, std::vector<int64_t>(65536, 1), o), UsageError);
+  EXPECT_THROW(decide_grey({}, std::vector<int64_t>(65536, 1), {}, o), UsageError);
 }
 
 }  // namespace tg

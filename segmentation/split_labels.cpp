@@ -1,0 +1,388 @@
+#include "segmentation/split_labels.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <cmath>
+#include <numeric>
+#include <omp.h>
+#include <stdexcept>
+
+#include "core/errors.hpp"
+#include "segmentation/neighbourhood.hpp"
+
+namespace tg {
+namespace {
+
+// Normalised Gaussian weights w[0..2r], r = ceil(3 sigma).
+std::vector<float> gaussian_kernel(double sigma) {
+  if (!(sigma > 0) || !std::isfinite(sigma)) throw UsageError("segment: the split repair's smoothing must be > 0 voxels");
+  const int r = int(std::ceil(3.0 * sigma));
+  std::vector<double> w(size_t(2 * r + 1));
+  double sum = 0;
+  for (int k = -r; k <= r; ++k) sum += w[size_t(k + r)] = std::exp(-0.5 * double(k * k) / (sigma * sigma));
+  std::vector<float> f(w.size());
+  for (size_t k = 0; k < w.size(); ++k) f[k] = float(w[k] / sum);
+  return f;
+}
+
+constexpr size_t kBins = 4096;  // flood levels per label (counting sort)
+constexpr size_t kConn = 6;  // the flood's neighbourhood (see the header)
+
+int64_t clampi(int64_t v, int64_t lo, int64_t hi) { return v < lo ? lo : (v > hi ? hi : v); }
+
+struct LabelBox {
+  int64_t z0 = INT64_MAX, y0 = INT64_MAX, x0 = INT64_MAX, z1 = -1, y1 = -1, x1 = -1;  // inclusive
+  int64_t voxels = 0;
+  void add(int64_t k, int64_t j, int64_t i) {
+    z0 = std::min(z0, k), y0 = std::min(y0, j), x0 = std::min(x0, i);
+    z1 = std::max(z1, k), y1 = std::max(y1, j), x1 = std::max(x1, i);
+    ++voxels;
+  }
+  void add(const LabelBox& o) {
+    z0 = std::min(z0, o.z0), y0 = std::min(y0, o.y0), x0 = std::min(x0, o.x0);
+    z1 = std::max(z1, o.z1), y1 = std::max(y1, o.y1), x1 = std::max(x1, o.x1);
+    voxels += o.voxels;
+  }
+};
+
+std::vector<LabelBox> label_boxes(const Volume<uint32_t>& labels, uint32_t count) {
+  const Shape s = labels.shape();
+  const uint32_t* L = labels.data();
+  const int nt = omp_get_max_threads();
+  std::vector<std::vector<LabelBox>> part(static_cast<size_t>(nt));
+#pragma omp parallel num_threads(nt)
+  {
+    auto& mine = part[size_t(omp_get_thread_num())];
+    mine.assign(size_t(count) + 1, LabelBox{});
+#pragma omp for schedule(static)
+    for (int64_t k = 0; k < s.nz; ++k)
+      for (int64_t j = 0; j < s.ny; ++j) {
+        const uint32_t* row = L + (k * s.ny + j) * s.nx;
+        for (int64_t i = 0; i < s.nx; ++i)
+          if (row[i]) mine[row[i]].add(k, j, i);
+      }
+  }
+  std::vector<LabelBox> box(size_t(count) + 1);
+  for (const auto& p : part)
+    for (uint32_t l = 1; l <= count; ++l)
+      if (p[l].voxels) box[l].add(p[l]);
+  return box;
+}
+
+// Per-thread scratch, reused from label to label.
+struct Scratch {
+  std::vector<float> a, b, sm, line;    // smoothing passes; sm: the box's smoothed grey
+  std::vector<int32_t> raster, order;   // the label's voxels (padded box) in box order, brightest first
+  std::vector<int64_t> start;           // counting sort
+  std::vector<int32_t> parent, size;    // union-find over box-local voxels (-1: not yet flooded)
+  std::vector<float> peak, val;         // per root: its brightest voxel; per voxel: its smoothed grey
+  std::vector<uint8_t> mine;            // 1: voxel of the label
+};
+
+int32_t find(std::vector<int32_t>& parent, int32_t x) {
+  while (parent[size_t(x)] != x) {
+    parent[size_t(x)] = parent[size_t(parent[size_t(x)])];
+    x = parent[size_t(x)];
+  }
+  return x;
+}
+
+// The pieces of one label: returns the number of pieces (1: no split) and
+// fills `piece` (box-local voxel -> piece ordinal 0..n-1, 0 the largest)
+// for the label's voxels.
+struct Pieces {
+  std::vector<int64_t> voxel;  // global indices of the voxels that leave the label
+  std::vector<int32_t> piece;  // their piece ordinal, 1..n-1
+  int32_t count = 1;
+};
+
+Pieces split_one(const Volume<uint32_t>& labels, const Volume<uint16_t>& grey, uint32_t l, const LabelBox& bx,
+                 const std::vector<float>& w, const SplitOptions& opt, Scratch& s) {
+  Pieces out;
+  const Shape S = labels.shape();
+  const int64_t r = int64_t(w.size() / 2);
+  const int64_t bz = bx.z1 - bx.z0 + 1, by = bx.y1 - bx.y0 + 1, bxn = bx.x1 - bx.x0 + 1;
+  // Extended box (the halo the kernel reads), clamped to the volume; beyond
+  // the volume the face voxel is repeated.
+  const int64_t ez0 = std::max<int64_t>(0, bx.z0 - r), ez1 = std::min<int64_t>(S.nz - 1, bx.z1 + r);
+  const int64_t ey0 = std::max<int64_t>(0, bx.y0 - r), ey1 = std::min<int64_t>(S.ny - 1, bx.y1 + r);
+  const int64_t ez = ez1 - ez0 + 1, ey = ey1 - ey0 + 1;
+  const uint16_t* G = grey.data();
+  // x pass: ez x ey x bxn
+  s.a.resize(size_t(ez * ey * bxn));
+  s.line.resize(size_t(bxn + 2 * r));
+  for (int64_t k = 0; k < ez; ++k)
+    for (int64_t j = 0; j < ey; ++j) {
+      const uint16_t* row = G + ((ez0 + k) * S.ny + (ey0 + j)) * S.nx;
+      float* line = s.line.data();  // the row's span with its halo, faces repeated
+      for (int64_t i = 0; i < bxn + 2 * r; ++i) line[i] = float(row[clampi(bx.x0 - r + i, 0, S.nx - 1)]);
+      float* o = s.a.data() + (k * ey + j) * bxn;
+      std::fill(o, o + bxn, 0.0f);
+      for (int64_t t = 0; t <= 2 * r; ++t) {
+        const float wt = w[size_t(t)];
+        for (int64_t i = 0; i < bxn; ++i) o[i] += wt * line[i + t];
+      }
+    }
+  // y pass: ez x by x bxn
+  s.b.resize(size_t(ez * by * bxn));
+  for (int64_t k = 0; k < ez; ++k)
+    for (int64_t j = 0; j < by; ++j) {
+      float* o = s.b.data() + (k * by + j) * bxn;
+      std::fill(o, o + bxn, 0.0f);
+      for (int64_t t = -r; t <= r; ++t) {
+        const int64_t jj = clampi(bx.y0 + j + t, 0, S.ny - 1) - ey0;
+        const float* in = s.a.data() + (k * ey + jj) * bxn;
+        const float wt = w[size_t(t + r)];
+        for (int64_t i = 0; i < bxn; ++i) o[i] += wt * in[i];
+      }
+    }
+  // z pass: bz x by x bxn
+  const int64_t n = bz * by * bxn;
+  s.sm.resize(size_t(n));
+  for (int64_t k = 0; k < bz; ++k) {
+    float* o = s.sm.data() + k * by * bxn;
+    std::fill(o, o + by * bxn, 0.0f);
+    for (int64_t t = -r; t <= r; ++t) {
+      const int64_t kk = clampi(bx.z0 + k + t, 0, S.nz - 1) - ez0;
+      const float* in = s.b.data() + kk * by * bxn;
+      const float wt = w[size_t(t + r)];
+      for (int64_t q = 0; q < by * bxn; ++q) o[q] += wt * in[q];
+    }
+  }
+
+  // The label's voxels, brightest first (ties: box order). The flood runs
+  // on the box padded by one voxel (never the label's), so that the 26
+  // neighbours need no bounds test; its values live in `val`.
+  const int64_t pz = bz + 2, py = by + 2, px = bxn + 2, pn = pz * py * px;
+  if (pn > int64_t(INT32_MAX)) throw std::logic_error("split_by_grey: box too large");
+  const uint32_t* L = labels.data();
+  s.mine.assign(size_t(pn), 0);
+  s.val.assign(size_t(pn), 0.0f);
+  s.raster.clear();
+  const float* sm = s.sm.data();
+  float hi = -1.0f, lo = 3.0e38f;
+  for (int64_t k = 0; k < bz; ++k)
+    for (int64_t j = 0; j < by; ++j) {
+      const uint32_t* row = L + ((bx.z0 + k) * S.ny + (bx.y0 + j)) * S.nx + bx.x0;
+      for (int64_t i = 0; i < bxn; ++i)
+        if (row[i] == l) {
+          const int32_t q = int32_t(((k + 1) * py + (j + 1)) * px + (i + 1));
+          const float v = sm[(k * by + j) * bxn + i];
+          s.mine[size_t(q)] = 1;
+          s.val[size_t(q)] = v;
+          s.raster.push_back(q);
+          hi = std::max(hi, v), lo = std::min(lo, v);
+        }
+    }
+  // Brightest first, by a stable counting sort into kBins levels between
+  // the label's extremes (a level is ~1/4096 of its grey range, a few grey
+  // levels, far below any depth that matters); within a level, box order.
+  const float* val = s.val.data();
+  {
+    const double width = std::max(double(hi - lo), 1e-6) / double(kBins - 1);
+    auto bin = [&](float v) { return size_t(std::min<double>(kBins - 1, std::floor(double(hi - v) / width))); };
+    s.start.assign(kBins + 1, 0);
+    for (const int32_t q : s.raster) ++s.start[bin(val[q]) + 1];
+    for (size_t b = 0; b < kBins; ++b) s.start[b + 1] += s.start[b];
+    s.order.resize(s.raster.size());
+    for (const int32_t q : s.raster) s.order[size_t(s.start[bin(val[q])]++)] = q;
+  }
+  std::array<int64_t, 26> off;
+  for (size_t d = 0; d < 26; ++d) off[d] = (int64_t(seg::kSteps[d].dz) * py + seg::kSteps[d].dy) * px + seg::kSteps[d].dx;
+  const int64_t vmin = std::max<int64_t>(opt.min_piece_vox, int64_t(std::ceil(opt.min_piece_fraction * double(bx.voxels))));
+  s.parent.assign(size_t(pn), -1);
+  s.size.assign(size_t(pn), 0);
+  s.peak.assign(size_t(pn), 0.0f);
+  const float depth = float(opt.depth);
+  bool separated = false;
+  int32_t roots[26];
+  float reach[26];  // per root: its brightest voxel among this voxel's neighbours
+  int32_t* parent = s.parent.data();
+  for (const int32_t q : s.order) {
+    const float v = val[q];
+    int nr = 0;
+    for (size_t d = 0; d < kConn; ++d) {
+      const int32_t nq = int32_t(q + off[d]);
+      if (parent[nq] < 0) continue;  // not the label's, or not flooded yet
+      const int32_t rt = find(s.parent, nq);
+      const int a = int(std::find(roots, roots + nr, rt) - roots);
+      if (a == nr) {
+        roots[nr] = rt;
+        reach[nr++] = val[nq];
+      } else {
+        reach[a] = std::max(reach[a], val[nq]);
+      }
+    }
+    s.parent[size_t(q)] = q;
+    s.size[size_t(q)] = 1;
+    s.peak[size_t(q)] = v;
+    if (nr == 0) continue;
+    // The significant components this voxel touches; it goes to the one
+    // of its brightest neighbour (steepest ascent, as a flood reaches it;
+    // the highest peak instead let a large grain creep round the rim of a
+    // chip beside it, voxel by voxel).
+    int nsig = 0, best = -1;
+    for (int a = 0; a < nr; ++a) {
+      const int32_t rt = roots[a];
+      if (s.size[size_t(rt)] >= vmin && s.peak[size_t(rt)] - v >= depth) {
+        ++nsig;
+        if (best < 0 || reach[a] > reach[best] || (reach[a] == reach[best] && rt < roots[best])) best = a;
+      }
+    }
+    int32_t into;
+    if (nsig >= 2) {
+      separated = true;
+      into = roots[best];
+      for (int a = 0; a < nr; ++a) {  // the lesser components go with the voxel; the significant ones stay apart
+        const int32_t rt = roots[a];
+        if (rt == into || (s.size[size_t(rt)] >= vmin && s.peak[size_t(rt)] - v >= depth)) continue;
+        s.parent[size_t(rt)] = into;
+        s.size[size_t(into)] += s.size[size_t(rt)];
+      }
+    } else {
+      // One component: the one with the highest peak is the root.
+      into = roots[0];
+      for (int a = 1; a < nr; ++a)
+        if (s.peak[size_t(roots[a])] > s.peak[size_t(into)] ||
+            (s.peak[size_t(roots[a])] == s.peak[size_t(into)] && roots[a] < into))
+          into = roots[a];
+      for (int a = 0; a < nr; ++a)
+        if (roots[a] != into) {
+          s.parent[size_t(roots[a])] = into;
+          s.size[size_t(into)] += s.size[size_t(roots[a])];
+        }
+    }
+    s.parent[size_t(q)] = into;
+    s.size[size_t(into)] += 1;
+  }
+  if (!separated) return out;
+
+  // Pieces: the final components of at least vmin voxels; the largest keeps
+  // the label (ties: the first in box order), smaller leftovers too.
+  std::vector<std::pair<int32_t, int32_t>> big;  // (root, size)
+  for (const int32_t q : s.order)
+    if (s.parent[size_t(q)] == q && s.size[size_t(q)] >= vmin) big.emplace_back(q, s.size[size_t(q)]);
+  if (big.size() < 2) return out;
+  std::sort(big.begin(), big.end(), [](const auto& a, const auto& b) { return a.second > b.second || (a.second == b.second && a.first < b.first); });
+  std::vector<std::pair<int32_t, int32_t>> ordinal;  // (root, piece) for pieces 1..
+  for (size_t p = 1; p < big.size(); ++p) ordinal.emplace_back(big[p].first, int32_t(p));
+  std::sort(ordinal.begin(), ordinal.end());
+  for (int64_t q = 0; q < pn; ++q) {
+    if (!s.mine[size_t(q)]) continue;
+    const int32_t rt = find(s.parent, int32_t(q));
+    const auto it = std::lower_bound(ordinal.begin(), ordinal.end(), std::make_pair(rt, int32_t(0)));
+    if (it == ordinal.end() || it->first != rt) continue;
+    const int64_t k = q / (py * px) - 1, j = (q / px) % py - 1, i = q % px - 1;
+    out.voxel.push_back(((bx.z0 + k) * S.ny + (bx.y0 + j)) * S.nx + bx.x0 + i);
+    out.piece.push_back(it->second);
+  }
+  out.count = int32_t(big.size());
+  return out;
+}
+
+}  // namespace
+
+SplitResult split_by_grey(Volume<uint32_t>& labels, uint32_t* count, const Volume<uint16_t>& grey,
+                          const SplitOptions& opt) {
+  if (!(labels.shape() == grey.shape())) throw std::logic_error("split_by_grey: labels and grey differ in shape");
+  SplitResult res;
+  const std::vector<float> w = gaussian_kernel(opt.smoothing_sigma_vox);
+  const uint32_t n = *count;
+  if (n == 0) return res;
+  const std::vector<LabelBox> box = label_boxes(labels, n);
+  std::vector<Pieces> pieces(size_t(n) + 1);
+  int64_t tested = 0, skipped = 0;
+#pragma omp parallel reduction(+ : tested, skipped)
+  {
+    Scratch s;
+#pragma omp for schedule(dynamic, 1)
+    for (int64_t l = 1; l <= int64_t(n); ++l) {
+      const LabelBox& b = box[size_t(l)];
+      const int64_t vmin =
+          std::max<int64_t>(opt.min_piece_vox, int64_t(std::ceil(opt.min_piece_fraction * double(b.voxels))));
+      if (b.voxels < 2 * vmin) continue;
+      const int64_t bv = (b.z1 - b.z0 + 1) * (b.y1 - b.y0 + 1) * (b.x1 - b.x0 + 1);
+      if (bv > opt.max_box_vox || bv > int64_t(INT32_MAX)) {
+        ++skipped;
+        continue;
+      }
+      ++tested;
+      pieces[size_t(l)] = split_one(labels, grey, uint32_t(l), b, w, opt, s);
+    }
+  }
+  res.tested = tested;
+  res.skipped_large = skipped;
+  // New numbers in label order: the same whatever the thread count.
+  uint32_t next = n;
+  uint32_t* L = labels.data();
+  for (uint32_t l = 1; l <= n; ++l) {
+    const Pieces& p = pieces[l];
+    if (p.count < 2) continue;
+    if (uint64_t(next) + uint64_t(p.count) > uint64_t(UINT32_MAX))
+      throw ResourceError("segment: more than 2^32 - 1 labels after the split repair");
+    for (size_t v = 0; v < p.voxel.size(); ++v) L[p.voxel[v]] = next + uint32_t(p.piece[v]);
+    next += uint32_t(p.count - 1);
+    ++res.split;
+    res.pieces_added += p.count - 1;
+  }
+  *count = next;
+  return res;
+}
+
+void smoothed_sample_histogram(const Volume<uint16_t>& slab, int64_t z0, int64_t nz_scan, const FieldOfView& fov,
+                               double smoothing_sigma_vox, std::vector<int64_t>& hist) {
+  if (hist.size() != 65536) hist.assign(65536, 0);
+  const std::vector<float> w = gaussian_kernel(smoothing_sigma_vox);
+  const int64_t r = int64_t(w.size() / 2);
+  const Shape S = slab.shape();
+  const int64_t plane = S.ny * S.nx;
+  std::vector<int64_t> zs;
+  if (nz_scan <= 8) {
+    if (nz_scan / 2 >= z0 && nz_scan / 2 < z0 + S.nz) zs.push_back(nz_scan / 2);
+  } else {
+    for (int64_t z = z0 + ((8 - z0 % 16) % 16 + 16) % 16; z < z0 + S.nz; z += 16) zs.push_back(z);
+  }
+  std::vector<float> a(static_cast<size_t>(plane)), b(static_cast<size_t>(plane));
+  const uint16_t* G = slab.data();
+  for (const int64_t z : zs) {
+    // z pass: the slice's neighbours, the scan's end faces repeated.
+    std::fill(a.begin(), a.end(), 0.0f);
+    for (int64_t t = -r; t <= r; ++t) {
+      const int64_t zz = clampi(z + t, 0, nz_scan - 1) - z0;
+      if (zz < 0 || zz >= S.nz)
+        throw std::logic_error("smoothed_sample_histogram: a sample slice's neighbours lie outside the slab");
+      const uint16_t* in = G + zz * plane;
+      const float wt = w[size_t(t + r)];
+#pragma omp parallel for schedule(static)
+      for (int64_t q = 0; q < plane; ++q) a[size_t(q)] += wt * float(in[q]);
+    }
+    // y pass, then x pass with the histogram.
+#pragma omp parallel for schedule(static)
+    for (int64_t j = 0; j < S.ny; ++j)
+      for (int64_t i = 0; i < S.nx; ++i) {
+        float acc = 0;
+        for (int64_t t = -r; t <= r; ++t) acc += w[size_t(t + r)] * a[size_t(clampi(j + t, 0, S.ny - 1) * S.nx + i)];
+        b[size_t(j * S.nx + i)] = acc;
+      }
+    std::vector<int64_t> h(65536, 0);
+#pragma omp parallel
+    {
+      std::vector<int64_t> hl(65536, 0);
+#pragma omp for schedule(static) nowait
+      for (int64_t j = 0; j < S.ny; ++j) {
+        const int64_t lo = fov.active ? fov.x0[size_t(j)] : 0, hi = fov.active ? fov.x1[size_t(j)] : S.nx;
+        for (int64_t i = lo; i < hi; ++i) {
+          float acc = 0;
+          for (int64_t t = -r; t <= r; ++t) acc += w[size_t(t + r)] * b[size_t(j * S.nx + clampi(i + t, 0, S.nx - 1))];
+          ++hl[size_t(clampi(std::lround(acc), 0, 65535))];
+        }
+      }
+#pragma omp critical
+      for (size_t g = 0; g < hl.size(); ++g) h[g] += hl[g];
+    }
+    for (size_t g = 0; g < h.size(); ++g) hist[g] += h[g];
+  }
+}
+
+}  // namespace tg

@@ -1,0 +1,100 @@
+// Under-segmentation repair from the grey levels: split a label whose
+// smoothed grey holds two or more bright cores parted by a darker sheet.
+//
+// Why. Two fragments of a split grain lie a voxel or less apart; where the
+// gap is under a voxel, the PSF is wide (σ 1.5 voxels) or the noise strong
+// (CNR 8), blur and noise bridge it with voxels brighter than the dim band
+// (segment.hpp "grey evidence"), the solid mask has no dip, and the
+// watershed gives the two halves one label. The gap is still there in the
+// grey levels: averaged over a few voxels, its sheet is darker than the
+// solid on either side by much more than the averaged noise. Geometry
+// cannot see it (two halves put back together are as convex as a grain:
+// the convex-hull flag of SPAM's detectUnderSegmentation does not tell them
+// apart, bench/segmentation/RESULTS.md), so the repair looks at the grey.
+//
+// Method (per label, in its bounding box):
+//  1. Smooth the grey with a Gaussian of σ_s voxels (separable, kernel
+//     radius ceil(3 σ_s), the volume's faces repeated), which divides white
+//     noise by ~(4π σ_s²)^(3/4) (6.7x at σ_s = 1) and keeps a planar sheet's
+//     dip.
+//  2. Flood the label's voxels from the brightest down (union-find over
+//     6-neighbours: the component tree of the smoothed grey restricted to
+//     the label). When a voxel at level v joins two or more components that
+//     are each *significant* — at least min_piece voxels, and a peak at
+//     least `depth` above v (the dynamic of a regional maximum, Grimaud
+//     1992) — they are kept apart: the voxel goes to the one its brightest
+//     neighbour belongs to, lesser components touching it too. Otherwise
+//     they merge. The voxels are taken in 4096 levels between the label's
+//     extremes (a counting sort), in box order within a level.
+//     This is a marker-controlled watershed of the smoothed grey whose
+//     markers are the maxima of dynamic >= depth and size >= min_piece (an
+//     area-and-dynamics filter), done in one sorted pass.
+//  3. Two or more pieces: the largest keeps the label, each other piece
+//     gets a new one. Voxels of components that never met a piece (parts of
+//     the label not connected to it) keep the label.
+// depth = depth_sigmas x the smoothed grey's noise sigma (measured, not
+// assumed: smoothed_sample_histogram below), and at least min_depth (a
+// share of the contrast, for noiseless scans; segment.hpp sets both).
+// min_piece = max(
+// min_piece_fraction x the label's voxels, min_piece_vox).
+//
+// Defaults, measured on blind_scene.py scans (160^3, R 16, dev seeds 1-2;
+// bench/segmentation/RESULTS.md "Split repair"): depth 4 to 9 noise sigmas
+// give the same F1 within 0.004 on gap 0.5 voxel, PSF 1.5 and CNR 8 (26-30
+// halves of ~30 glued pairs rejoined per scene); 4 splits one intact grain
+// of the middle setting, 6-9 none; 6 is the default. Smoothing 0.7, 1 and
+// 1.5 voxels: F1 within 0.008 of each other (1 is in the middle).
+// min_piece_fraction 0.03 -> 0.01 -> 0.005: gap 0.5 F1 0.973 -> 0.977 ->
+// 0.979, no false split at any; 0.01 (a sphere of radius ~3.4 voxels in a
+// grain of R 16) was kept, R 12's scenes were no better at 0.005.
+// The flood is 6-connected: the same labels as 26 on the dev scenes (one
+// more split at gap 0.5) in 40 % of the time.
+//
+// Cost: each label's box plus its halo is smoothed once and its voxels
+// sorted once (a counting sort, O(V)); labels in parallel (dynamic schedule), each
+// label's result depends only on its own box, so it is the same whatever
+// the thread count and in a slab of a chunked run as in the whole volume.
+// Labels whose box exceeds max_box_vox (2^28: a grain of radius ~300
+// voxels) are not tested and counted.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "core/volume.hpp"
+#include "segmentation/field_of_view.hpp"
+
+namespace tg {
+
+struct SplitOptions {
+  double smoothing_sigma_vox = 1.0;  // σ_s of the Gaussian, voxels
+  double depth = 0;                  // grey levels a piece's peak must stand above the sheet between pieces
+  double min_piece_fraction = 0.01;  // of the label's voxels
+  int64_t min_piece_vox = 27;        // and at least this many voxels (3^3)
+  int64_t max_box_vox = int64_t(1) << 28;
+};
+
+struct SplitResult {
+  int64_t tested = 0;        // labels large enough to hold two pieces
+  int64_t split = 0;         // labels split
+  int64_t pieces_added = 0;  // new labels
+  int64_t skipped_large = 0; // boxes over max_box_vox, not tested
+};
+
+// labels: 1..count (0 void); new pieces get count+1.. in the order of the
+// labels they come from (renumber afterwards for raster order). grey: the
+// scan the labels came from, same shape. *count is updated.
+SplitResult split_by_grey(Volume<uint32_t>& labels, uint32_t* count, const Volume<uint16_t>& grey,
+                          const SplitOptions& opt);
+
+// The smoothed grey's noise: adds to `hist` (65536 bins) the smoothed grey
+// (the same Gaussian as split_by_grey) of the sample slices z = 8 (mod 16)
+// of the scan (slice nz / 2 when nz <= 8) that lie in `slab` (the scan's
+// slices [z0, z0 + slab.nz)), inside the field of view. A sample slice
+// needs its neighbours within 3 σ_s: a slab starting at a multiple of 16
+// slices and ending at one or at the scan's end holds them (a chunked
+// run's pass 1 reads such slabs), so the histogram is the same read whole
+// or by slabs. solid_peak() of it gives the smoothed solid's noise sigma.
+void smoothed_sample_histogram(const Volume<uint16_t>& slab, int64_t z0, int64_t nz_scan, const FieldOfView& fov,
+                               double smoothing_sigma_vox, std::vector<int64_t>& hist);
+
+}  // namespace tg

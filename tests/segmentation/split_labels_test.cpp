@@ -1,0 +1,283 @@
+// The split repair (segmentation/split_labels.hpp): two halves of a ball
+// whose sub-voxel gap blur and noise bridge come apart, on the side of the
+// plane they belong to; intact porous grains and noiseless scans stay
+// whole; the smoothed noise estimate against its analytic value; the same
+// result with 1 and 2 threads, and read whole or by slabs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <omp.h>
+#include <random>
+#include <set>
+
+#include "data_synth/imaging.hpp"
+#include "segmentation/segment.hpp"
+#include "segmentation/segment_chunked.hpp"
+#include "segmentation/split_labels.hpp"
+#include "segmentation/threshold.hpp"
+
+namespace tg {
+namespace {
+
+// A ball of radius R centred in an n^3 volume, cut by a plane through its
+// centre with normal (1, 0.3, 0.2) (oblique: the gap crosses voxels partly)
+// and a gap `gap` voxels wide; `pores` void balls of radius 2 inside each
+// half when gap < 0 (then no cut: an intact grain). Partial volume by 4^3
+// supersampling; imaging as data_synth's (PSF, Gaussian noise at CNR cnr).
+Volume<uint16_t> ball_scan(int64_t n, double R, double gap, int pores, double psf, double cnr, uint64_t seed) {
+  const Shape s{n, n, n};
+  Volume<float> phi = Volume<float>::filled(s, 0.f);
+  const double c = double(n) / 2 - 0.5, nn = std::sqrt(1 + 0.09 + 0.04);
+  std::vector<std::array<double, 3>> pore;
+  for (int p = 0; p < pores; ++p) {  // on a ring at R/2 around the centre
+    const double a = 2 * M_PI * p / pores;
+    pore.push_back({0.3 * R * std::sin(2 * a), 0.5 * R * std::cos(a), 0.5 * R * std::sin(a)});
+  }
+  for (int64_t k = 0; k < n; ++k)
+    for (int64_t j = 0; j < n; ++j)
+      for (int64_t i = 0; i < n; ++i) {
+        int in = 0;
+        for (int a = 0; a < 4; ++a)
+          for (int b = 0; b < 4; ++b)
+            for (int d = 0; d < 4; ++d) {
+              const double z = double(k) + (a + 0.5) / 4 - 0.5 - c, y = double(j) + (b + 0.5) / 4 - 0.5 - c,
+                           x = double(i) + (d + 0.5) / 4 - 0.5 - c;
+              bool solid = z * z + y * y + x * x <= R * R;
+              if (gap > 0) solid = solid && std::abs((x + 0.3 * y + 0.2 * z) / nn) > gap / 2;
+              for (const auto& p : pore)
+                solid = solid && (z - p[0]) * (z - p[0]) + (y - p[1]) * (y - p[1]) + (x - p[2]) * (x - p[2]) > 4.0;
+              in += solid;
+            }
+        phi(k, j, i) = float(in) / 64.f;
+      }
+  synth::ImagingOptions im;
+  im.void_grey = 10000, im.solid_grey = 30000, im.psf_sigma = psf, im.noise_sigma = cnr > 0 ? 20000.0 / cnr : 0.0;
+  im.seed = seed;
+  synth::apply_imaging(phi, im);
+  return synth::to_u16(phi).volume;
+}
+
+// Which side of the cut plane voxel (k, j, i) lies on.
+int side(int64_t n, int64_t k, int64_t j, int64_t i) {
+  const double c = double(n) / 2 - 0.5;
+  return (double(i) - c) + 0.3 * (double(j) - c) + 0.2 * (double(k) - c) > 0 ? 1 : 0;
+}
+
+// One label over the whole ball (radius R + 0.5): what a watershed that
+// did not see the gap leaves.
+Volume<uint32_t> one_label(int64_t n, double R) {
+  auto l = Volume<uint32_t>::filled(Shape{n, n, n}, 0u);
+  const double c = double(n) / 2 - 0.5;
+  for (int64_t k = 0; k < n; ++k)
+    for (int64_t j = 0; j < n; ++j)
+      for (int64_t i = 0; i < n; ++i)
+        if (std::hypot(double(k) - c, double(j) - c, double(i) - c) <= R + 0.5) l(k, j, i) = 1;
+  return l;
+}
+
+// The depth segment() would use: 6 sigmas of the smoothed solid's noise.
+double depth_of(const Volume<uint16_t>& g, uint16_t t) {
+  std::vector<int64_t> h;
+  smoothed_sample_histogram(g, 0, g.shape().nz, FieldOfView{}, 1.0, h);
+  return 6.0 * solid_peak(h, t).sigma;
+}
+
+// Seeds 1-3 were looked at while writing this; the assertions run on 21-23.
+TEST(SplitLabels, HalvesWithASubVoxelGapComeApartOnTheirSides) {
+  const int64_t n = 36;
+  for (uint64_t seed : {21u, 22u, 23u}) {
+    const auto g = ball_scan(n, 13, 0.5, 0, 1.0, 13, seed);
+    auto lab = one_label(n, 13);
+    SplitOptions o;
+    o.depth = depth_of(g, 20000);
+    ASSERT_GT(o.depth, 0);
+    uint32_t count = 1;
+    const SplitResult r = split_by_grey(lab, &count, g, o);
+    EXPECT_EQ(r.tested, 1);
+    EXPECT_EQ(r.split, 1) << "seed " << seed;
+    ASSERT_EQ(count, 2u) << "seed " << seed;
+    // Each piece on its own side of the plane (a voxel the plane crosses
+    // may go either way).
+    int64_t on[3][2] = {};
+    for (int64_t k = 0; k < n; ++k)
+      for (int64_t j = 0; j < n; ++j)
+        for (int64_t i = 0; i < n; ++i)
+          if (lab(k, j, i)) ++on[lab(k, j, i)][side(n, k, j, i)];
+    const int a = on[1][0] > on[1][1] ? 0 : 1;
+    EXPECT_GT(double(on[1][a]) / double(on[1][0] + on[1][1]), 0.97) << "seed " << seed;
+    EXPECT_GT(double(on[2][1 - a]) / double(on[2][0] + on[2][1]), 0.97) << "seed " << seed;
+  }
+}
+
+TEST(SplitLabels, SegmentSplitsWhatTheGreyEvidenceJoined) {
+  // End to end: at gap 0.5 and PSF 1.0 the gap's centre is too bright for
+  // the dim band, the watershed leaves one label, the split repair two.
+  for (uint64_t seed : {21u, 22u}) {
+    const auto g = ball_scan(36, 13, 0.5, 0, 1.0, 13, seed);
+    SegmentOptions o;
+    o.grain_radius_vox = 13;
+    const SegmentResult with = segment(g, o);
+    o.split = false;
+    const SegmentResult without = segment(g, o);
+    EXPECT_EQ(without.count, 1u) << "seed " << seed << ": the case this repair is for";
+    EXPECT_EQ(with.count, 2u) << "seed " << seed;
+    EXPECT_TRUE(with.split_used);
+    EXPECT_EQ(with.split.pieces_added, 1);
+  }
+}
+
+TEST(SplitLabels, IntactPorousGrainsStayWhole) {
+  const int64_t n = 36;
+  for (uint64_t seed : {21u, 22u, 23u}) {
+    for (double cnr : {8.0, 13.0, 30.0}) {
+      const auto g = ball_scan(n, 13, -1, 4, 0.7, cnr, seed);
+      auto lab = one_label(n, 13);
+      SplitOptions o;
+      o.depth = depth_of(g, 20000);
+      uint32_t count = 1;
+      const SplitResult r = split_by_grey(lab, &count, g, o);
+      EXPECT_EQ(r.split, 0) << "seed " << seed << " CNR " << cnr;
+      EXPECT_EQ(count, 1u);
+    }
+  }
+}
+
+TEST(SplitLabels, NoiselessScanKeepsTheContrastFloor) {
+  // No noise: the smoothed solid peak has no width and the depth is the
+  // floor, a tenth of the contrast; an intact porous grain stays one label,
+  // the split one (gap 0.5, PSF 1) still comes apart.
+  SegmentOptions o;
+  o.grain_radius_vox = 13;
+  const auto intact = segment(ball_scan(36, 13, -1, 4, 0.7, 0, 1), o);
+  EXPECT_EQ(intact.count, 1u);
+  EXPECT_NEAR(intact.split_depth, 0.1 * (30000 - double(intact.threshold.value)), 300.0);
+  const auto split = segment(ball_scan(36, 13, 0.5, 0, 1.0, 0, 1), o);
+  EXPECT_EQ(split.count, 2u);
+}
+
+TEST(SplitLabels, SmoothedNoiseMatchesTheKernel) {
+  // White noise of sigma 1500 on a constant solid: the smoothed values'
+  // sigma is 1500 (sum of w_k^2)^(3/2) for the discrete separable kernel.
+  const Shape s{64, 64, 64};
+  Volume<uint16_t> g(s);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> nd(30000, 1500);
+  for (auto& v : g.span()) v = uint16_t(std::lround(nd(rng)));
+  std::vector<int64_t> h;
+  smoothed_sample_histogram(g, 0, s.nz, FieldOfView{}, 1.0, h);
+  int64_t total = 0;
+  for (auto c : h) total += c;
+  EXPECT_EQ(total, 4 * 64 * 64);  // sample slices 8, 24, 40, 56
+  double w2 = 0, sum = 0;
+  for (int k = -3; k <= 3; ++k) sum += std::exp(-0.5 * k * k);
+  for (int k = -3; k <= 3; ++k) w2 += std::pow(std::exp(-0.5 * k * k) / sum, 2);
+  const double want = 1500 * std::pow(w2, 1.5);
+  EXPECT_NEAR(solid_peak(h, 20000).sigma, want, 0.06 * want);
+}
+
+TEST(SplitLabels, SampleHistogramIsTheSameBySlabs) {
+  const Shape s{100, 20, 24};
+  Volume<uint16_t> g(s);
+  std::mt19937_64 rng(7);
+  std::uniform_int_distribution<int> u(0, 60000);
+  for (auto& v : g.span()) v = uint16_t(u(rng));
+  std::vector<int64_t> whole, parts;
+  smoothed_sample_histogram(g, 0, s.nz, FieldOfView{}, 1.0, whole);
+  const int64_t sl = s.slice_voxels();
+  for (int64_t z0 = 0; z0 < s.nz; z0 += 48) {  // slabs of 48 slices (a multiple of 16), the last one short
+    const int64_t nz = std::min<int64_t>(48, s.nz - z0);
+    Volume<uint16_t> slab(Shape{nz, s.ny, s.nx});
+    std::copy(g.data() + z0 * sl, g.data() + (z0 + nz) * sl, slab.data());
+    smoothed_sample_histogram(slab, z0, s.nz, FieldOfView{}, 1.0, parts);
+  }
+  EXPECT_EQ(whole, parts);
+  // A volume of 5 slices: the middle one is the sample.
+  std::vector<int64_t> small;
+  Volume<uint16_t> thin(Shape{5, 20, 24});
+  std::copy(g.data(), g.data() + 5 * sl, thin.data());
+  smoothed_sample_histogram(thin, 0, 5, FieldOfView{}, 1.0, small);
+  int64_t total = 0;
+  for (auto c : small) total += c;
+  EXPECT_EQ(total, 20 * 24);
+}
+
+TEST(SplitLabels, SameLabelsWithOneAndTwoThreads) {
+  // Four split balls (four noise seeds) side by side in one scan.
+  std::vector<Volume<uint16_t>> one;
+  for (uint64_t seed : {21u, 22u, 23u, 24u}) one.push_back(ball_scan(36, 13, 0.5, 0, 1.0, 13, seed));
+  const Shape s{36, 36, 144};
+  Volume<uint16_t> g(s);
+  auto lab = Volume<uint32_t>::filled(s, 0u);
+  const auto l1 = one_label(36, 13);
+  for (int b = 0; b < 4; ++b)
+    for (int64_t k = 0; k < 36; ++k)
+      for (int64_t j = 0; j < 36; ++j)
+        for (int64_t i = 0; i < 36; ++i) {
+          g(k, j, 36 * b + i) = one[size_t(b)](k, j, i);
+          lab(k, j, 36 * b + i) = l1(k, j, i) ? uint32_t(b + 1) : 0u;
+        }
+  SplitOptions o;
+  o.depth = depth_of(g, 20000);
+  auto a = lab.clone(), b = lab.clone();
+  uint32_t ca = 4, cb = 4;
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  split_by_grey(a, &ca, g, o);
+  omp_set_num_threads(2);
+  split_by_grey(b, &cb, g, o);
+  omp_set_num_threads(threads);
+  EXPECT_EQ(ca, 8u);
+  EXPECT_EQ(ca, cb);
+  for (int64_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], b[i]) << i;
+}
+
+TEST(SplitLabels, SameLabelsSlabBySlab) {
+  // Four split balls stacked along z, segmented whole and in slabs of 16
+  // core slices (segment_chunked.hpp): the split repair's depth comes from
+  // pass 1's sample slices and each label's split from its own box, so
+  // the labels are the same, voxel for voxel.
+  const Shape s{144, 36, 36};
+  Volume<uint16_t> g(s, Geometry::isotropic_m(30e-6));
+  for (int b = 0; b < 4; ++b) {
+    const auto one = ball_scan(36, 13, 0.5, 0, 1.0, 13, 31 + uint64_t(b));
+    std::copy(one.data(), one.data() + one.size(), g.data() + b * one.size());
+  }
+  SegmentOptions o;
+  o.grain_radius_vox = 4;  // a margin of 5 R + 4 = 24 -> 32 slices: enough for these balls, small enough for slabs
+  const SegmentResult whole = segment(g, o);
+  EXPECT_EQ(whole.split.split, 4);
+  EXPECT_EQ(whole.count, 8u);
+  setenv("TOMOGRAIN_QUIET", "1", 0);
+  auto labels = Volume<uint32_t>::filled(s, 0xffffffffu);
+  const int64_t sl = s.slice_voxels();
+  auto read = [&](int64_t z0, int64_t nz) {
+    Volume<uint16_t> v(Shape{nz, s.ny, s.nx}, g.geometry());
+    std::copy(g.data() + z0 * sl, g.data() + (z0 + nz) * sl, v.data());
+    return v;
+  };
+  auto write = [&](int64_t z0, const Volume<uint32_t>& l, int64_t vz0, int64_t nz) {
+    std::copy(l.data() + vz0 * sl, l.data() + (vz0 + nz) * sl, labels.data() + z0 * sl);
+  };
+  ChunkPlan plan;
+  plan.in_memory = false;
+  plan.core = 16;
+  plan.margin = 32;
+  const ChunkedResult cr = segment_chunked(s, g.geometry(), read, write, o, plan);
+  EXPECT_EQ(cr.result.count, whole.count);
+  EXPECT_DOUBLE_EQ(cr.result.split_depth, whole.split_depth);
+  int64_t differ = 0;
+  for (int64_t i = 0; i < s.voxels(); ++i) differ += labels[i] != whole.labels[i];
+  EXPECT_EQ(differ, 0);
+}
+
+TEST(SplitLabels, BadSmoothingIsAUsageError) {
+  auto lab = one_label(8, 2);
+  Volume<uint16_t> g = Volume<uint16_t>::filled(lab.shape(), 100);
+  uint32_t c = 1;
+  SplitOptions o;
+  o.smoothing_sigma_vox = 0;
+  EXPECT_THROW(split_by_grey(lab, &c, g, o), UsageError);
+}
+
+}  // namespace
+}  // namespace tg

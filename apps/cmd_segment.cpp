@@ -166,7 +166,9 @@ int run_segment(SegmentJob& o) {
       const tg::AnyVolume probe = r.read_slab(ds, 0, 1);
       tg::Geometry geom = tg::geometry_of(probe);
       if (o.voxel_um > 0) geom.voxel_size_m = {o.voxel_um * 1e-6, o.voxel_um * 1e-6, o.voxel_um * 1e-6};
-      const double radius = segment_options(o, geom, 65535).resolved().grain_radius_vox;
+      const tg::SegmentOptions so = segment_options(o, geom, 65535);
+      const double radius = so.resolved().grain_radius_vox;
+      co.bytes_per_voxel = tg::segment_bytes_per_voxel(so);
       if (!tg::plan_chunks(shape, radius, co).in_memory) {
         if (tg::dtype_of(probe) != tg::DType::u16)
           throw tg::UsageError(o.in + ": slab-by-slab segmentation (--memory-limit) reads uint16 scans only (this one "
@@ -179,7 +181,8 @@ int run_segment(SegmentJob& o) {
   tg::Volume<uint16_t> grey = read_grey(o.in, o.voxel_um, top);
   const tg::Geometry geom = grey.geometry();
   if (co.memory_limit_bytes > 0) {
-    const tg::ChunkPlan plan = tg::plan_chunks(grey.shape(), 1.0, {co.memory_limit_bytes, 0});
+    const tg::ChunkPlan plan =
+        tg::plan_chunks(grey.shape(), 1.0, {co.memory_limit_bytes, 0, tg::segment_bytes_per_voxel(segment_options(o, geom, top))});
     if (!plan.in_memory)
       throw tg::UsageError(o.in + ": segmenting it needs about " + tg::human_bytes(double(plan.estimate_bytes)) +
                            ", over --memory-limit; slab by slab needs an HDF5 scan (tomograin convert)");

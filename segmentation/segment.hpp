@@ -22,7 +22,7 @@
 // writes the u8 mask over the grey volume's own storage. The split repair
 // reads the grey after the watershed, so with it (the default) the grey
 // stays and the mask is a volume of its own: 2 B/voxel more at peak
-// (8 B/voxel beside the markers; kSegmentBytesPerVoxel plans slabs for it).
+// (8 B/voxel beside the markers; segment_bytes_per_voxel plans slabs for it).
 // The pore filter works on runs of void voxels (no label volume). Then the
 // float distance map (4 B) is made; the mask goes (the map is 0 exactly
 // on the void); the map becomes 16-bit fixed point over its own storage

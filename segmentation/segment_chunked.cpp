@@ -44,14 +44,18 @@ std::string margin_advice(const ChunkPlan& p) {
 
 }  // namespace
 
+double segment_bytes_per_voxel(const SegmentOptions& o) {
+  return kSegmentBytesPerVoxel + (o.split && o.threshold != ThresholdMethod::local ? kSplitGreyBytesPerVoxel : 0.0);
+}
+
 ChunkPlan plan_chunks(const Shape& s, double grain_radius_vox, const ChunkedOptions& c) {
   ChunkPlan p;
-  p.estimate_bytes = int64_t(kSegmentBytesPerVoxel * double(s.voxels())) + kSegmentFixedBytes;
+  p.estimate_bytes = int64_t(c.bytes_per_voxel * double(s.voxels())) + kSegmentFixedBytes;
   if (c.memory_limit_bytes <= 0 || p.estimate_bytes <= c.memory_limit_bytes) return p;
   p.in_memory = false;
   if (!(grain_radius_vox > 0)) throw UsageError("segment: slabs need a positive grain radius");
   p.margin = round_up_align(c.margin_vox >= 0 ? c.margin_vox : int64_t(std::ceil(5.0 * grain_radius_vox)) + 4);
-  const double slice_bytes = kSegmentBytesPerVoxel * double(s.slice_voxels());
+  const double slice_bytes = c.bytes_per_voxel * double(s.slice_voxels());
   const int64_t fit = int64_t(double(c.memory_limit_bytes - kSegmentFixedBytes) / slice_bytes);  // slices
   p.core = (fit - 2 * p.margin) / kChunkAlign * kChunkAlign;
   if (p.core < kChunkAlign) {
@@ -59,7 +63,7 @@ ChunkPlan plan_chunks(const Shape& s, double grain_radius_vox, const ChunkedOpti
     throw UsageError(fmt::format(
         "segment: --memory-limit {} is too small for one slab: 16 core slices and 2 x {} margin slices of {} x {} "
         "voxels need about {} ({} B/voxel); give at least that, or a smaller --slab-margin-vox",
-        human_bytes(double(c.memory_limit_bytes)), p.margin, s.ny, s.nx, human_bytes(need), kSegmentBytesPerVoxel));
+        human_bytes(double(c.memory_limit_bytes)), p.margin, s.ny, s.nx, human_bytes(need), c.bytes_per_voxel));
   }
   p.slabs = (s.nz + p.core - 1) / p.core;
   const int64_t thickest = std::min(s.nz, p.core + 2 * p.margin);

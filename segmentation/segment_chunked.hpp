@@ -68,17 +68,22 @@
 namespace tg {
 
 // Bytes per voxel of segment()'s peak, process included (6.03 measured at
-// 1220^3 with the fixed-point distance map, segment.hpp; 2 more for the
-// grey the split repair reads after the watershed; 1 more for the frontier
-// and the allocator's slack), and the process's own bytes: the estimate
-// behind the choice between segment() and the slabs, and the slabs'
-// thickness.
-inline constexpr double kSegmentBytesPerVoxel = 9.0;
+// 1220^3 with the fixed-point distance map, segment.hpp; 1 more for the
+// frontier and the allocator's slack), 2 more when the split repair keeps
+// the grey for after the watershed, and the process's own bytes: the
+// estimate behind the choice between segment() and the slabs, and the
+// slabs' thickness.
+inline constexpr double kSegmentBytesPerVoxel = 7.0;
+inline constexpr double kSplitGreyBytesPerVoxel = 2.0;
 inline constexpr int64_t kSegmentFixedBytes = int64_t(128) << 20;
+
+// The estimate for these options (the grey kept or not).
+double segment_bytes_per_voxel(const SegmentOptions& o);
 
 struct ChunkedOptions {
   int64_t memory_limit_bytes = 0;  // <= 0: no limit (segment() on the whole volume)
   int64_t margin_vox = -1;         // < 0: 5 R + 4 (header), rounded up to a multiple of 16
+  double bytes_per_voxel = kSegmentBytesPerVoxel + kSplitGreyBytesPerVoxel;  // segment_bytes_per_voxel(options)
 };
 
 struct ChunkPlan {

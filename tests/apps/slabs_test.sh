@@ -3,25 +3,38 @@
 # and measured slab by slab (segmentation/segment_chunked.hpp,
 # measure/measure_chunked.hpp) with the labels and particle table of the
 # whole-volume run: every voxel and every cell equal, the coordination
-# column too (contacts in two passes over slabs). The synthetic scan is 128^3 at 25 um, grains
-# of radius 8 voxels: segment's estimate is 142 MiB in one piece (7 B/voxel
-# + 128 MiB), one slab of 16 core and 2 x 48 margin slices 140 MiB, so
-# 141 MiB forces slabs for both steps (measure: 2 slabs). Then measure's
-# refusals: a limit too small for one slab, an .h5 table (exit 2, nothing
-# written). ~10 s.
+# column too (contacts in two passes over slabs). The scan is the 128^3
+# synthetic one at 25 um (grains of radius 8 voxels) stacked on its mirror
+# image, 256 x 128 x 128: segment's estimate is 164 MiB in one piece (9
+# B/voxel with the split repair's grey + 128 MiB), a slab of 16 core and
+# 2 x 48 margin slices 144 MiB, measure's 156 MiB in one piece, so 147 MiB
+# forces slabs for both steps (a 128^3 scan cannot do both: a slab of 112
+# slices costs segment more than the whole scan costs measure). Then
+# measure's refusals: a limit too small for one slab, an .h5 table (exit 2,
+# nothing written). ~15 s.
 set -eu
 TG=$1
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 cd "$W"
 "$TG" synth --preset spheres --seed 3 -o s.h5 >/dev/null
-"$TG" analyse s.h5 -o whole --grain-diameter-um 400 >/dev/null
-"$TG" analyse s.h5 -o slabs --grain-diameter-um 400 --memory-limit 141MiB > slabs.log
-grep -q "^segmenting s.h5 .* slab by slab" slabs.log || { echo "FAIL: segment did not go by slabs"; cat slabs.log; exit 1; }
+/usr/bin/python3 - <<'PY'
+import h5py, numpy as np
+with h5py.File("s.h5", "r") as f, h5py.File("tall.h5", "w") as g:
+    v = f["volume"][()]
+    d = g.create_dataset("volume", data=np.concatenate([v, v[::-1]], axis=0))
+    for k, a in f["volume"].attrs.items():
+        d.attrs[k] = a
+    for k in ("voxel_size_m", "origin_m"):
+        g.attrs[k] = f.attrs[k]
+PY
+"$TG" analyse tall.h5 -o whole --grain-diameter-um 400 >/dev/null
+"$TG" analyse tall.h5 -o slabs --grain-diameter-um 400 --memory-limit 147MiB > slabs.log
+grep -q "^segmenting tall.h5 .* slab by slab" slabs.log || { echo "FAIL: segment did not go by slabs"; cat slabs.log; exit 1; }
 grep -q "^measuring .* slab by slab" slabs.log || { echo "FAIL: measure did not go by slabs"; cat slabs.log; exit 1; }
 # measure alone on the whole run's labels, its grey volumes from the scan, in slabs
-"$TG" measure whole/labels.h5 --grey s.h5 --memory-limit 135MiB -o m.csv > m.log
-grep -q "slab by slab" m.log || { echo "FAIL: measure 135MiB did not go by slabs"; cat m.log; exit 1; }
+"$TG" measure whole/labels.h5 --grey tall.h5 --memory-limit 140MiB -o m.csv > m.log
+grep -q "slab by slab" m.log || { echo "FAIL: measure 140MiB did not go by slabs"; cat m.log; exit 1; }
 /usr/bin/python3 - <<'PY'
 import csv, h5py, numpy as np
 with h5py.File("whole/labels.h5", "r") as f:

@@ -40,7 +40,7 @@ SegmentOptions chunk_options() {
 
 // The memory limit that gives slabs of `core` core slices (plan_chunks' rule).
 int64_t limit_for(const Shape& s, int64_t core, int64_t margin) {
-  return kSegmentFixedBytes + int64_t(kSegmentBytesPerVoxel * double(s.slice_voxels()) * double(core + 2 * margin)) + 1;
+  return kSegmentFixedBytes + int64_t(ChunkedOptions{}.bytes_per_voxel * double(s.slice_voxels()) * double(core + 2 * margin)) + 1;
 }
 
 struct ChunkRun {
@@ -162,7 +162,7 @@ TEST(SegmentChunked, FovScanBySlabs) {
 TEST(SegmentChunked, LimitTooSmallForOneSlab) {
   const Shape s{192, 64, 64};
   ChunkedOptions co;
-  co.memory_limit_bytes = limit_for(s, 16, 48) - 2 * int64_t(kSegmentBytesPerVoxel * double(s.slice_voxels()));
+  co.memory_limit_bytes = limit_for(s, 16, 48) - 2 * int64_t(ChunkedOptions{}.bytes_per_voxel * double(s.slice_voxels()));
   try {
     plan_chunks(s, 6.0, co);
     FAIL() << "no error";
@@ -170,10 +170,10 @@ TEST(SegmentChunked, LimitTooSmallForOneSlab) {
     EXPECT_NE(std::string(e.what()).find("--memory-limit"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("too small for one slab"), std::string::npos) << e.what();
   }
-  co.memory_limit_bytes += 2 * int64_t(kSegmentBytesPerVoxel * double(s.slice_voxels()));
+  co.memory_limit_bytes += 2 * int64_t(ChunkedOptions{}.bytes_per_voxel * double(s.slice_voxels()));
   EXPECT_EQ(plan_chunks(s, 6.0, co).core, 16);
   // Under the in-memory estimate: no slabs.
-  co.memory_limit_bytes = int64_t(kSegmentBytesPerVoxel * double(s.voxels())) + kSegmentFixedBytes;
+  co.memory_limit_bytes = int64_t(ChunkedOptions{}.bytes_per_voxel * double(s.voxels())) + kSegmentFixedBytes;
   EXPECT_TRUE(plan_chunks(s, 6.0, co).in_memory);
 }
 

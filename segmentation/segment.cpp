@@ -123,7 +123,8 @@ struct SlabRun {
 
 // grey (or nullptr) and split_depth > 0: the split repair runs on the labels.
 SegmentResult segment_graded(Volume<uint8_t> mask, const SegmentOptions& opt, bool graded, SlabRun* slab = nullptr,
-                             const Volume<uint16_t>* grey = nullptr, double split_depth = 0);
+                             const Volume<uint16_t>* grey = nullptr, double split_depth = 0,
+                             double split_floor = 0);
 
 // grey -> mask with the decisions d, then the chain. The core's solid count
 // (slab) or the field of view's goes to *nsolid_out.
@@ -157,7 +158,8 @@ SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* ow
   }
   *nsolid_out = nsolid;
   clock.lap("threshold");
-  return segment_graded(std::move(mask), opt, d.graded, slab, keep_grey ? &grey : nullptr, d.split_depth);
+  return segment_graded(std::move(mask), opt, d.graded, slab, keep_grey ? &grey : nullptr, d.split_depth,
+                        double(t.value));
 }
 
 
@@ -278,7 +280,7 @@ namespace {
 // The chain from a mask: 0/nonzero (graded = false), or graded 0 void,
 // 1 dim, 2 bright (the header's grey evidence).
 SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in, bool graded, SlabRun* slab,
-                             const Volume<uint16_t>* grey, double split_depth) {
+                             const Volume<uint16_t>* grey, double split_depth, double split_floor) {
   const SegmentOptions opt = opt_in.resolved();
   SegmentResult r;
   StageClock clock(r);
@@ -414,6 +416,7 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
     SplitOptions so;
     so.smoothing_sigma_vox = opt.split_smoothing_vox;
     so.depth = split_depth;
+    so.floor = split_floor;
     so.min_piece_fraction = opt.split_min_piece_fraction;
     uint32_t count = r.count;
     r.split = split_by_grey(lab, &count, *grey, so);

@@ -77,7 +77,6 @@ struct Scratch {
   std::vector<int64_t> start;           // counting sort
   std::vector<int32_t> parent, size;    // union-find over box-local voxels (-1: not yet flooded)
   std::vector<float> peak, val;         // per root: its brightest voxel; per voxel: its smoothed grey
-  std::vector<uint8_t> mine;            // 1: voxel of the label
 };
 
 int32_t find(std::vector<int32_t>& parent, int32_t x) {
@@ -157,8 +156,9 @@ Pieces split_one(const Volume<uint32_t>& labels, const Volume<uint16_t>& grey, u
   const int64_t pz = bz + 2, py = by + 2, px = bxn + 2, pn = pz * py * px;
   if (pn > int64_t(INT32_MAX)) throw std::logic_error("split_by_grey: box too large");
   const uint32_t* L = labels.data();
-  s.mine.assign(size_t(pn), 0);
-  s.val.assign(size_t(pn), 0.0f);
+  // Only `parent` needs a fill (-1: not the label's, or not flooded yet);
+  // the other per-voxel arrays are read only where the label's voxels set them.
+  s.val.resize(size_t(pn));
   s.raster.clear();
   const float* sm = s.sm.data();
   float hi = -1.0f, lo = 3.0e38f;
@@ -169,7 +169,6 @@ Pieces split_one(const Volume<uint32_t>& labels, const Volume<uint16_t>& grey, u
         if (row[i] == l) {
           const int32_t q = int32_t(((k + 1) * py + (j + 1)) * px + (i + 1));
           const float v = sm[(k * by + j) * bxn + i];
-          s.mine[size_t(q)] = 1;
           s.val[size_t(q)] = v;
           s.raster.push_back(q);
           hi = std::max(hi, v), lo = std::min(lo, v);
@@ -192,15 +191,20 @@ Pieces split_one(const Volume<uint32_t>& labels, const Volume<uint16_t>& grey, u
   for (size_t d = 0; d < 26; ++d) off[d] = (int64_t(seg::kSteps[d].dz) * py + seg::kSteps[d].dy) * px + seg::kSteps[d].dx;
   const int64_t vmin = std::max<int64_t>(opt.min_piece_vox, int64_t(std::ceil(opt.min_piece_fraction * double(bx.voxels))));
   s.parent.assign(size_t(pn), -1);
-  s.size.assign(size_t(pn), 0);
-  s.peak.assign(size_t(pn), 0.0f);
+  s.size.resize(size_t(pn));
+  s.peak.resize(size_t(pn));
   const float depth = float(opt.depth);
   bool separated = false;
   int32_t roots[26];
   float reach[26];  // per root: its brightest voxel among this voxel's neighbours
   int32_t* parent = s.parent.data();
+  const float floor_level = float(opt.floor);
   for (const int32_t q : s.order) {
     const float v = val[q];
+    // Below the floor with nothing kept apart yet: no split (a sheet darker
+    // than the threshold even smoothed is void in the mask, the watershed's
+    // business); the rim of every grain is not flooded for nothing.
+    if (v < floor_level && !separated) return out;
     int nr = 0;
     for (size_t d = 0; d < kConn; ++d) {
       const int32_t nq = int32_t(q + off[d]);
@@ -230,28 +234,26 @@ Pieces split_one(const Volume<uint32_t>& labels, const Volume<uint16_t>& grey, u
         if (best < 0 || reach[a] > reach[best] || (reach[a] == reach[best] && rt < roots[best])) best = a;
       }
     }
+    // Union by size (short finds); the root carries the larger peak.
+    auto unite = [&](int32_t x, int32_t y) {
+      if (s.size[size_t(x)] < s.size[size_t(y)] || (s.size[size_t(x)] == s.size[size_t(y)] && y < x)) std::swap(x, y);
+      s.parent[size_t(y)] = x;
+      s.size[size_t(x)] += s.size[size_t(y)];
+      s.peak[size_t(x)] = std::max(s.peak[size_t(x)], s.peak[size_t(y)]);
+      return x;
+    };
     int32_t into;
     if (nsig >= 2) {
       separated = true;
       into = roots[best];
       for (int a = 0; a < nr; ++a) {  // the lesser components go with the voxel; the significant ones stay apart
         const int32_t rt = roots[a];
-        if (rt == into || (s.size[size_t(rt)] >= vmin && s.peak[size_t(rt)] - v >= depth)) continue;
-        s.parent[size_t(rt)] = into;
-        s.size[size_t(into)] += s.size[size_t(rt)];
+        if (rt == roots[best] || (s.size[size_t(rt)] >= vmin && s.peak[size_t(rt)] - v >= depth)) continue;
+        into = unite(into, rt);
       }
     } else {
-      // One component: the one with the highest peak is the root.
       into = roots[0];
-      for (int a = 1; a < nr; ++a)
-        if (s.peak[size_t(roots[a])] > s.peak[size_t(into)] ||
-            (s.peak[size_t(roots[a])] == s.peak[size_t(into)] && roots[a] < into))
-          into = roots[a];
-      for (int a = 0; a < nr; ++a)
-        if (roots[a] != into) {
-          s.parent[size_t(roots[a])] = into;
-          s.size[size_t(into)] += s.size[size_t(roots[a])];
-        }
+      for (int a = 1; a < nr; ++a) into = unite(into, roots[a]);
     }
     s.parent[size_t(q)] = into;
     s.size[size_t(into)] += 1;
@@ -268,9 +270,8 @@ Pieces split_one(const Volume<uint32_t>& labels, const Volume<uint16_t>& grey, u
   std::vector<std::pair<int32_t, int32_t>> ordinal;  // (root, piece) for pieces 1..
   for (size_t p = 1; p < big.size(); ++p) ordinal.emplace_back(big[p].first, int32_t(p));
   std::sort(ordinal.begin(), ordinal.end());
-  for (int64_t q = 0; q < pn; ++q) {
-    if (!s.mine[size_t(q)]) continue;
-    const int32_t rt = find(s.parent, int32_t(q));
+  for (const int32_t q : s.raster) {
+    const int32_t rt = find(s.parent, q);
     const auto it = std::lower_bound(ordinal.begin(), ordinal.end(), std::make_pair(rt, int32_t(0)));
     if (it == ordinal.end() || it->first != rt) continue;
     const int64_t k = q / (py * px) - 1, j = (q / px) % py - 1, i = q % px - 1;

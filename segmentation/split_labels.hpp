@@ -68,6 +68,7 @@ namespace tg {
 struct SplitOptions {
   double smoothing_sigma_vox = 1.0;  // σ_s of the Gaussian, voxels
   double depth = 0;                  // grey levels a piece's peak must stand above the sheet between pieces
+  double floor = 0;                  // grey level: a label not split above it is left whole (the threshold)
   double min_piece_fraction = 0.01;  // of the label's voxels
   int64_t min_piece_vox = 27;        // and at least this many voxels (3^3)
   int64_t max_box_vox = int64_t(1) << 28;

@@ -87,124 +87,134 @@ int32_t find(std::vector<int32_t>& parent, int32_t x) {
   return x;
 }
 
-// The pieces of one label: returns the number of pieces (1: no split) and
-// fills `piece` (box-local voxel -> piece ordinal 0..n-1, 0 the largest)
-// for the label's voxels.
-struct Pieces {
-  std::vector<int64_t> voxel;  // global indices of the voxels that leave the label
-  std::vector<int32_t> piece;  // their piece ordinal, 1..n-1
-  int32_t count = 1;
-};
-
-Pieces split_one(const Volume<uint32_t>& labels, const Volume<uint16_t>& grey, uint32_t l, const LabelBox& bx,
-                 const std::vector<float>& w, const SplitOptions& opt, Scratch& s) {
-  Pieces out;
-  const Shape S = labels.shape();
+// The box's grey smoothed (step 1 of the header) at every stride-th voxel
+// along each axis, into s.sm (ceil(bz / stride) x ceil(by / stride) x
+// ceil(bx / stride)); the kernel reads a halo around the box, the volume's
+// faces repeated. Stride 2 costs ~40 % of stride 1 (the x pass still reads
+// every row of the halo).
+void smooth_box(Scratch& s, const Volume<uint16_t>& grey, const LabelBox& bx, const std::vector<float>& w,
+                int64_t stride) {
+  const Shape S = grey.shape();
   const int64_t r = int64_t(w.size() / 2);
   const int64_t bz = bx.z1 - bx.z0 + 1, by = bx.y1 - bx.y0 + 1, bxn = bx.x1 - bx.x0 + 1;
-  // Extended box (the halo the kernel reads), clamped to the volume; beyond
-  // the volume the face voxel is repeated.
+  const int64_t gz = (bz + stride - 1) / stride, gy = (by + stride - 1) / stride, gx = (bxn + stride - 1) / stride;
   const int64_t ez0 = std::max<int64_t>(0, bx.z0 - r), ez1 = std::min<int64_t>(S.nz - 1, bx.z1 + r);
   const int64_t ey0 = std::max<int64_t>(0, bx.y0 - r), ey1 = std::min<int64_t>(S.ny - 1, bx.y1 + r);
   const int64_t ez = ez1 - ez0 + 1, ey = ey1 - ey0 + 1;
   const uint16_t* G = grey.data();
-  // x pass: ez x ey x bxn
-  s.a.resize(size_t(ez * ey * bxn));
+  // x pass: ez x ey x gx
+  s.a.resize(size_t(ez * ey * gx));
   s.line.resize(size_t(bxn + 2 * r));
   for (int64_t k = 0; k < ez; ++k)
     for (int64_t j = 0; j < ey; ++j) {
       const uint16_t* row = G + ((ez0 + k) * S.ny + (ey0 + j)) * S.nx;
       float* line = s.line.data();  // the row's span with its halo, faces repeated
       for (int64_t i = 0; i < bxn + 2 * r; ++i) line[i] = float(row[clampi(bx.x0 - r + i, 0, S.nx - 1)]);
-      float* o = s.a.data() + (k * ey + j) * bxn;
-      std::fill(o, o + bxn, 0.0f);
+      float* o = s.a.data() + (k * ey + j) * gx;
+      std::fill(o, o + gx, 0.0f);
       for (int64_t t = 0; t <= 2 * r; ++t) {
         const float wt = w[size_t(t)];
-        for (int64_t i = 0; i < bxn; ++i) o[i] += wt * line[i + t];
+        for (int64_t i = 0; i < gx; ++i) o[i] += wt * line[i * stride + t];
       }
     }
-  // y pass: ez x by x bxn
-  s.b.resize(size_t(ez * by * bxn));
+  // y pass: ez x gy x gx
+  s.b.resize(size_t(ez * gy * gx));
   for (int64_t k = 0; k < ez; ++k)
-    for (int64_t j = 0; j < by; ++j) {
-      float* o = s.b.data() + (k * by + j) * bxn;
-      std::fill(o, o + bxn, 0.0f);
+    for (int64_t j = 0; j < gy; ++j) {
+      float* o = s.b.data() + (k * gy + j) * gx;
+      std::fill(o, o + gx, 0.0f);
       for (int64_t t = -r; t <= r; ++t) {
-        const int64_t jj = clampi(bx.y0 + j + t, 0, S.ny - 1) - ey0;
-        const float* in = s.a.data() + (k * ey + jj) * bxn;
+        const int64_t jj = clampi(bx.y0 + j * stride + t, 0, S.ny - 1) - ey0;
+        const float* in = s.a.data() + (k * ey + jj) * gx;
         const float wt = w[size_t(t + r)];
-        for (int64_t i = 0; i < bxn; ++i) o[i] += wt * in[i];
+        for (int64_t i = 0; i < gx; ++i) o[i] += wt * in[i];
       }
     }
-  // z pass: bz x by x bxn
-  const int64_t n = bz * by * bxn;
-  s.sm.resize(size_t(n));
-  for (int64_t k = 0; k < bz; ++k) {
-    float* o = s.sm.data() + k * by * bxn;
-    std::fill(o, o + by * bxn, 0.0f);
+  // z pass: gz x gy x gx
+  s.sm.resize(size_t(gz * gy * gx));
+  for (int64_t k = 0; k < gz; ++k) {
+    float* o = s.sm.data() + k * gy * gx;
+    std::fill(o, o + gy * gx, 0.0f);
     for (int64_t t = -r; t <= r; ++t) {
-      const int64_t kk = clampi(bx.z0 + k + t, 0, S.nz - 1) - ez0;
-      const float* in = s.b.data() + kk * by * bxn;
+      const int64_t kk = clampi(bx.z0 + k * stride + t, 0, S.nz - 1) - ez0;
+      const float* in = s.b.data() + kk * gy * gx;
       const float wt = w[size_t(t + r)];
-      for (int64_t q = 0; q < by * bxn; ++q) o[q] += wt * in[q];
+      for (int64_t q = 0; q < gy * gx; ++q) o[q] += wt * in[q];
     }
   }
+}
 
-  // The label's voxels, brightest first (ties: box order). The flood runs
-  // on the box padded by one voxel (never the label's), so that the 26
-  // neighbours need no bounds test; its values live in `val`.
-  const int64_t pz = bz + 2, py = by + 2, px = bxn + 2, pn = pz * py * px;
+// The flood of step 2 (header) over the label's voxels at a stride (1:
+// all; 2: every second along each axis) of its box, on the box padded by
+// one voxel (never the label's), so that the neighbours need no bounds
+// test. Returns whether significant components were kept apart; with
+// screen, at the first such event. Leaves the union-find in s.parent for
+// the pieces (stride 1).
+bool flood_box(Scratch& s, const uint32_t* L, uint32_t l, const Shape& S, const LabelBox& bx, int64_t bz, int64_t by,
+               int64_t bxn, int64_t stride, int64_t vmin, float depth, float floor_level, bool screen) {
+  const int64_t gz = (bz + stride - 1) / stride, gy = (by + stride - 1) / stride, gx = (bxn + stride - 1) / stride;
+  const float* sm = s.sm.data();  // smooth_box at this stride
+  const int64_t py = gy + 2, px = gx + 2, pn = (gz + 2) * py * px;
   if (pn > int64_t(INT32_MAX)) throw std::logic_error("split_by_grey: box too large");
-  const uint32_t* L = labels.data();
   // Only `parent` needs a fill (-1: not the label's, or not flooded yet);
   // the other per-voxel arrays are read only where the label's voxels set them.
   s.val.resize(size_t(pn));
   s.raster.clear();
-  const float* sm = s.sm.data();
   float hi = -1.0f, lo = 3.0e38f;
-  for (int64_t k = 0; k < bz; ++k)
-    for (int64_t j = 0; j < by; ++j) {
+  for (int64_t k = 0; k < bz; k += stride)
+    for (int64_t j = 0; j < by; j += stride) {
       const uint32_t* row = L + ((bx.z0 + k) * S.ny + (bx.y0 + j)) * S.nx + bx.x0;
-      for (int64_t i = 0; i < bxn; ++i)
+      for (int64_t i = 0; i < bxn; i += stride)
         if (row[i] == l) {
-          const int32_t q = int32_t(((k + 1) * py + (j + 1)) * px + (i + 1));
-          const float v = sm[(k * by + j) * bxn + i];
+          const int32_t q = int32_t(((k / stride + 1) * py + (j / stride + 1)) * px + (i / stride + 1));
+          const float v = sm[((k / stride) * gy + j / stride) * gx + i / stride];
           s.val[size_t(q)] = v;
           s.raster.push_back(q);
           hi = std::max(hi, v), lo = std::min(lo, v);
         }
     }
-  // Brightest first, by a stable counting sort into kBins levels between
-  // the label's extremes (a level is ~1/4096 of its grey range, a few grey
-  // levels, far below any depth that matters); within a level, box order.
+  // Brightest first, by a stable counting sort into levels between the
+  // label's extremes (at most 4096: a few grey levels each, far below any
+  // depth that matters); within a level, box order.
   const float* val = s.val.data();
   {
-    const double width = std::max(double(hi - lo), 1e-6) / double(kBins - 1);
-    auto bin = [&](float v) { return size_t(std::min<double>(kBins - 1, std::floor(double(hi - v) / width))); };
-    s.start.assign(kBins + 1, 0);
+    // As many levels as voxels, 256 to kBins: the fill of the counts costs
+    // no more than the voxels themselves.
+    const size_t bins = std::clamp<size_t>(s.raster.size(), 256, kBins);
+    const float width = std::max(hi - lo, 1e-6f) / float(bins - 1);
+    auto bin = [&](float v) { return std::min<size_t>(bins - 1, size_t((hi - v) / width)); };
+    s.start.assign(bins + 1, 0);
     for (const int32_t q : s.raster) ++s.start[bin(val[q]) + 1];
-    for (size_t b = 0; b < kBins; ++b) s.start[b + 1] += s.start[b];
+    for (size_t b = 0; b < bins; ++b) s.start[b + 1] += s.start[b];
     s.order.resize(s.raster.size());
     for (const int32_t q : s.raster) s.order[size_t(s.start[bin(val[q])]++)] = q;
   }
-  std::array<int64_t, 26> off;
-  for (size_t d = 0; d < 26; ++d) off[d] = (int64_t(seg::kSteps[d].dz) * py + seg::kSteps[d].dy) * px + seg::kSteps[d].dx;
-  const int64_t vmin = std::max<int64_t>(opt.min_piece_vox, int64_t(std::ceil(opt.min_piece_fraction * double(bx.voxels))));
+  std::array<int64_t, kConn> off;
+  for (size_t d = 0; d < kConn; ++d) off[d] = (int64_t(seg::kSteps[d].dz) * py + seg::kSteps[d].dy) * px + seg::kSteps[d].dx;
   s.parent.assign(size_t(pn), -1);
   s.size.resize(size_t(pn));
   s.peak.resize(size_t(pn));
-  const float depth = float(opt.depth);
   bool separated = false;
-  int32_t roots[26];
-  float reach[26];  // per root: its brightest voxel among this voxel's neighbours
+  int32_t roots[kConn];
+  float reach[kConn];  // per root: its brightest voxel among this voxel's neighbours
   int32_t* parent = s.parent.data();
-  const float floor_level = float(opt.floor);
+  int32_t* size = s.size.data();
+  float* peak = s.peak.data();
+  auto significant = [&](int32_t rt, float v) { return size[rt] >= vmin && peak[rt] - v >= depth; };
+  // Union by size (short finds); the root carries the larger peak.
+  auto unite = [&](int32_t x, int32_t y) {
+    if (size[x] < size[y] || (size[x] == size[y] && y < x)) std::swap(x, y);
+    parent[y] = x;
+    size[x] += size[y];
+    peak[x] = std::max(peak[x], peak[y]);
+    return x;
+  };
   for (const int32_t q : s.order) {
     const float v = val[q];
     // Below the floor with nothing kept apart yet: no split (a sheet darker
     // than the threshold even smoothed is void in the mask, the watershed's
     // business); the rim of every grain is not flooded for nothing.
-    if (v < floor_level && !separated) return out;
+    if (v < floor_level && !separated) return false;
     int nr = 0;
     for (size_t d = 0; d < kConn; ++d) {
       const int32_t nq = int32_t(q + off[d]);
@@ -218,47 +228,64 @@ Pieces split_one(const Volume<uint32_t>& labels, const Volume<uint16_t>& grey, u
         reach[a] = std::max(reach[a], val[nq]);
       }
     }
-    s.parent[size_t(q)] = q;
-    s.size[size_t(q)] = 1;
-    s.peak[size_t(q)] = v;
+    parent[q] = q;
+    size[q] = 1;
+    peak[q] = v;
     if (nr == 0) continue;
     // The significant components this voxel touches; it goes to the one
     // of its brightest neighbour (steepest ascent, as a flood reaches it;
     // the highest peak instead let a large grain creep round the rim of a
     // chip beside it, voxel by voxel).
     int nsig = 0, best = -1;
-    for (int a = 0; a < nr; ++a) {
-      const int32_t rt = roots[a];
-      if (s.size[size_t(rt)] >= vmin && s.peak[size_t(rt)] - v >= depth) {
+    for (int a = 0; a < nr; ++a)
+      if (significant(roots[a], v)) {
         ++nsig;
-        if (best < 0 || reach[a] > reach[best] || (reach[a] == reach[best] && rt < roots[best])) best = a;
+        if (best < 0 || reach[a] > reach[best] || (reach[a] == reach[best] && roots[a] < roots[best])) best = a;
       }
-    }
-    // Union by size (short finds); the root carries the larger peak.
-    auto unite = [&](int32_t x, int32_t y) {
-      if (s.size[size_t(x)] < s.size[size_t(y)] || (s.size[size_t(x)] == s.size[size_t(y)] && y < x)) std::swap(x, y);
-      s.parent[size_t(y)] = x;
-      s.size[size_t(x)] += s.size[size_t(y)];
-      s.peak[size_t(x)] = std::max(s.peak[size_t(x)], s.peak[size_t(y)]);
-      return x;
-    };
     int32_t into;
     if (nsig >= 2) {
+      if (screen) return true;
       separated = true;
       into = roots[best];
-      for (int a = 0; a < nr; ++a) {  // the lesser components go with the voxel; the significant ones stay apart
-        const int32_t rt = roots[a];
-        if (rt == roots[best] || (s.size[size_t(rt)] >= vmin && s.peak[size_t(rt)] - v >= depth)) continue;
-        into = unite(into, rt);
-      }
+      for (int a = 0; a < nr; ++a)  // the lesser components go with the voxel; the significant ones stay apart
+        if (a != best && !significant(roots[a], v)) into = unite(into, roots[a]);
     } else {
       into = roots[0];
       for (int a = 1; a < nr; ++a) into = unite(into, roots[a]);
     }
-    s.parent[size_t(q)] = into;
-    s.size[size_t(into)] += 1;
+    parent[q] = into;
+    size[into] += 1;
   }
-  if (!separated) return out;
+  return separated;
+}
+
+// The pieces of one label: returns the number of pieces (1: no split) and
+// fills `piece` (box-local voxel -> piece ordinal 0..n-1, 0 the largest)
+// for the label's voxels.
+struct Pieces {
+  std::vector<int64_t> voxel;  // global indices of the voxels that leave the label
+  std::vector<int32_t> piece;  // their piece ordinal, 1..n-1
+  int32_t count = 1;
+};
+
+Pieces split_one(const Volume<uint32_t>& labels, const Volume<uint16_t>& grey, uint32_t l, const LabelBox& bx,
+                 const std::vector<float>& w, const SplitOptions& opt, Scratch& s) {
+  Pieces out;
+  const Shape S = labels.shape();
+  const int64_t bz = bx.z1 - bx.z0 + 1, by = bx.y1 - bx.y0 + 1, bxn = bx.x1 - bx.x0 + 1;
+  const uint32_t* L = labels.data();
+  const int64_t vmin = std::max<int64_t>(opt.min_piece_vox, int64_t(std::ceil(opt.min_piece_fraction * double(bx.voxels))));
+  // Screen: the same flood on every second voxel along each axis (1/8 of
+  // the work), with half the depth and an eighth of the piece. Most labels
+  // are whole and stop here; a label the full flood would split has shown
+  // a split here on every scene measured (bench/segmentation/RESULTS.md).
+  smooth_box(s, grey, bx, w, 2);
+  if (!flood_box(s, L, l, S, bx, bz, by, bxn, 2, std::max<int64_t>(4, vmin / 8), 0.5f * float(opt.depth),
+                 float(opt.floor), true))
+    return out;
+  smooth_box(s, grey, bx, w, 1);
+  if (!flood_box(s, L, l, S, bx, bz, by, bxn, 1, vmin, float(opt.depth), float(opt.floor), false)) return out;
+  const int64_t py = by + 2, px = bxn + 2;
 
   // Pieces: the final components of at least vmin voxels; the largest keeps
   // the label (ties: the first in box order), smaller leftovers too.

@@ -280,7 +280,7 @@ static tg::app::Registrar reg{{"segment", 30,
     "  uneven brightness (cupping, drift along z): --threshold local, Tsai per block of\n"
     "    --local-window-vox voxels (default 4 R), interpolated between block centres.\n\n"
     "Scans larger than memory: with --memory-limit, a uint16 HDF5 scan whose segmentation needs\n"
-    "more than the limit (~9 B/voxel + 128 MiB) is segmented slab by slab along z: one pass for\n"
+    "more than the limit (~8 B/voxel + 128 MiB) is segmented slab by slab along z: one pass for\n"
     "the field of view, histogram and threshold, then slabs of core slices (a multiple of 16),\n"
     "each read with 5 R + 4 slices of margin below and above (--slab-margin-vox), written into\n"
     "the labels file slab by slab. The labels are the same, voxel for voxel and number for\n"
@@ -375,7 +375,7 @@ static tg::app::Registrar reg{{"segment", 30,
       ->capture_default_str();
   sub->add_option("--memory-limit", o->memory_limit,
                   "Memory to stay under, e.g. 16GiB, 512MiB, 2G or a byte count. A scan whose segmentation needs more "
-                  "(~9 B/voxel) is segmented slab by slab from its HDF5 file, with the same labels")
+                  "(~8 B/voxel) is segmented slab by slab from its HDF5 file, with the same labels")
       ->type_name("SIZE");
   sub->add_option("--slab-margin-vox", o->slab_margin_vox,
                   "Slices read below and above each slab's core (default 5 R + 4, rounded up to 16)")

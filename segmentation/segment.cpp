@@ -95,6 +95,7 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist, cons
     d.smoothed_sigma = sm.sigma;
     d.split_depth = std::max(o.split_depth_sigmas * sm.sigma,
                              o.split_min_depth_contrast * std::max(0.0, raw.mode - double(d.t.value)));
+    d.split_code = GreyCode::from_histogram(hist);
   }
 }
 
@@ -121,9 +122,10 @@ struct SlabRun {
   SlabOutcome* out = nullptr;
 };
 
-// grey (or nullptr) and split_depth > 0: the split repair runs on the labels.
+// grey_code (or nullptr) and split_depth > 0: the split repair runs on the
+// labels; depth and floor in the code's units.
 SegmentResult segment_graded(Volume<uint8_t> mask, const SegmentOptions& opt, bool graded, SlabRun* slab = nullptr,
-                             const Volume<uint16_t>* grey = nullptr, double split_depth = 0,
+                             const Volume<uint8_t>* grey_code = nullptr, double split_depth = 0,
                              double split_floor = 0);
 
 // grey -> mask with the decisions d, then the chain. The core's solid count
@@ -132,10 +134,12 @@ SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* ow
                               const SegmentOptions& opt, SlabRun* slab, int64_t* nsolid_out, StageClock& clock) {
   const ThresholdResult& t = d.t;
   const Shape shape = grey.shape();
-  // An owned scan becomes the mask in its own storage, unless the split
-  // repair needs the grey after the watershed (2 B/voxel more at peak).
-  const bool keep_grey = d.split_depth > 0 && t.method != ThresholdMethod::local;
-  if (keep_grey) owned = nullptr;
+  // The split repair reads the grey after the watershed: a one-byte code of
+  // it (split_labels.hpp GreyCode) stays, 1 B/voxel more at peak. An owned
+  // scan becomes the mask in its own storage.
+  const bool split = d.split_depth > 0 && t.method != ThresholdMethod::local;
+  Volume<uint8_t> code;
+  if (split) code = quantise_grey(grey, d.split_code);
   Volume<uint8_t> mask;
   if (t.method == ThresholdMethod::local) {
     mask = owned ? binarise_local(std::move(*owned), d.local, d.fov) : binarise_local(grey, d.local, d.fov);
@@ -158,8 +162,8 @@ SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* ow
   }
   *nsolid_out = nsolid;
   clock.lap("threshold");
-  return segment_graded(std::move(mask), opt, d.graded, slab, keep_grey ? &grey : nullptr, d.split_depth,
-                        double(t.value));
+  return segment_graded(std::move(mask), opt, d.graded, slab, split ? &code : nullptr,
+                        d.split_depth / d.split_code.step, (double(t.value) - d.split_code.lo) / d.split_code.step);
 }
 
 
@@ -189,6 +193,8 @@ void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& o
   r.bright_value = d.bright;
   r.solid_noise_sigma = d.noise_sigma;
   r.smoothed_noise_sigma = d.smoothed_sigma;
+  r.split_depth = r.split_used ? d.split_depth : 0.0;
+  r.split_code = d.split_code;
   if (opt.split && !r.split_used)
     r.notes.push_back(t.method == ThresholdMethod::local
                           ? "split repair off: it needs one global threshold (not --threshold local)"
@@ -280,7 +286,7 @@ namespace {
 // The chain from a mask: 0/nonzero (graded = false), or graded 0 void,
 // 1 dim, 2 bright (the header's grey evidence).
 SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in, bool graded, SlabRun* slab,
-                             const Volume<uint16_t>* grey, double split_depth, double split_floor) {
+                             const Volume<uint8_t>* grey_code, double split_depth, double split_floor) {
   const SegmentOptions opt = opt_in.resolved();
   SegmentResult r;
   StageClock clock(r);
@@ -408,18 +414,17 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   r.count = rl.count;
   r.dropped = rl.dropped;
   clock.lap("relabel");
-  if (grey && split_depth > 0) {
+  if (grey_code && split_depth > 0) {
     // Split repair (split_labels.hpp), then raster order again (a chunked
     // run numbers particles by their first voxel).
     r.split_used = true;
-    r.split_depth = split_depth;
     SplitOptions so;
     so.smoothing_sigma_vox = opt.split_smoothing_vox;
     so.depth = split_depth;
     so.floor = split_floor;
     so.min_piece_fraction = opt.split_min_piece_fraction;
     uint32_t count = r.count;
-    r.split = split_by_grey(lab, &count, *grey, so);
+    r.split = split_by_grey(lab, &count, *grey_code, so);
     if (r.split.pieces_added > 0) {
       rl = relabel_consecutive(lab, opt.min_size_vox);
       r.count = rl.count;
@@ -522,6 +527,8 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                 {"depth_sigmas", o.split_depth_sigmas},
                 {"min_depth_contrast", o.split_min_depth_contrast},
                 {"depth", r.split_depth},
+                {"grey_code", {{"lo", r.split_code.lo}, {"step", r.split_code.step},
+                               {"rule", "the repair reads grey lo + c step, c = round((grey - lo) / step) in 0..255"}}},
                 {"min_piece_fraction", o.split_min_piece_fraction},
                 {"rule", "a label is split where its smoothed grey holds pieces of >= max(min_piece_fraction x its "
                          "voxels, 27) voxels whose peaks stand >= depth grey levels above the sheet between them"},

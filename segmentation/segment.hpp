@@ -16,13 +16,12 @@
 // and its reference there; this file only chains them and records what was
 // chosen, how long each stage took and the peak memory.
 //
-// Memory (why the stages are ordered and buffers reused this way): without
-// the split repair (--no-split, or a plain mask) the grey volume (2 B/voxel)
-// is needed only for the histograms and the mask, and the rvalue overload
-// writes the u8 mask over the grey volume's own storage. The split repair
-// reads the grey after the watershed, so with it (the default) the grey
-// stays and the mask is a volume of its own: 2 B/voxel more at peak
-// (8 B/voxel beside the markers; segment_bytes_per_voxel plans slabs for it).
+// Memory (why the stages are ordered and buffers reused this way): the grey
+// volume (2 B/voxel) is needed only for the histograms, the mask and a
+// one-byte code of it that the split repair reads after the watershed
+// (split_labels.hpp GreyCode; not made with --no-split, --threshold local
+// or a plain mask); the rvalue overload writes the u8 mask over the grey
+// volume's own storage.
 // The pore filter works on runs of void voxels (no label volume). Then the
 // float distance map (4 B) is made; the mask goes (the map is 0 exactly
 // on the void); the map becomes 16-bit fixed point over its own storage
@@ -30,7 +29,7 @@
 // back), the u32 markers (4 B) come; the flood levels (u8) are written over
 // the fixed-point map's storage; the watershed labels and the merge are in
 // place in the markers' volume. At most 6 B/voxel at peak (markers beside
-// the fixed-point map; 8 with the grey kept), plus the frontier queue (4 B per queued voxel, a
+// the fixed-point map; 7 with the split repair's grey code), plus the frontier queue (4 B per queued voxel, a
 // small fraction of the volume) and the process itself. Measured (peak RSS
 // of the whole `tomograin segment` process): 7.4 B/voxel at 256^3 (the
 // process is ~1 B/voxel at that size), 6.03 B/voxel on a 1220^3 zeolite
@@ -185,6 +184,7 @@ struct SegmentResult {
   bool split_used = false;        // the split repair ran (a grey scan, a global threshold, split on)
   double smoothed_noise_sigma = 0;// the smoothed solid's noise sigma, grey levels (split_labels.hpp)
   double split_depth = 0;         // grey levels
+  GreyCode split_code;
   SplitResult split;
   uint32_t count = 0;       // final labels
   int64_t dropped = 0;      // labels removed by min_size_vox
@@ -221,6 +221,7 @@ struct GreyDecisions {
   // histogram, smoothed_sample_histogram) and the depth it sets; 0: off.
   double smoothed_sigma = 0;
   double split_depth = 0;
+  GreyCode split_code;  // the one-byte grey it reads (0.1th..99.9th percentile of the histogram)
 };
 
 // From the field of view (FovScan or given_field_of_view) and the 65536-bin

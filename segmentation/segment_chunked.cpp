@@ -248,7 +248,6 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
   r.count = running;
   r.dropped = dropped;
   r.split_used = split_used;
-  r.split_depth = d.split_depth;
   r.stage_seconds = std::move(stage_sum);
   r.stage_seconds.insert(r.stage_seconds.begin(), {"pass1", cr.pass1_seconds});
   record_decisions(r, std::move(d), opt, shape);

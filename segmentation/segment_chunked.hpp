@@ -51,8 +51,9 @@
 // slabs, a memory limit too small for one slab of 16 core slices and its
 // margins. ThresholdMethod::local is refused (its blocks need the volume).
 //
-// Memory: one slab at a time, ~9 B/voxel of the slab at peak (segment.hpp:
-// 8 B/voxel + frontier), plus 4 B per particle for the numbering.
+// Memory: one slab at a time, ~8 B/voxel of the slab at peak (segment.hpp:
+// 7 B/voxel with the split repair's grey code, + frontier), plus 4 B per
+// particle for the numbering.
 // Cost: pass 2 repeats the margins' work, (core + 2 M) / core of segment()'s
 // time, plus one (two with a field of view) read of the scan in pass 1.
 #pragma once
@@ -69,12 +70,12 @@ namespace tg {
 
 // Bytes per voxel of segment()'s peak, process included (6.03 measured at
 // 1220^3 with the fixed-point distance map, segment.hpp; 1 more for the
-// frontier and the allocator's slack), 2 more when the split repair keeps
-// the grey for after the watershed, and the process's own bytes: the
+// frontier and the allocator's slack), 1 more when the split repair keeps
+// its grey code for after the watershed, and the process's own bytes: the
 // estimate behind the choice between segment() and the slabs, and the
 // slabs' thickness.
 inline constexpr double kSegmentBytesPerVoxel = 7.0;
-inline constexpr double kSplitGreyBytesPerVoxel = 2.0;
+inline constexpr double kSplitGreyBytesPerVoxel = 1.0;
 inline constexpr int64_t kSegmentFixedBytes = int64_t(128) << 20;
 
 // The estimate for these options (the grey kept or not).

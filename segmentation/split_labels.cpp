@@ -92,8 +92,8 @@ int32_t find(std::vector<int32_t>& parent, int32_t x) {
 // ceil(bx / stride)); the kernel reads a halo around the box, the volume's
 // faces repeated. Stride 2 costs ~40 % of stride 1 (the x pass still reads
 // every row of the halo).
-void smooth_box(Scratch& s, const Volume<uint16_t>& grey, const LabelBox& bx, const std::vector<float>& w,
-                int64_t stride) {
+template <class T>
+void smooth_box(Scratch& s, const Volume<T>& grey, const LabelBox& bx, const std::vector<float>& w, int64_t stride) {
   const Shape S = grey.shape();
   const int64_t r = int64_t(w.size() / 2);
   const int64_t bz = bx.z1 - bx.z0 + 1, by = bx.y1 - bx.y0 + 1, bxn = bx.x1 - bx.x0 + 1;
@@ -101,13 +101,13 @@ void smooth_box(Scratch& s, const Volume<uint16_t>& grey, const LabelBox& bx, co
   const int64_t ez0 = std::max<int64_t>(0, bx.z0 - r), ez1 = std::min<int64_t>(S.nz - 1, bx.z1 + r);
   const int64_t ey0 = std::max<int64_t>(0, bx.y0 - r), ey1 = std::min<int64_t>(S.ny - 1, bx.y1 + r);
   const int64_t ez = ez1 - ez0 + 1, ey = ey1 - ey0 + 1;
-  const uint16_t* G = grey.data();
+  const T* G = grey.data();
   // x pass: ez x ey x gx
   s.a.resize(size_t(ez * ey * gx));
   s.line.resize(size_t(bxn + 2 * r));
   for (int64_t k = 0; k < ez; ++k)
     for (int64_t j = 0; j < ey; ++j) {
-      const uint16_t* row = G + ((ez0 + k) * S.ny + (ey0 + j)) * S.nx;
+      const T* row = G + ((ez0 + k) * S.ny + (ey0 + j)) * S.nx;
       float* line = s.line.data();  // the row's span with its halo, faces repeated
       for (int64_t i = 0; i < bxn + 2 * r; ++i) line[i] = float(row[clampi(bx.x0 - r + i, 0, S.nx - 1)]);
       float* o = s.a.data() + (k * ey + j) * gx;
@@ -268,7 +268,8 @@ struct Pieces {
   int32_t count = 1;
 };
 
-Pieces split_one(const Volume<uint32_t>& labels, const Volume<uint16_t>& grey, uint32_t l, const LabelBox& bx,
+template <class T>
+Pieces split_one(const Volume<uint32_t>& labels, const Volume<T>& grey, uint32_t l, const LabelBox& bx,
                  const std::vector<float>& w, const SplitOptions& opt, Scratch& s) {
   Pieces out;
   const Shape S = labels.shape();
@@ -309,10 +310,8 @@ Pieces split_one(const Volume<uint32_t>& labels, const Volume<uint16_t>& grey, u
   return out;
 }
 
-}  // namespace
-
-SplitResult split_by_grey(Volume<uint32_t>& labels, uint32_t* count, const Volume<uint16_t>& grey,
-                          const SplitOptions& opt) {
+template <class T>
+SplitResult split_impl(Volume<uint32_t>& labels, uint32_t* count, const Volume<T>& grey, const SplitOptions& opt) {
   if (!(labels.shape() == grey.shape())) throw std::logic_error("split_by_grey: labels and grey differ in shape");
   SplitResult res;
   const std::vector<float> w = gaussian_kernel(opt.smoothing_sigma_vox);
@@ -356,6 +355,43 @@ SplitResult split_by_grey(Volume<uint32_t>& labels, uint32_t* count, const Volum
   }
   *count = next;
   return res;
+}
+
+}  // namespace
+
+SplitResult split_by_grey(Volume<uint32_t>& labels, uint32_t* count, const Volume<uint16_t>& grey,
+                          const SplitOptions& opt) {
+  return split_impl(labels, count, grey, opt);
+}
+SplitResult split_by_grey(Volume<uint32_t>& labels, uint32_t* count, const Volume<uint8_t>& grey,
+                          const SplitOptions& opt) {
+  return split_impl(labels, count, grey, opt);
+}
+
+GreyCode GreyCode::from_histogram(const std::vector<int64_t>& hist) {
+  int64_t n = 0;
+  for (const int64_t c : hist) n += c;
+  GreyCode g;
+  if (n == 0) return g;
+  size_t lo = 0, hi = hist.size() - 1;
+  for (int64_t c = 0; lo < hist.size(); ++lo)
+    if ((c += hist[lo]) > n / 1000) break;
+  for (int64_t c = 0; hi > 0; --hi)
+    if ((c += hist[hi]) > n / 1000) break;
+  g.lo = double(std::min(lo, hi));
+  g.step = std::max(1.0, (double(hi) - g.lo) / 255.0);
+  return g;
+}
+
+Volume<uint8_t> quantise_grey(const Volume<uint16_t>& grey, const GreyCode& code) {
+  Volume<uint8_t> out(grey.shape(), grey.geometry());
+  const uint16_t* g = grey.data();
+  uint8_t* o = out.data();
+  const float lo = float(code.lo), inv = float(1.0 / code.step);
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < grey.size(); ++i)
+    o[i] = uint8_t(std::clamp(std::lround((float(g[i]) - lo) * inv), 0L, 255L));
+  return out;
 }
 
 void smoothed_sample_histogram(const Volume<uint16_t>& slab, int64_t z0, int64_t nz_scan, const FieldOfView& fov,

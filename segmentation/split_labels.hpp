@@ -83,9 +83,24 @@ struct SplitResult {
 
 // labels: 1..count (0 void); new pieces get count+1.. in the order of the
 // labels they come from (renumber afterwards for raster order). grey: the
-// scan the labels came from, same shape. *count is updated.
+// scan the labels came from, same shape, as read (uint16) or as a GreyCode
+// (uint8; depth and floor then in code units). *count is updated.
 SplitResult split_by_grey(Volume<uint32_t>& labels, uint32_t* count, const Volume<uint16_t>& grey,
                           const SplitOptions& opt);
+SplitResult split_by_grey(Volume<uint32_t>& labels, uint32_t* count, const Volume<uint8_t>& grey,
+                          const SplitOptions& opt);
+
+// The grey the split repair keeps beside the markers, one byte a voxel:
+// code c stands for grey lo + c step (rounded, clipped to 0..255). segment()
+// takes lo and hi (step = (hi - lo) / 255) as the 0.1th and 99.9th
+// percentiles of the scan's histogram: a step is ~0.5 % of the contrast,
+// its rounding noise (step / sqrt(12)) a few % of the smoothed noise the
+// depth is measured in. 1 B/voxel instead of the scan's 2 at the peak.
+struct GreyCode {
+  double lo = 0, step = 1;
+  static GreyCode from_histogram(const std::vector<int64_t>& hist);  // 0.1th..99.9th percentile
+};
+Volume<uint8_t> quantise_grey(const Volume<uint16_t>& grey, const GreyCode& code);
 
 // The smoothed grey's noise: adds to `hist` (65536 bins) the smoothed grey
 // (the same Gaussian as split_by_grey) of the sample slices z = 8 (mod 16)

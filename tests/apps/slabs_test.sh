@@ -5,9 +5,9 @@
 # whole-volume run: every voxel and every cell equal, the coordination
 # column too (contacts in two passes over slabs). The scan is the 128^3
 # synthetic one at 25 um (grains of radius 8 voxels) stacked on its mirror
-# image, 256 x 128 x 128: segment's estimate is 164 MiB in one piece (9
-# B/voxel with the split repair's grey + 128 MiB), a slab of 16 core and
-# 2 x 48 margin slices 144 MiB, measure's 156 MiB in one piece, so 147 MiB
+# image, 256 x 128 x 128: segment's estimate is 160 MiB in one piece (8
+# B/voxel with the split repair's grey code + 128 MiB), a slab of 16 core and
+# 2 x 48 margin slices 142 MiB, measure's 156 MiB in one piece, so 147 MiB
 # forces slabs for both steps (a 128^3 scan cannot do both: a slab of 112
 # slices costs segment more than the whole scan costs measure). Then
 # measure's refusals: a limit too small for one slab, an .h5 table (exit 2,

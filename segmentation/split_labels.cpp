@@ -385,12 +385,13 @@ GreyCode GreyCode::from_histogram(const std::vector<int64_t>& hist) {
 
 Volume<uint8_t> quantise_grey(const Volume<uint16_t>& grey, const GreyCode& code) {
   Volume<uint8_t> out(grey.shape(), grey.geometry());
+  std::vector<uint8_t> lut(65536);  // one rounding per grey level, not per voxel
+  for (size_t g = 0; g < lut.size(); ++g)
+    lut[g] = uint8_t(std::clamp(std::lround((double(g) - code.lo) / code.step), 0L, 255L));
   const uint16_t* g = grey.data();
   uint8_t* o = out.data();
-  const float lo = float(code.lo), inv = float(1.0 / code.step);
 #pragma omp parallel for schedule(static)
-  for (int64_t i = 0; i < grey.size(); ++i)
-    o[i] = uint8_t(std::clamp(std::lround((float(g[i]) - lo) * inv), 0L, 255L));
+  for (int64_t i = 0; i < grey.size(); ++i) o[i] = lut[g[i]];
   return out;
 }
 

@@ -9,6 +9,7 @@
 
 #include "data_synth/imaging.hpp"
 #include "fixtures.hpp"
+#include "scan_scenes.hpp"
 #include "segmentation/distance_transform.hpp"
 #include "segmentation/merge_labels.hpp"
 #include "segmentation/pore_filter.hpp"
@@ -168,34 +169,10 @@ TEST(GreyEvidence, ANeckPieceJoinsOneGrainNotBoth) {
 }
 
 // A ball of radius 14 split through its centre by a plane gap one voxel
-// wide (normal (1, 0.3, 0.2): oblique, so the gap crosses voxels partly),
-// partial volume by 4^3 supersampling, PSF sigma 0.7, Gaussian noise at
-// CNR 13 (data_synth's imaging). Blur and noise bridge the gap above the
-// threshold; the bridges stay dim.
-Volume<uint16_t> split_ball_scan(uint64_t seed) {
-  const Shape s{40, 40, 40};
-  Volume<float> phi = Volume<float>::filled(s, 0.f);
-  const double c = 19.5, R = 14, nn = std::sqrt(1 + 0.09 + 0.04);
-  for (int64_t k = 0; k < s.nz; ++k)
-    for (int64_t j = 0; j < s.ny; ++j)
-      for (int64_t i = 0; i < s.nx; ++i) {
-        int in = 0;
-        for (int a = 0; a < 4; ++a)
-          for (int b = 0; b < 4; ++b)
-            for (int d = 0; d < 4; ++d) {
-              const double z = double(k) + (a + 0.5) / 4 - 0.5 - c, y = double(j) + (b + 0.5) / 4 - 0.5 - c,
-                           x = double(i) + (d + 0.5) / 4 - 0.5 - c;
-              const double plane = (x + 0.3 * y + 0.2 * z) / nn;
-              in += z * z + y * y + x * x <= R * R && std::abs(plane) > 0.5;
-            }
-        phi(k, j, i) = float(in) / 64.f;
-      }
-  synth::ImagingOptions im;
-  im.void_grey = 10000, im.solid_grey = 30000, im.psf_sigma = 0.7, im.noise_sigma = 20000.0 / 13.0;
-  im.seed = seed;
-  synth::apply_imaging(phi, im);
-  return synth::to_u16(phi).volume;
-}
+// wide (oblique, so the gap crosses voxels partly), partial volume by 4^3
+// supersampling, PSF sigma 0.7, Gaussian noise at CNR 13 (scan_scenes.hpp).
+// Blur and noise bridge the gap above the threshold; the bridges stay dim.
+Volume<uint16_t> split_ball_scan(uint64_t seed) { return test::split_ball_scan(40, 14, 1.0, 0, 0.7, 13, seed); }
 
 std::set<uint32_t> labels_of(const Volume<uint32_t>& l) {
   std::set<uint32_t> out;

@@ -2,7 +2,8 @@
 // saturation, uneven brightness): a random packing of balls whose truth is
 // known voxel by voxel, imaged with the contrast (void 10000, solid
 // 30000, Gaussian noise 1500), optional blur (partial volume) and a
-// brightness field.
+// brightness field; and a ball split by an oblique plane gap (the grey
+// evidence and the split repair).
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -11,7 +12,10 @@
 #include <random>
 #include <vector>
 
+#include <array>
+
 #include "core/volume.hpp"
+#include "data_synth/imaging.hpp"
 
 namespace tg::test {
 
@@ -85,5 +89,44 @@ inline Volume<uint16_t> image(const Volume<uint8_t>& truth, double sigma, const 
       }
   return g;
 }
+
+// A ball of radius R centred in an n^3 volume, cut by a plane through its
+// centre with normal (1, 0.3, 0.2) (oblique: the gap crosses voxels partly)
+// and a gap `gap` voxels wide; `pores` void balls of radius 2 inside each
+// half when gap < 0 (then no cut: an intact grain). Partial volume by 4^3
+// supersampling; imaging as data_synth's (PSF, Gaussian noise at CNR cnr).
+inline Volume<uint16_t> split_ball_scan(int64_t n, double R, double gap, int pores, double psf, double cnr, uint64_t seed) {
+  const Shape s{n, n, n};
+  Volume<float> phi = Volume<float>::filled(s, 0.f);
+  const double c = double(n) / 2 - 0.5, nn = std::sqrt(1 + 0.09 + 0.04);
+  std::vector<std::array<double, 3>> pore;  // on a ring at R/2 around the centre
+  for (int p = 0; p < pores; ++p) {
+    const double a = 2 * M_PI * p / pores;
+    pore.push_back({0.3 * R * std::sin(2 * a), 0.5 * R * std::cos(a), 0.5 * R * std::sin(a)});
+  }
+  for (int64_t k = 0; k < n; ++k)
+    for (int64_t j = 0; j < n; ++j)
+      for (int64_t i = 0; i < n; ++i) {
+        int in = 0;
+        for (int a = 0; a < 4; ++a)
+          for (int b = 0; b < 4; ++b)
+            for (int d = 0; d < 4; ++d) {
+              const double z = double(k) + (a + 0.5) / 4 - 0.5 - c, y = double(j) + (b + 0.5) / 4 - 0.5 - c,
+                           x = double(i) + (d + 0.5) / 4 - 0.5 - c;
+              bool solid = z * z + y * y + x * x <= R * R;
+              if (gap > 0) solid = solid && std::abs((x + 0.3 * y + 0.2 * z) / nn) > gap / 2;
+              for (const auto& p : pore)
+                solid = solid && (z - p[0]) * (z - p[0]) + (y - p[1]) * (y - p[1]) + (x - p[2]) * (x - p[2]) > 4.0;
+              in += solid;
+            }
+        phi(k, j, i) = float(in) / 64.f;
+      }
+  synth::ImagingOptions im;
+  im.void_grey = 10000, im.solid_grey = 30000, im.psf_sigma = psf, im.noise_sigma = cnr > 0 ? 20000.0 / cnr : 0.0;
+  im.seed = seed;
+  synth::apply_imaging(phi, im);
+  return synth::to_u16(phi).volume;
+}
+
 
 }  // namespace tg::test

@@ -10,7 +10,7 @@
 #include <random>
 #include <set>
 
-#include "data_synth/imaging.hpp"
+#include "scan_scenes.hpp"
 #include "segmentation/segment.hpp"
 #include "segmentation/segment_chunked.hpp"
 #include "segmentation/split_labels.hpp"
@@ -18,44 +18,6 @@
 
 namespace tg {
 namespace {
-
-// A ball of radius R centred in an n^3 volume, cut by a plane through its
-// centre with normal (1, 0.3, 0.2) (oblique: the gap crosses voxels partly)
-// and a gap `gap` voxels wide; `pores` void balls of radius 2 inside each
-// half when gap < 0 (then no cut: an intact grain). Partial volume by 4^3
-// supersampling; imaging as data_synth's (PSF, Gaussian noise at CNR cnr).
-Volume<uint16_t> ball_scan(int64_t n, double R, double gap, int pores, double psf, double cnr, uint64_t seed) {
-  const Shape s{n, n, n};
-  Volume<float> phi = Volume<float>::filled(s, 0.f);
-  const double c = double(n) / 2 - 0.5, nn = std::sqrt(1 + 0.09 + 0.04);
-  std::vector<std::array<double, 3>> pore;
-  for (int p = 0; p < pores; ++p) {  // on a ring at R/2 around the centre
-    const double a = 2 * M_PI * p / pores;
-    pore.push_back({0.3 * R * std::sin(2 * a), 0.5 * R * std::cos(a), 0.5 * R * std::sin(a)});
-  }
-  for (int64_t k = 0; k < n; ++k)
-    for (int64_t j = 0; j < n; ++j)
-      for (int64_t i = 0; i < n; ++i) {
-        int in = 0;
-        for (int a = 0; a < 4; ++a)
-          for (int b = 0; b < 4; ++b)
-            for (int d = 0; d < 4; ++d) {
-              const double z = double(k) + (a + 0.5) / 4 - 0.5 - c, y = double(j) + (b + 0.5) / 4 - 0.5 - c,
-                           x = double(i) + (d + 0.5) / 4 - 0.5 - c;
-              bool solid = z * z + y * y + x * x <= R * R;
-              if (gap > 0) solid = solid && std::abs((x + 0.3 * y + 0.2 * z) / nn) > gap / 2;
-              for (const auto& p : pore)
-                solid = solid && (z - p[0]) * (z - p[0]) + (y - p[1]) * (y - p[1]) + (x - p[2]) * (x - p[2]) > 4.0;
-              in += solid;
-            }
-        phi(k, j, i) = float(in) / 64.f;
-      }
-  synth::ImagingOptions im;
-  im.void_grey = 10000, im.solid_grey = 30000, im.psf_sigma = psf, im.noise_sigma = cnr > 0 ? 20000.0 / cnr : 0.0;
-  im.seed = seed;
-  synth::apply_imaging(phi, im);
-  return synth::to_u16(phi).volume;
-}
 
 // Which side of the cut plane voxel (k, j, i) lies on.
 int side(int64_t n, int64_t k, int64_t j, int64_t i) {
@@ -86,7 +48,7 @@ double depth_of(const Volume<uint16_t>& g, uint16_t t) {
 TEST(SplitLabels, HalvesWithASubVoxelGapComeApartOnTheirSides) {
   const int64_t n = 36;
   for (uint64_t seed : {21u, 22u, 23u}) {
-    const auto g = ball_scan(n, 13, 0.5, 0, 1.0, 13, seed);
+    const auto g = test::split_ball_scan(n, 13, 0.5, 0, 1.0, 13, seed);
     auto lab = one_label(n, 13);
     SplitOptions o;
     o.depth = depth_of(g, 20000);
@@ -113,7 +75,7 @@ TEST(SplitLabels, SegmentSplitsWhatTheGreyEvidenceJoined) {
   // End to end: at gap 0.5 and PSF 1.0 the gap's centre is too bright for
   // the dim band, the watershed leaves one label, the split repair two.
   for (uint64_t seed : {21u, 22u}) {
-    const auto g = ball_scan(36, 13, 0.5, 0, 1.0, 13, seed);
+    const auto g = test::split_ball_scan(36, 13, 0.5, 0, 1.0, 13, seed);
     SegmentOptions o;
     o.grain_radius_vox = 13;
     const SegmentResult with = segment(g, o);
@@ -130,7 +92,7 @@ TEST(SplitLabels, IntactPorousGrainsStayWhole) {
   const int64_t n = 36;
   for (uint64_t seed : {21u, 22u, 23u}) {
     for (double cnr : {8.0, 13.0, 30.0}) {
-      const auto g = ball_scan(n, 13, -1, 4, 0.7, cnr, seed);
+      const auto g = test::split_ball_scan(n, 13, -1, 4, 0.7, cnr, seed);
       auto lab = one_label(n, 13);
       SplitOptions o;
       o.depth = depth_of(g, 20000);
@@ -148,10 +110,10 @@ TEST(SplitLabels, NoiselessScanKeepsTheContrastFloor) {
   // the split one (gap 0.5, PSF 1) still comes apart.
   SegmentOptions o;
   o.grain_radius_vox = 13;
-  const auto intact = segment(ball_scan(36, 13, -1, 4, 0.7, 0, 1), o);
+  const auto intact = segment(test::split_ball_scan(36, 13, -1, 4, 0.7, 0, 1), o);
   EXPECT_EQ(intact.count, 1u);
   EXPECT_NEAR(intact.split_depth, 0.1 * (30000 - double(intact.threshold.value)), 300.0);
-  const auto split = segment(ball_scan(36, 13, 0.5, 0, 1.0, 0, 1), o);
+  const auto split = segment(test::split_ball_scan(36, 13, 0.5, 0, 1.0, 0, 1), o);
   EXPECT_EQ(split.count, 2u);
 }
 
@@ -204,7 +166,7 @@ TEST(SplitLabels, SampleHistogramIsTheSameBySlabs) {
 TEST(SplitLabels, SameLabelsWithOneAndTwoThreads) {
   // Four split balls (four noise seeds) side by side in one scan.
   std::vector<Volume<uint16_t>> one;
-  for (uint64_t seed : {21u, 22u, 23u, 24u}) one.push_back(ball_scan(36, 13, 0.5, 0, 1.0, 13, seed));
+  for (uint64_t seed : {21u, 22u, 23u, 24u}) one.push_back(test::split_ball_scan(36, 13, 0.5, 0, 1.0, 13, seed));
   const Shape s{36, 36, 144};
   Volume<uint16_t> g(s);
   auto lab = Volume<uint32_t>::filled(s, 0u);
@@ -239,7 +201,7 @@ TEST(SplitLabels, SameLabelsSlabBySlab) {
   const Shape s{144, 36, 36};
   Volume<uint16_t> g(s, Geometry::isotropic_m(30e-6));
   for (int b = 0; b < 4; ++b) {
-    const auto one = ball_scan(36, 13, 0.5, 0, 1.0, 13, 31 + uint64_t(b));
+    const auto one = test::split_ball_scan(36, 13, 0.5, 0, 1.0, 13, 31 + uint64_t(b));
     std::copy(one.data(), one.data() + one.size(), g.data() + b * one.size());
   }
   SegmentOptions o;

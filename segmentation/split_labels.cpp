@@ -2,9 +2,7 @@
 
 #include <algorithm>
 #include <array>
-#include <cstring>
 #include <cmath>
-#include <numeric>
 #include <omp.h>
 #include <stdexcept>
 
@@ -278,8 +276,9 @@ Pieces split_one(const Volume<uint32_t>& labels, const Volume<T>& grey, uint32_t
   const int64_t vmin = std::max<int64_t>(opt.min_piece_vox, int64_t(std::ceil(opt.min_piece_fraction * double(bx.voxels))));
   // Screen: the same flood on every second voxel along each axis (1/8 of
   // the work), with half the depth and an eighth of the piece. Most labels
-  // are whole and stop here; a label the full flood would split has shown
-  // a split here on every scene measured (bench/segmentation/RESULTS.md).
+  // are whole and stop here. Measured against the full flood alone: the same
+  // labels on the 7 development scenes; on the 76 scenes of the blind sweep
+  // (with the threshold floor) F1 moved by 0.002 at most, both ways.
   smooth_box(s, grey, bx, w, 2);
   if (!flood_box(s, L, l, S, bx, bz, by, bxn, 2, std::max<int64_t>(4, vmin / 8), 0.5f * float(opt.depth),
                  float(opt.floor), true))

@@ -257,9 +257,8 @@ bool flood_box(Scratch& s, const uint32_t* L, uint32_t l, const Shape& S, const 
   return separated;
 }
 
-// The pieces of one label: returns the number of pieces (1: no split) and
-// fills `piece` (box-local voxel -> piece ordinal 0..n-1, 0 the largest)
-// for the label's voxels.
+// The pieces of one label (count 1: no split). The largest keeps the
+// label; the voxels of the others are listed with their piece ordinal.
 struct Pieces {
   std::vector<int64_t> voxel;  // global indices of the voxels that leave the label
   std::vector<int32_t> piece;  // their piece ordinal, 1..n-1

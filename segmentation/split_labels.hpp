@@ -50,12 +50,17 @@
 // The flood is 6-connected: the same labels as 26 on the dev scenes (one
 // more split at gap 0.5) in 40 % of the time.
 //
-// Cost: each label's box plus its halo is smoothed once and its voxels
-// sorted once (a counting sort, O(V)); labels in parallel (dynamic schedule), each
-// label's result depends only on its own box, so it is the same whatever
-// the thread count and in a slab of a chunked run as in the whole volume.
-// Labels whose box exceeds max_box_vox (2^28: a grain of radius ~300
-// voxels) are not tested and counted.
+// Cost: each label is first screened: its box smoothed and flooded at
+// every second voxel along each axis (half the depth, an eighth of the
+// piece); only a label the screen finds two cores in is smoothed and
+// flooded in full. The flood sorts by a counting sort (O(V)) and stops at
+// the threshold when nothing was kept apart. Labels in parallel (dynamic
+// schedule); each label's result depends only on its own box, so it is the
+// same whatever the thread count and in a slab of a chunked run as in the
+// whole volume. Measured (2 threads, data_synth zeolite stage 4): 0.15 s of
+// 0.79 s at 256^3, 0.80 s of 4.13 s at 512^3. Labels whose box exceeds
+// max_box_vox (2^28: a grain of radius ~300 voxels) are not tested and
+// counted.
 #pragma once
 #include <cstdint>
 #include <vector>

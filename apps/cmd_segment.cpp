@@ -371,6 +371,11 @@ static tg::app::Registrar reg{{"segment", 30,
                   "pieces (blind scans: 4 split an intact grain, 6-9 gave the same labels)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  sub->add_option("--split-min-depth-contrast", o->seg.split_min_depth_contrast,
+                  "...and at least this share of (solid peak - threshold) grey levels above it (the floor that "
+                  "keeps a scan with little noise from splitting at every pore and bump)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   sub->add_option("--split-min-piece", o->seg.split_min_piece_fraction,
                   "Smallest piece the split repair cuts off, as a share of the label's voxels (and >= 27 voxels)")
       ->check(CLI::Range(0.0, 0.5))

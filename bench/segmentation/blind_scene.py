@@ -37,6 +37,8 @@ Method
      grain's) >= 0.5, else 0.
   4. Imaging: grey = void + (solid - void) * blur_psf(solid fraction) *
      cupping(rho) + N(0, (solid - void) / cnr); void 10000, solid 30000;
+     with --noise-corr c the noise is white noise smoothed by a Gaussian of
+     sigma c voxels and rescaled to the same per-voxel sigma;
      cupping(rho) = 1 - c (1 - (rho/rho_max)^2) for rho < rho_max (radial from
      the scan's z axis, rho_max half the smaller of nx, ny; 1 beyond): the
      contrast at the centre is (1 - c) of that at the border. Gaussian blur
@@ -384,6 +386,9 @@ def main(argv=None):
     ap.add_argument("--psf", type=float, default=0.7, help="Gaussian PSF sigma, voxels (0.7; 0 = none)")
     ap.add_argument("--cnr", type=float, default=13.0,
                     help="contrast-to-noise ratio: noise sigma = (solid - void)/cnr grey levels (13; 0 = no noise)")
+    ap.add_argument("--noise-corr", type=float, default=0.0,
+                    help="correlation length of the noise, voxels: white noise smoothed by a Gaussian of this sigma, "
+                         "rescaled to the same per-voxel sigma (as reconstruction filters make it; 0 = white)")
     ap.add_argument("--cupping", type=float, default=0.0,
                     help="fraction of the contrast lost at the scan's axis relative to its border, radial (0)")
     ap.add_argument("--supersample", type=int, default=3, help="samples per axis for partial volume, near surfaces (3)")
@@ -429,7 +434,12 @@ def main(argv=None):
     img = img * contrast + VOID
     sigma = contrast / a.cnr if a.cnr > 0 else 0.0
     if sigma > 0:
-        img += rng.normal(0, sigma, size=shape).astype(np.float32)
+        noise = rng.normal(0, 1, size=shape).astype(np.float32)
+        if a.noise_corr > 0:
+            # smoothing lowers the per-voxel sigma; rescale so that the CNR stays the one asked for
+            noise = ndimage.gaussian_filter(noise, a.noise_corr, mode="wrap")
+            noise /= noise.std()
+        img += sigma * noise
     scan = np.clip(np.rint(img), 0, 65535).astype(np.uint16)
     t_image = time.perf_counter() - t0 - t_pack - t_render
 

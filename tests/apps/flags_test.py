@@ -79,6 +79,12 @@ def segment_rows(base):
         (["--bright-fraction", "0.1"], "differs"),
         (["--bright-sigmas", "0"], ("grey_evidence", "bright_sigmas", 0.0)),
         (["--min-size", "5000"], "differs"),
+        # Split repair: this crop's grains are whole, so the options show in the summary.
+        (["--no-split"], ("split", "enabled", False)),
+        (["--split-depth-sigmas", "3"], ("split", "depth_sigmas", 3.0)),
+        (["--split-min-depth-contrast", "0.3"], ("split", "min_depth_contrast", 0.3)),
+        (["--split-min-piece", "0.05"], ("split", "min_piece_fraction", 0.05)),
+        (["--split-smoothing-vox", "1.5"], ("split", "smoothing_sigma_vox", 1.5)),
         # The scale: recorded in the summary (the labels of this crop do not
         # move with it: it sets only the default pore size limit).
         (["--grain-radius-vox", "10"], ("grain_radius_vox", None, 10.0)),

@@ -262,7 +262,7 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
         const NeighbourTransfer& x = transfer[a];
         const int32_t n = parent[x.into];
         const double t = static_cast<double>(x.voxels);
-        const double d = o.surface_tolerance_vox;
+        const double d = x.shift_vox > 0 ? x.shift_vox : o.surface_tolerance_vox;
         const double loss = static_cast<double>(pr.volume_vox - after);
         const double gain = static_cast<double>(kids_volume[n] - prev[n].volume_vox);
         if (t > d * static_cast<double>(x.contact_faces) + new_contact_voxels(static_cast<double>(pr.volume_vox), d) &&
@@ -401,15 +401,23 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
 
     auto absorbed = o_.absorbed_chips ? transfers_to_neighbours({&ov, &ov1}, ib, parent, prev_whole_)
                                       : std::vector<NeighbourTransfer>{};
+    // The boundary shift d of the rule (track.hpp step 5): the segmentation's surface
+    // uncertainty and how far the stage's axial strain increment can press a contact of a
+    // grain of radius r_eq (its two neighbours along the axis come closer by 2 strain r_eq),
+    // in quadrature: the caps 2 pi r_eq d^2 that the two independent shifts move add.
+    const double strain = std::max(0.0, 1.0 - m.axial_scale());
     // S_an, only where T could pass the threshold at all (a few dozen particles per stage).
     for (size_t a = 0; a < absorbed.size(); ++a) {
       NeighbourTransfer& x = absorbed[a];
       const auto& pa = prev_rows_[a];
-      const double floor_vox = new_contact_voxels(static_cast<double>(pa.volume_vox), o_.surface_tolerance_vox);
-      if (x.into < 0 || parent[x.into] < 0 || static_cast<double>(x.voxels) <= floor_vox) continue;
+      if (x.into < 0 || parent[x.into] < 0) continue;
+      const int32_t n = parent[x.into];
+      x.shift_vox = std::hypot(o_.surface_tolerance_vox, strain * r_eq(static_cast<double>(pa.volume_vox)));
+      const double floor_vox = new_contact_voxels(static_cast<double>(pa.volume_vox), x.shift_vox);
+      if (static_cast<double>(x.voxels) <= floor_vox) continue;
       const std::array<int64_t, 3> lo{pa.box_lo[0] - 1, pa.box_lo[1] - 1, pa.box_lo[2] - 1},
           hi{pa.box_hi[0] + 1, pa.box_hi[1] + 1, pa.box_hi[2] + 1};
-      x.contact_faces = shared_faces(prev_, pa.label, prev_rows_[parent[x.into]].label, lo, hi);
+      x.contact_faces = shared_faces(prev_, pa.label, prev_rows_[n].label, lo, hi);
     }
     link_stage(prev_rows_, rows, parent, o_, absorbed);
     for (size_t q = 0; q < rows.size(); ++q)

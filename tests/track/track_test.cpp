@@ -379,3 +379,26 @@ TEST(Track, ContactBoundaryMovingByAVoxelIsNotChipping) {
   EXPECT_TRUE(r.events.empty());
   EXPECT_EQ(r.summary[1].chips_absorbed, 0);
 }
+
+// The absorbed-chip rule's boundary shift d (NeighbourTransfer::shift_vox; the tracker sets it
+// to hypot(1 voxel, strain increment x r_eq)): grain a (4 000 voxels, r_eq 9.85) hands T = 100
+// voxels to its neighbour's label. 2 pi r_eq d^2 is 62 voxels for d = 1: chipping; 139 for
+// d = 1.5 (a contact pressed 1.1 voxels deeper by the stage's strain): intact.
+TEST(Track, AbsorbedChipThresholdFollowsTheBoundaryShift) {
+  auto classify = [](double shift_vox) {
+    std::vector<LineageRow> prev(2), rows(2);
+    prev[0].label = 1, prev[0].grain = 1, prev[0].volume_vox = 4000;
+    prev[1].label = 2, prev[1].grain = 2, prev[1].volume_vox = 4000;
+    rows[0].label = 7, rows[0].volume_vox = 3900;
+    rows[1].label = 9, rows[1].volume_vox = 4100;
+    std::vector<NeighbourTransfer> tr(2);
+    tr[0].into = 1, tr[0].voxels = 100, tr[0].contact_faces = 0, tr[0].shift_vox = shift_vox;
+    link_stage(prev, rows, {0, 1}, TrackOptions{}, tr);
+    return std::make_pair(rows[0].event, rows[0].absorbed_vox);
+  };
+  EXPECT_NEAR(new_contact_voxels(4000, 1.0), 61.9, 0.1);
+  EXPECT_NEAR(new_contact_voxels(4000, 1.5), 139.2, 0.1);
+  EXPECT_EQ(classify(0.0), std::make_pair(Event::chipping, int64_t{100}));  // 0: surface_tolerance_vox
+  EXPECT_EQ(classify(1.0), std::make_pair(Event::chipping, int64_t{100}));
+  EXPECT_EQ(classify(1.5), std::make_pair(Event::intact, int64_t{0}));
+}

@@ -32,10 +32,10 @@ int64_t clampi(int64_t v, int64_t lo, int64_t hi) { return v < lo ? lo : (v > hi
 struct LabelBox {
   int64_t z0 = INT64_MAX, y0 = INT64_MAX, x0 = INT64_MAX, z1 = -1, y1 = -1, x1 = -1;  // inclusive
   int64_t voxels = 0;
-  void add(int64_t k, int64_t j, int64_t i) {
-    z0 = std::min(z0, k), y0 = std::min(y0, j), x0 = std::min(x0, i);
-    z1 = std::max(z1, k), y1 = std::max(y1, j), x1 = std::max(x1, i);
-    ++voxels;
+  void add_run(int64_t k, int64_t j, int64_t i0, int64_t i1) {  // voxels (k, j, i0..i1)
+    z0 = std::min(z0, k), y0 = std::min(y0, j), x0 = std::min(x0, i0);
+    z1 = std::max(z1, k), y1 = std::max(y1, j), x1 = std::max(x1, i1);
+    voxels += i1 - i0 + 1;
   }
   void add(const LabelBox& o) {
     z0 = std::min(z0, o.z0), y0 = std::min(y0, o.y0), x0 = std::min(x0, o.x0);
@@ -57,8 +57,13 @@ std::vector<LabelBox> label_boxes(const Volume<uint32_t>& labels, uint32_t count
     for (int64_t k = 0; k < s.nz; ++k)
       for (int64_t j = 0; j < s.ny; ++j) {
         const uint32_t* row = L + (k * s.ny + j) * s.nx;
-        for (int64_t i = 0; i < s.nx; ++i)
-          if (row[i]) mine[row[i]].add(k, j, i);
+        for (int64_t i = 0; i < s.nx;) {  // by runs of one label: a grain's row is tens of voxels
+          const uint32_t l = row[i];
+          int64_t e = i + 1;
+          while (e < s.nx && row[e] == l) ++e;
+          if (l) mine[l].add_run(k, j, i, e - 1);
+          i = e;
+        }
       }
   }
   std::vector<LabelBox> box(size_t(count) + 1);

@@ -71,6 +71,7 @@ tg::SegmentOptions segment_options(const SegmentJob& o, const tg::Geometry& geom
   s.watershed_lines = !o.no_lines;
   s.merge = !o.no_merge;
   s.split = !o.no_split;
+  s.noise_specks = !o.keep_noise_specks;
   s.grey_evidence = !o.no_grey_evidence;
   if (o.grain_radius_vox > 0) {
     s.grain_radius_vox = o.grain_radius_vox;
@@ -93,6 +94,10 @@ void print_plan(const SegmentJob& o, const tg::SegmentOptions& s) {
                                    "above the sheet between them are cut apart",
                                    s.split_smoothing_vox, s.split_depth_sigmas)
                      : std::string("off"));
+  fmt::print("  noise specks: {}\n", s.noise_specks ? fmt::format("labels whose mean grey is void noise over the "
+                                                                 "threshold (z < {:.3g}) and that have no core are "
+                                                                 "cleared", s.speck_z)
+                                                   : std::string("kept"));
   (void)o;
 }
 
@@ -366,6 +371,14 @@ static tg::app::Registrar reg{{"segment", 30,
   sub->add_flag("--no-split", o->no_split,
                 "Do not split labels whose smoothed grey holds two bright cores parted by a darker sheet (two "
                 "fragments whose gap blur and noise bridged)");
+  sub->add_flag("--keep-noise-specks", o->keep_noise_specks,
+                "Keep labels whose mean grey says they are void noise lifted over the threshold (by default such "
+                "specks are cleared: noise_specks.hpp, the summary's noise_specks)");
+  sub->add_option("--speck-z", o->seg.speck_z,
+                  "A label is noise while its mean grey stands fewer than this many standard errors above what "
+                  "void noise over the threshold gives (larger: clears more)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   sub->add_option("--split-depth-sigmas", o->seg.split_depth_sigmas,
                   "A piece's smoothed peak must stand this many smoothed-noise sigmas above the sheet between "
                   "pieces (blind scans: 4 split an intact grain, 6-9 gave the same labels)")

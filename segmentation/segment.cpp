@@ -95,8 +95,19 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist, cons
     d.smoothed_sigma = sm.sigma;
     d.split_depth = std::max(o.split_depth_sigmas * sm.sigma,
                              o.split_min_depth_contrast * std::max(0.0, raw.mode - double(d.t.value)));
-    d.split_code = GreyCode::from_histogram(hist);
   }
+  if (o.noise_specks && o.threshold != ThresholdMethod::local) {
+    // The void's noise above t (noise_specks.hpp): the void peak's mode and
+    // the sigma of its lower side, the voxels a noisy scan clipped at 0
+    // counted in (the solid's sigma is no stand-in: where the threshold lies
+    // low, the void's tail fills the histogram above it).
+    const PhaseLevels pl = phase_levels(hist, d.levels.zeros_clipped ? d.levels.zero_count : 0);
+    d.speck_test.threshold = double(d.t.value);
+    d.speck_test.void_level = pl.void_level;
+    d.speck_test.sigma = pl.void_sigma;
+    d.speck_test.z_crit = o.speck_z;
+  }
+  if (d.split_depth > 0 || d.speck_test.sigma > 0) d.split_code = GreyCode::from_histogram(hist);
 }
 
 GreyDecisions choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o) {
@@ -123,10 +134,11 @@ struct SlabRun {
 };
 
 // grey_code (or nullptr) and split_depth > 0: the split repair runs on the
-// labels; depth and floor in the code's units.
+// labels; depth and floor in the code's units. grey_code and specks: the
+// noise-speck test (in the code's units) runs first.
 SegmentResult segment_graded(Volume<uint8_t> mask, const SegmentOptions& opt, bool graded, SlabRun* slab = nullptr,
                              const Volume<uint8_t>* grey_code = nullptr, double split_depth = 0,
-                             double split_floor = 0);
+                             double split_floor = 0, const SpeckTest* specks = nullptr);
 
 // grey -> mask with the decisions d, then the chain. The core's solid count
 // (slab) or the field of view's goes to *nsolid_out.
@@ -138,8 +150,9 @@ SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* ow
   // it (split_labels.hpp GreyCode) stays, 1 B/voxel more at peak. An owned
   // scan becomes the mask in its own storage.
   const bool split = d.split_depth > 0 && t.method != ThresholdMethod::local;
+  const bool specks = d.speck_test.sigma > 0 && t.method != ThresholdMethod::local;
   Volume<uint8_t> code;
-  if (split) code = quantise_grey(grey, d.split_code);
+  if (split || specks) code = quantise_grey(grey, d.split_code);
   Volume<uint8_t> mask;
   if (t.method == ThresholdMethod::local) {
     mask = owned ? binarise_local(std::move(*owned), d.local, d.fov) : binarise_local(grey, d.local, d.fov);
@@ -162,8 +175,11 @@ SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* ow
   }
   *nsolid_out = nsolid;
   clock.lap("threshold");
-  return segment_graded(std::move(mask), opt, d.graded, slab, split ? &code : nullptr,
-                        d.split_depth / d.split_code.step, (double(t.value) - d.split_code.lo) / d.split_code.step);
+  const GreyCode& c = d.split_code;
+  SpeckTest st = d.speck_test;  // in the code's units
+  st.threshold = (st.threshold - c.lo) / c.step, st.void_level = (st.void_level - c.lo) / c.step, st.sigma /= c.step;
+  return segment_graded(std::move(mask), opt, d.graded, slab, split || specks ? &code : nullptr,
+                        split ? d.split_depth / c.step : 0.0, (double(t.value) - c.lo) / c.step, specks ? &st : nullptr);
 }
 
 
@@ -195,6 +211,7 @@ void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& o
   r.smoothed_noise_sigma = d.smoothed_sigma;
   r.split_depth = r.split_used ? d.split_depth : 0.0;
   r.split_code = d.split_code;
+  r.speck_test = d.speck_test;
   if (opt.split && !r.split_used)
     r.notes.push_back(t.method == ThresholdMethod::local
                           ? "split repair off: it needs one global threshold (not --threshold local)"
@@ -286,7 +303,8 @@ namespace {
 // The chain from a mask: 0/nonzero (graded = false), or graded 0 void,
 // 1 dim, 2 bright (the header's grey evidence).
 SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in, bool graded, SlabRun* slab,
-                             const Volume<uint8_t>* grey_code, double split_depth, double split_floor) {
+                             const Volume<uint8_t>* grey_code, double split_depth, double split_floor,
+                             const SpeckTest* specks) {
   const SegmentOptions opt = opt_in.resolved();
   SegmentResult r;
   StageClock clock(r);
@@ -414,6 +432,17 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   r.count = rl.count;
   r.dropped = rl.dropped;
   clock.lap("relabel");
+  if (grey_code && specks) {
+    // Noise specks (noise_specks.hpp) before the split repair, which then
+    // need not look at them.
+    r.specks = find_noise_specks(lab, r.count, *grey_code, *specks);
+    if (r.specks.dropped > 0) {
+      rl = relabel_consecutive(lab, opt.min_size_vox, &r.specks.keep);
+      r.count = rl.count;
+    }
+    r.specks.keep = {};
+    clock.lap("specks");
+  }
   if (grey_code && split_depth > 0) {
     // Split repair (split_labels.hpp), then raster order again (a chunked
     // run numbers particles by their first voxel).
@@ -536,6 +565,19 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                 {"labels_split", r.split.split},
                 {"pieces_added", r.split.pieces_added},
                 {"labels_too_large_to_test", r.split.skipped_large}};
+  j["noise_specks"] = {{"enabled", r.specks.used},
+                       {"rule", "a label is void noise, and cleared, when z = (m - mu0) / (s0 / sqrt(n)) < z_crit "
+                                "(m its mean grey's excess over the threshold in noise sigmas, n its voxels, mu0 and s0 "
+                                "the excess of void noise above the threshold: a truncated normal) and the grey "
+                                "smoothed over 1 voxel reaches the threshold at none of its voxels (no core)"},
+                       {"void_level", r.speck_test.void_level},
+                       {"noise_sigma", r.speck_test.sigma},
+                       {"z_crit", o.speck_z},
+                       {"mu0", r.specks.mu0},
+                       {"s0", r.specks.s0},
+                       {"labels_tested", r.specks.tested},
+                       {"labels_dropped", r.specks.dropped},
+                       {"voxels_dropped", r.specks.dropped_voxels}};
   j["labels"] = {{"count", r.count}, {"min_size_vox", o.min_size_vox}, {"dropped", r.dropped}};
   json st = json::object();
   double total = 0;

@@ -90,6 +90,7 @@
 #include "segmentation/field_of_view.hpp"
 #include "segmentation/local_threshold.hpp"
 #include "segmentation/merge_labels.hpp"
+#include "segmentation/noise_specks.hpp"
 #include "segmentation/pore_filter.hpp"
 #include "segmentation/split_labels.hpp"
 #include "segmentation/threshold.hpp"
@@ -159,6 +160,11 @@ struct SegmentOptions {
   double split_min_depth_contrast = 0.1;  // floor for noiseless scans
   double split_min_piece_fraction = 0.01;
 
+  // Noise specks (noise_specks.hpp): labels whose grey says "void noise
+  // above the threshold" are cleared (grey scans with a global threshold).
+  bool noise_specks = true;
+  double speck_z = 5.0;
+
   // Resolved values (derived defaults filled in), as the pipeline will use them.
   SegmentOptions resolved() const;
 };
@@ -186,6 +192,8 @@ struct SegmentResult {
   double split_depth = 0;         // grey levels
   GreyCode split_code;
   SplitResult split;
+  SpeckTest speck_test;     // grey levels (not the code's units)
+  SpeckResult specks;
   uint32_t count = 0;       // final labels
   int64_t dropped = 0;      // labels removed by min_size_vox
   std::vector<std::pair<std::string, double>> stage_seconds;
@@ -222,6 +230,8 @@ struct GreyDecisions {
   double smoothed_sigma = 0;
   double split_depth = 0;
   GreyCode split_code;  // the one-byte grey it reads (0.1th..99.9th percentile of the histogram)
+  // Noise specks: the test in grey levels (sigma 0: off); it reads the same code.
+  SpeckTest speck_test;
 };
 
 // From the field of view (FovScan or given_field_of_view) and the 65536-bin

@@ -45,7 +45,8 @@ std::string margin_advice(const ChunkPlan& p) {
 }  // namespace
 
 double segment_bytes_per_voxel(const SegmentOptions& o) {
-  return kSegmentBytesPerVoxel + (o.split && o.threshold != ThresholdMethod::local ? kSplitGreyBytesPerVoxel : 0.0);
+  return kSegmentBytesPerVoxel +
+         ((o.split || o.noise_specks) && o.threshold != ThresholdMethod::local ? kSplitGreyBytesPerVoxel : 0.0);
 }
 
 ChunkPlan plan_chunks(const Shape& s, double grain_radius_vox, const ChunkedOptions& c) {
@@ -134,7 +135,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
   auto q_for = [&](float dmax) { return levels_per_unit(dmax, opt.buckets_per_unit); };
   uint32_t running = 0;
   int64_t dropped = 0, core_solid = 0;
-  bool split_used = false;
+  bool split_used = false, specks_used = false;
   std::unordered_map<int64_t, OwnedParticle> owned;  // by the first voxel's linear index in the scan
   std::vector<std::pair<std::string, double>> stage_sum;
   for (int64_t s = 0; s < cr.plan.slabs; ++s) {
@@ -164,6 +165,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
     dmax_seen = std::max(dmax_seen, out.core_dmax);
     core_solid += out.core_solid;
     split_used = split_used || out.result.split_used;
+    specks_used = specks_used || out.result.specks.used;
     for (const auto& [name, sec] : out.result.stage_seconds) {
       auto it = std::find_if(stage_sum.begin(), stage_sum.end(), [&](const auto& p) { return p.first == name; });
       if (it == stage_sum.end()) stage_sum.emplace_back(name, sec);
@@ -248,6 +250,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
   r.count = running;
   r.dropped = dropped;
   r.split_used = split_used;
+  r.specks.used = specks_used;
   r.stage_seconds = std::move(stage_sum);
   r.stage_seconds.insert(r.stage_seconds.begin(), {"pass1", cr.pass1_seconds});
   record_decisions(r, std::move(d), opt, shape);
@@ -271,6 +274,7 @@ std::string summary_json(const ChunkedResult& cr, const SegmentOptions& opt) {
   j["markers"]["count"] = nullptr;
   for (const char* k : {"touching_pairs", "passing_pairs", "merges"}) j["merge"][k] = nullptr;
   for (const char* k : {"labels_tested", "labels_split", "pieces_added", "labels_too_large_to_test"}) j["split"][k] = nullptr;
+  for (const char* k : {"mu0", "s0", "labels_tested", "labels_dropped", "voxels_dropped"}) j["noise_specks"][k] = nullptr;
   json slabs = json::array();
   for (const auto& [range, sec] : cr.slab_seconds) slabs.push_back({{"core_slices", range}, {"seconds", sec}});
   j["chunked"] = {{"slabs", cr.plan.slabs},
@@ -285,7 +289,7 @@ std::string summary_json(const ChunkedResult& cr, const SegmentOptions& opt) {
                   {"peak_rss_bytes", cr.result.peak_rss_bytes},
                   {"peak_rss_bytes_per_voxel", j["peak_rss_bytes_per_voxel"]},
                   {"per_slab", slabs},
-                  {"null_counts", "pores, dim pockets, markers, merges and splits are counted per slab, margins twice: left out"}};
+                  {"null_counts", "pores, dim pockets, markers, merges, splits and noise specks are counted per slab, margins twice: left out"}};
   return j.dump(2);
 }
 

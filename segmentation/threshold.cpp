@@ -288,7 +288,7 @@ double refine_mode(const std::vector<int64_t>& hist, double m, double sigma) {
 
 }  // namespace threshold_detail
 
-PhaseLevels phase_levels(std::vector<int64_t> hist) {
+PhaseLevels phase_levels(std::vector<int64_t> hist, int64_t clipped_zeros) {
   hist[0] = 0;  // pre-masked voxels (docs/real_scans.md) are no phase
   PhaseLevels r;
   r.threshold = moments_threshold(hist).value;
@@ -309,9 +309,9 @@ PhaseLevels phase_levels(std::vector<int64_t> hist) {
   for (int64_t c = 0; lo < t; ++lo)
     if ((c += hist[lo]) > n / 1000) break;
   const double m = threshold_detail::peak_mode(hist, lo, t);
-  int64_t below = 0;
+  int64_t below = clipped_zeros;  // void voxels clipped at 0 lie below every other
   for (size_t g = 1; g <= size_t(m); ++g) below += hist[g];
-  double sigma = 0;
+  double sigma = m / 0.6745;  // the median among the clipped zeros: at least this
   int64_t c = 0;
   for (size_t g = size_t(m); g >= 1; --g)
     if ((c += hist[g]) * 2 >= below) {

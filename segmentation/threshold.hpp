@@ -125,13 +125,15 @@ SolidPeak solid_peak(const std::vector<int64_t>& hist, uint16_t t);
 // phase's mean towards the other phase, not its mode.
 // Each peak's noise sigma comes from its outer side (the void's lower, the
 // solid's upper: the sides without partial volume), as the median of the
-// one-sided deviations / 0.6745 (0 when the side is empty).
+// one-sided deviations / 0.6745 (0 when the side is empty). clipped_zeros:
+// void voxels a noisy scan clipped at 0 and the histogram left out (they
+// count on the void's lower side, beyond every other).
 struct PhaseLevels {
   uint16_t threshold = 0;
   double void_level = 0, solid = 0;
   double void_sigma = 0, solid_sigma = 0;
 };
-PhaseLevels phase_levels(std::vector<int64_t> hist);
+PhaseLevels phase_levels(std::vector<int64_t> hist, int64_t clipped_zeros = 0);
 
 // The automatic threshold: the midpoint of the phases where the void's noise
 // allows it, else Tsai's level.

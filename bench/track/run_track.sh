@@ -6,6 +6,13 @@
 #
 #   bench/track/run_track.sh [BUILD] [SIZES] [SEEDS] [GAP_VOX]
 #   bench/track/run_track.sh build/release "256 512" "11" 1.0
+#   PSF=1.0 NOISE=2230 bench/track/run_track.sh build/release 256 11 1.0
+#
+# PSF (voxels) and NOISE (grey levels; the contrast is 29000, so CNR 13 is
+# NOISE 2230) set data_synth's [imaging] psf_sigma_vox and noise_sigma
+# (defaults 0.7 and 900: CNR 32); bench/track/blind_range.py sweeps them.
+# KIND=segmented skips the truth-label run (the tracker alone does not see
+# the imaging).
 #
 # Work files in ${TMPDIR:-/tmp}/tomograin_track_bench; one CSV of figures per
 # (size, seed, labels) and the /usr/bin/time -v lines of each track run.
@@ -22,9 +29,14 @@ export TOMOGRAIN_QUIET=1
 echo "== machine: $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg); gap $GAP voxels"
 for n in $SIZES; do
   for seed in $SEEDS; do
-    d=$W/n${n}_s${seed}_g${GAP}
+    d=$W/n${n}_s${seed}_g${GAP}${PSF:+_p$PSF}${NOISE:+_n$NOISE}
     mkdir -p "$d"
     printf '[stages]\nmotion = "oedometer"\ngap_vox = %s\n' "$GAP" > "$d/scene.toml"
+    if [[ -n ${PSF:-}${NOISE:-} ]]; then
+      printf '[imaging]\n' >> "$d/scene.toml"
+      [[ -z ${PSF:-} ]] || printf 'psf_sigma_vox = %s\n' "$PSF" >> "$d/scene.toml"
+      [[ -z ${NOISE:-} ]] || printf 'noise_sigma = %s\n' "$NOISE" >> "$d/scene.toml"
+    fi
     if [[ ! -f $d/run_lineage.csv ]]; then
       "$T" synth --preset zeolite-stages --scene "$d/scene.toml" --size "$n" --seed "$seed" -o "$d/run.h5" > "$d/synth.log"
     fi
@@ -35,7 +47,7 @@ for n in $SIZES; do
       seg+=("$d/seg$s.h5")
       truth+=("$d/run_stage$s.h5")
     done
-    for kind in truth segmented; do
+    for kind in ${KIND:-truth segmented}; do
       if [[ $kind == truth ]]; then in=("${truth[@]}"); else in=("${seg[@]}"); fi
       /usr/bin/time -v "$T" track "${in[@]}" -o "$d/track_$kind" > "$d/track_$kind.log" 2> "$d/track_$kind.time"
       echo "-- ${n}^3 seed $seed $kind labels"

@@ -81,6 +81,9 @@ def segment_rows(base):
         (["--min-size", "5000"], "differs"),
         # Split repair: this crop's grains are whole, so the options show in the summary.
         (["--no-split"], ("split", "enabled", False)),
+        # Noise specks: this crop has none at its noise, so the options show in the summary.
+        (["--keep-noise-specks"], ("noise_specks", "enabled", False)),
+        (["--speck-z", "7"], ("noise_specks", "z_crit", 7.0)),
         (["--split-depth-sigmas", "3"], ("split", "depth_sigmas", 3.0)),
         (["--split-min-depth-contrast", "0.3"], ("split", "min_depth_contrast", 0.3)),
         (["--split-min-piece", "0.05"], ("split", "min_piece_fraction", 0.05)),

@@ -82,13 +82,23 @@ Accuracy evaluate(const TrackResult& tracked, const std::vector<LineageRow>& tru
   for (const auto& e : truth_events) truth_keys.insert({e.stage, e.parent_label, e.type});
   for (const auto& e : tracked.events)
     if (e.parent_label) tracked_keys.insert({e.stage, map_label(maps, e.stage - 1, e.parent_label), e.type});
-  for (Event t : types) a.events[event_name(t)];
+  // Truth parents cut by the faces (stage of the parent, its label).
+  auto at_border = [&](int stage, uint32_t label) {
+    auto it = truth_row.find({stage, label});
+    return it != truth_row.end() && it->second->touches_border;
+  };
+  for (Event t : types) a.events[event_name(t)], a.events_interior[event_name(t)];
   for (const auto& e : truth_events) {
     if (std::find(types.begin(), types.end(), e.type) == types.end()) continue;
     auto& sc = a.events[event_name(e.type)];
     ++sc.truth;
     const bool hit = tracked_keys.count({e.stage, e.parent_label, e.type}) > 0;
     sc.found += hit;
+    if (!at_border(e.stage - 1, e.parent_label)) {
+      auto& si = a.events_interior[event_name(e.type)];
+      ++si.truth;
+      si.found += hit;
+    }
     if (!hit && a.missed_events.size() < 50)
       a.missed_events.push_back("stage " + std::to_string(e.stage) + " parent " + std::to_string(e.parent_label) + " " +
                                 event_name(e.type) + " (" + std::to_string(e.children.size()) + " children, volume " +
@@ -98,7 +108,14 @@ Accuracy evaluate(const TrackResult& tracked, const std::vector<LineageRow>& tru
     if (std::find(types.begin(), types.end(), e.type) == types.end()) continue;
     auto& sc = a.events[event_name(e.type)];
     ++sc.tracked;
-    sc.confirmed += truth_keys.count({e.stage, map_label(maps, e.stage - 1, e.parent_label), e.type});
+    const uint32_t tp = map_label(maps, e.stage - 1, e.parent_label);
+    const bool right = truth_keys.count({e.stage, tp, e.type}) > 0;
+    sc.confirmed += right;
+    if (!at_border(e.stage - 1, tp)) {
+      auto& si = a.events_interior[event_name(e.type)];
+      ++si.tracked;
+      si.confirmed += right;
+    }
   }
   const auto truth_summary = summarise(truth, truth_events, stages);
   for (int s = 0; s < stages; ++s) {

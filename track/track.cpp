@@ -159,9 +159,12 @@ std::vector<Overlap> overlaps(const Volume<uint32_t>& A, const LabelIndex& ia, c
   return out;
 }
 
-// Parent (index into A, -1 none) and covered voxels of every B particle.
+// Parent (index into A, -1 none) and covered voxels of every B particle:
+// the parent must cover min_overlap_fraction of the voxels of b that stage A could
+// see (unseen: those that entered the field since, mapped_outside()).
 void assign_parents(const std::vector<Overlap>& ov, const LabelIndex& ib, const std::vector<LineageRow>& b_rows,
-                    double min_fraction, std::vector<int32_t>& parent, std::vector<int64_t>& covered) {
+                    const std::vector<int64_t>& unseen, const TrackOptions& o, std::vector<int32_t>& parent,
+                    std::vector<int64_t>& covered) {
   parent.assign(b_rows.size(), -1);
   covered.assign(b_rows.size(), 0);
   for (const Overlap& o : ov) {  // ascending a: ties keep the lower index
@@ -169,8 +172,35 @@ void assign_parents(const std::vector<Overlap>& ov, const LabelIndex& ib, const 
     if (bi < 0) continue;
     if (o.n > covered[bi]) covered[bi] = o.n, parent[bi] = o.a;
   }
-  for (size_t q = 0; q < b_rows.size(); ++q)
-    if (static_cast<double>(covered[q]) < min_fraction * static_cast<double>(b_rows[q].volume_vox)) parent[q] = -1;
+  for (size_t q = 0; q < b_rows.size(); ++q) {
+    const double seen = static_cast<double>(b_rows[q].volume_vox - unseen[q]);
+    if (static_cast<double>(covered[q]) < o.min_overlap_fraction * seen) parent[q] = -1;
+  }
+}
+
+// Voxels of every particle of V cut by the faces that the affine map y = M x + t sends outside
+// the volume; with the inverse of the stage map, the parts of B particles that entered the field
+// since A (track.hpp step 3). Only the boxes of border particles are read.
+std::vector<int64_t> mapped_outside(const Volume<uint32_t>& V, const std::vector<LineageRow>& rows,
+                                    const Eigen::Matrix3d& M, const Eigen::Vector3d& t, int threads) {
+  const Shape sh = V.shape();
+  const double n[3] = {static_cast<double>(sh.nz), static_cast<double>(sh.ny), static_cast<double>(sh.nx)};
+  std::vector<int64_t> out(rows.size(), 0);
+#pragma omp parallel for schedule(dynamic) num_threads(threads > 0 ? threads : omp_get_max_threads())
+  for (int64_t q = 0; q < static_cast<int64_t>(rows.size()); ++q) {
+    const LineageRow& r = rows[static_cast<size_t>(q)];
+    if (!r.touches_border) continue;
+    int64_t c = 0;
+    for (int64_t k = r.box_lo[0]; k < r.box_hi[0]; ++k)
+      for (int64_t j = r.box_lo[1]; j < r.box_hi[1]; ++j)
+        for (int64_t i = r.box_lo[2]; i < r.box_hi[2]; ++i) {
+          if (V.data()[(k * sh.ny + j) * sh.nx + i] != r.label) continue;
+          const Eigen::Vector3d x = M * Eigen::Vector3d(k + 0.5, j + 0.5, i + 0.5) + t;
+          if (!(x[0] >= 0 && x[1] >= 0 && x[2] >= 0 && x[0] < n[0] && x[1] < n[1] && x[2] < n[2])) ++c;
+        }
+    out[static_cast<size_t>(q)] = c;
+  }
+  return out;
 }
 
 // For every eligible A particle, the B particle of ANOTHER parent that received most of its moved
@@ -355,8 +385,10 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
     std::vector<int32_t> parent, parent1;
     std::vector<int64_t> covered, covered1;
     std::vector<Overlap> ov1;
+    const Eigen::Matrix3d Mi = m.M.inverse();
+    const std::vector<int64_t> unseen = mapped_outside(labels, rows, Mi, -(Mi * m.t), o_.threads);
     auto ov = overlaps(prev_, ia, labels, m.M, shift, o_.threads);
-    assign_parents(ov, ib, rows, o_.min_overlap_fraction, parent, covered);
+    assign_parents(ov, ib, rows, unseen, o_, parent, covered);
     if (o_.refine) {
       // Residual shift of each A particle: its children's volume-weighted centroid off its mapped centroid.
       std::vector<Eigen::Vector3d> sum(prev_rows_.size(), Eigen::Vector3d::Zero());
@@ -373,7 +405,7 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
       covered1.swap(covered);
       ov1.swap(ov);
       ov = overlaps(prev_, ia, labels, m.M, shift, o_.threads);
-      assign_parents(ov, ib, rows, o_.min_overlap_fraction, parent, covered);
+      assign_parents(ov, ib, rows, unseen, o_, parent, covered);
       // A child missed by its parent's shift (a thin chip on the side the body's centroid moved
       // away from) keeps its first-pass match: the better covered of the two passes wins.
       for (size_t q = 0; q < rows.size(); ++q)
@@ -701,6 +733,7 @@ std::vector<LineageRow> read_lineage(const Table& t) {
     if (t.has("volume_vox")) r.volume_vox = static_cast<int64_t>(t.num("volume_vox")[i]);
     if (t.has("cz_vox")) r.centroid_vox = {t.num("cz_vox")[i], t.num("cy_vox")[i], t.num("cx_vox")[i]};
     if (t.has("absorbed_vox")) r.absorbed_vox = static_cast<int64_t>(t.num("absorbed_vox")[i]);
+    if (t.has("border")) r.touches_border = t.num("border")[i] != 0;
   }
   return out;
 }

@@ -56,6 +56,9 @@ int main(int argc, char** argv) try {
     std::printf("%s_truth,%lld\n%s_tracked,%lld\n%s_recall,%.4f\n%s_precision,%.4f\n", name.c_str(),
                 static_cast<long long>(e.truth), name.c_str(), static_cast<long long>(e.tracked), name.c_str(),
                 e.recall(), name.c_str(), e.precision());
+  for (const auto& [name, e] : a.events_interior)
+    std::printf("%s_interior_truth,%lld\n%s_interior_recall,%.4f\n%s_interior_precision,%.4f\n", name.c_str(),
+                static_cast<long long>(e.truth), name.c_str(), e.recall(), name.c_str(), e.precision());
   for (size_t s = 0; s < a.pct_broken.size(); ++s)
     std::printf("pct_intact_broken_stage%zu,%.2f\npct_intact_broken_truth_stage%zu,%.2f\n", s, a.pct_broken[s], s,
                 a.pct_broken_truth[s]);

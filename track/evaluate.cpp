@@ -58,6 +58,11 @@ Accuracy evaluate(const TrackResult& tracked, const std::vector<LineageRow>& tru
   }
   if (truth_stages != stages) throw UsageError("evaluate: the truth lineage has another number of stages");
   Accuracy a;
+  // Truth particles cut by the faces (stage, truth label): the truth lineage's `border` column.
+  auto at_border = [&](int stage, uint32_t label) {
+    auto it = truth_row.find({stage, label});
+    return it != truth_row.end() && it->second->touches_border;
+  };
   for (const auto& r : tracked.lineage) {
     if (r.stage == 0) continue;
     ++a.particles;
@@ -67,6 +72,7 @@ Accuracy evaluate(const TrackResult& tracked, const std::vector<LineageRow>& tru
     const uint32_t tg = it == truth_row.end() ? 0 : it->second->grain;
     const bool ok = map_label(maps, r.stage - 1, r.parent_label) == tp;
     a.right_parent += ok;
+    if (!at_border(r.stage, q)) ++a.particles_interior, a.right_parent_interior += ok;
     if (!ok && a.mistakes.size() < 50)
       a.mistakes.push_back("stage " + std::to_string(r.stage) + " label " + std::to_string(r.label) + " (truth " +
                            std::to_string(q) + ", " + (it == truth_row.end() ? "-" : event_name(it->second->event)) +
@@ -82,11 +88,6 @@ Accuracy evaluate(const TrackResult& tracked, const std::vector<LineageRow>& tru
   for (const auto& e : truth_events) truth_keys.insert({e.stage, e.parent_label, e.type});
   for (const auto& e : tracked.events)
     if (e.parent_label) tracked_keys.insert({e.stage, map_label(maps, e.stage - 1, e.parent_label), e.type});
-  // Truth parents cut by the faces (stage of the parent, its label).
-  auto at_border = [&](int stage, uint32_t label) {
-    auto it = truth_row.find({stage, label});
-    return it != truth_row.end() && it->second->touches_border;
-  };
   for (Event t : types) a.events[event_name(t)], a.events_interior[event_name(t)];
   for (const auto& e : truth_events) {
     if (std::find(types.begin(), types.end(), e.type) == types.end()) continue;

@@ -13,8 +13,9 @@
 // the same key / truth events of the type; precision = tracked events of a
 // type whose key holds a truth event of that type / tracked events of it.
 // The % of intact grains broken comes from summarise() on both lineages.
-// events_interior: the same scores over the events whose truth parent does
-// not touch the volume's faces (the truth lineage's `border` column, when
+// events_interior (and right_parent_interior): the same scores over the
+// events whose truth parent (the particles whose truth particle) does not
+// touch the volume's faces (the truth lineage's `border` column, when
 // it has one): a parent cut by a face shows only part of its volume, so
 // its children's visible shares may say chipping where the whole grain
 // split (a scan of a window inside the specimen).
@@ -43,6 +44,7 @@ struct EventScore {
 
 struct Accuracy {
   int64_t particles = 0, right_parent = 0, right_grain = 0;  // tracked particles at stages >= 1
+  int64_t particles_interior = 0, right_parent_interior = 0;  // those whose truth particle is clear of the faces
   std::map<std::string, EventScore> events;  // "split", "fragmentation", "chipping", "lost"
   std::map<std::string, EventScore> events_interior;  // the same, parents clear of the faces
   std::vector<double> pct_broken, pct_broken_truth;  // per stage

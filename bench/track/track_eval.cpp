@@ -56,6 +56,9 @@ int main(int argc, char** argv) try {
     std::printf("%s_truth,%lld\n%s_tracked,%lld\n%s_recall,%.4f\n%s_precision,%.4f\n", name.c_str(),
                 static_cast<long long>(e.truth), name.c_str(), static_cast<long long>(e.tracked), name.c_str(),
                 e.recall(), name.c_str(), e.precision());
+  std::printf("particles_interior,%lld\nright_parent_interior,%.4f\n", static_cast<long long>(a.particles_interior),
+              a.particles_interior ? static_cast<double>(a.right_parent_interior) / static_cast<double>(a.particles_interior)
+                                   : 1.0);
   for (const auto& [name, e] : a.events_interior)
     std::printf("%s_interior_truth,%lld\n%s_interior_recall,%.4f\n%s_interior_precision,%.4f\n", name.c_str(),
                 static_cast<long long>(e.truth), name.c_str(), e.recall(), name.c_str(), e.precision());

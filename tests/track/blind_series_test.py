@@ -9,7 +9,8 @@ permuted at every stage, grains rotating up to 8 degrees. The tracker runs
 on the truth label volumes (the tracker alone) and is scored here against
 the truth lineage, labels being the truth's:
   * right parent >= 0.98 of the particles at stages >= 1 (before grains
-    entering the field kept their parent: 0.969 on the dev seed);
+    entering the field kept their parent: 0.969 on the dev seed), >= 0.995
+    (issue 20's figure for the tracker alone) of those clear of the faces;
   * breakage events (split, fragmentation, chipping) of parents clear of
     the faces, keyed by (stage, parent label, type): recall and precision
     >= 0.95 (the faces hide part of a cut parent: its events are not asked);
@@ -73,6 +74,8 @@ def run(tomograin, work):
     border = {(int(r["stage"]), int(r["label"])): r["border"] == "1" for r in truth}
     later = [r for r in tracked if int(r["stage"]) > 0]
     right = sum(tparent.get((r["stage"], r["label"])) == r["parent_label"] for r in later) / max(1, len(later))
+    inner = [r for r in later if not border.get((int(r["stage"]), int(r["label"])), True)]
+    right_in = sum(tparent.get((r["stage"], r["label"])) == r["parent_label"] for r in inner) / max(1, len(inner))
     te, ke = events(truth), events(tracked)
     interior = lambda key: not border.get((key[0] - 1, key[1]), True)  # noqa: E731
     t_ev = {(k, e) for k, e in te.items() if e in BREAKS and interior(k)}
@@ -82,14 +85,15 @@ def run(tomograin, work):
     new_t = sum(r["event"] == "new" for r in truth)
     new_k = sum(r["event"] == "new" for r in tracked)
     by_type = collections.Counter(e for _, e in t_ev)
-    print(f"seed {SEED}, {SIZE}^3, R {R}: {len(later)} particles at stages >= 1, right parent {right:.4f}; "
+    print(f"seed {SEED}, {SIZE}^3, R {R}: {len(later)} particles at stages >= 1, right parent {right:.4f} "
+          f"({right_in:.4f} of the {len(inner)} clear of the faces); "
           f"interior breakage events {len(t_ev)} ({dict(by_type)}): recall {recall:.3f}, precision {precision:.3f}; "
           f"new {new_k} (truth {new_t})")
     fails = []
     if len(t_ev) < 20:
         fails.append(f"only {len(t_ev)} interior events in the series (the test needs >= 20)")
-    if right < 0.98:
-        fails.append(f"right parent {right:.4f} < 0.98")
+    if right < 0.98 or right_in < 0.995:
+        fails.append(f"right parent {right:.4f} (< 0.98?), clear of the faces {right_in:.4f} (< 0.995?)")
     if recall < 0.95 or precision < 0.95:
         fails.append(f"interior events recall {recall:.3f} / precision {precision:.3f} < 0.95")
     if new_k > 1.25 * new_t + 3:

@@ -13,10 +13,11 @@
 // the same key / truth events of the type; precision = tracked events of a
 // type whose key holds a truth event of that type / tracked events of it.
 // The % of intact grains broken comes from summarise() on both lineages.
-// events_interior (and right_parent_interior): the same scores over the
-// events whose truth parent (the particles whose truth particle) does not
-// touch the volume's faces (the truth lineage's `border` column, when
-// it has one): a parent cut by a face shows only part of its volume, so
+// events_interior: the same scores over the events whose truth parent does
+// not touch the volume's faces, and right_parent_interior over the particles
+// whose truth particle does not (the truth lineage's `border` column, when
+// it has one; without it every particle counts): a parent cut by a face
+// shows only part of its volume, so
 // its children's visible shares may say chipping where the whole grain
 // split (a scan of a window inside the specimen).
 #pragma once

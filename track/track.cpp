@@ -163,7 +163,7 @@ std::vector<Overlap> overlaps(const Volume<uint32_t>& A, const LabelIndex& ia, c
 // the parent must cover min_overlap_fraction of the voxels of b that stage A could
 // see (unseen: those that entered the field since, mapped_outside()).
 void assign_parents(const std::vector<Overlap>& ov, const LabelIndex& ib, const std::vector<LineageRow>& b_rows,
-                    const std::vector<int64_t>& unseen, const TrackOptions& o, std::vector<int32_t>& parent,
+                    const std::vector<int64_t>& unseen, const TrackOptions& opt, std::vector<int32_t>& parent,
                     std::vector<int64_t>& covered) {
   parent.assign(b_rows.size(), -1);
   covered.assign(b_rows.size(), 0);
@@ -174,7 +174,7 @@ void assign_parents(const std::vector<Overlap>& ov, const LabelIndex& ib, const 
   }
   for (size_t q = 0; q < b_rows.size(); ++q) {
     const double seen = static_cast<double>(b_rows[q].volume_vox - unseen[q]);
-    if (static_cast<double>(covered[q]) < o.min_overlap_fraction * seen) parent[q] = -1;
+    if (static_cast<double>(covered[q]) < opt.min_overlap_fraction * seen) parent[q] = -1;
   }
 }
 

@@ -84,10 +84,12 @@ struct Overlap {
   int64_t n;
 };
 
-// ov(a, b): voxels of A particle a that land in B label b once moved by M x + shift[a].
+// ov(a, b): voxels of A particle a that land in B label b once moved by M x + shift[a]. The two
+// stages may differ in shape (each scan cropped to its own specimen height): voxels that land
+// outside B's volume count nowhere.
 std::vector<Overlap> overlaps(const Volume<uint32_t>& A, const LabelIndex& ia, const Volume<uint32_t>& B,
                               const Eigen::Matrix3d& M, const std::vector<Eigen::Vector3d>& shift, int threads) {
-  const Shape sh = A.shape();
+  const Shape sh = A.shape(), sb = B.shape();
   const int nt = threads > 0 ? threads : omp_get_max_threads();
   std::vector<std::unordered_map<uint64_t, int64_t>> part(static_cast<size_t>(nt));
 #pragma omp parallel num_threads(nt)
@@ -95,7 +97,7 @@ std::vector<Overlap> overlaps(const Volume<uint32_t>& A, const LabelIndex& ia, c
     const int t = omp_get_thread_num(), n = omp_get_num_threads();
     auto& acc = part[static_cast<size_t>(t)];
     const int64_t z0 = sh.nz * t / n, z1 = sh.nz * (t + 1) / n;
-    const double nzd = static_cast<double>(sh.nz), nyd = static_cast<double>(sh.ny), nxd = static_cast<double>(sh.nx);
+    const double nzd = static_cast<double>(sb.nz), nyd = static_cast<double>(sb.ny), nxd = static_cast<double>(sb.nx);
     uint64_t run_key = ~uint64_t{0};
     int64_t run = 0;
     // Runs go through a small direct-mapped cache before the hash map: the same few (a, b)
@@ -135,7 +137,7 @@ std::vector<Overlap> overlaps(const Volume<uint32_t>& A, const LabelIndex& ia, c
           // Inside [0, n) in each axis, where truncation is the floor (no libm call per voxel).
           if (!(y0 >= 0 && y1 >= 0 && y2 >= 0 && y0 < nzd && y1 < nyd && y2 < nxd)) continue;
           const int64_t bk = static_cast<int64_t>(y0), bj = static_cast<int64_t>(y1), bi = static_cast<int64_t>(y2);
-          const uint32_t b = B.data()[(bk * sh.ny + bj) * sh.nx + bi];
+          const uint32_t b = B.data()[(bk * sb.ny + bj) * sb.nx + bi];
           if (!b) continue;
           const uint64_t key = (static_cast<uint64_t>(ai) << 32) | b;
           if (key != run_key) {
@@ -179,12 +181,14 @@ void assign_parents(const std::vector<Overlap>& ov, const LabelIndex& ib, const 
 }
 
 // Voxels of every particle of V cut by the faces that the affine map y = M x + t sends outside
-// the volume; with the inverse of the stage map, the parts of B particles that entered the field
-// since A (track.hpp step 3). Only the boxes of border particles are read.
+// `target` (a volume's shape); with the inverse of the stage map and A's shape, the parts of B
+// particles that entered the field since A (track.hpp step 3). Only the boxes of border
+// particles are read.
 std::vector<int64_t> mapped_outside(const Volume<uint32_t>& V, const std::vector<LineageRow>& rows,
-                                    const Eigen::Matrix3d& M, const Eigen::Vector3d& t, int threads) {
+                                    const Eigen::Matrix3d& M, const Eigen::Vector3d& t, const Shape& target,
+                                    int threads) {
   const Shape sh = V.shape();
-  const double n[3] = {static_cast<double>(sh.nz), static_cast<double>(sh.ny), static_cast<double>(sh.nx)};
+  const double n[3] = {static_cast<double>(target.nz), static_cast<double>(target.ny), static_cast<double>(target.nx)};
   std::vector<int64_t> out(rows.size(), 0);
 #pragma omp parallel for schedule(dynamic) num_threads(threads > 0 ? threads : omp_get_max_threads())
   for (int64_t q = 0; q < static_cast<int64_t>(rows.size()); ++q) {
@@ -351,9 +355,6 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
   }
   const int s = stages();
   if (s > 0) {
-    if (labels.shape() != prev_.shape())
-      throw InputError(name + ": shape " + labels.shape().str() + " differs from the first stage's (" +
-                       prev_.shape().str() + ", " + names_.front() + ")");
     const auto &g0 = prev_.geometry().voxel_size_m, &g1 = labels.geometry().voxel_size_m;
     for (int a = 0; a < 3; ++a)
       if (std::abs(g0[a] - g1[a]) > 1e-6 * std::max(std::abs(g0[a]), std::abs(g1[a])))
@@ -372,7 +373,8 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
     std::vector<Point> pa, pb;
     for (const auto& r : prev_rows_) pa.push_back({r.centroid_vox, static_cast<double>(r.volume_vox)});
     for (const auto& r : rows) pb.push_back({r.centroid_vox, static_cast<double>(r.volume_vox)});
-    const StageMap m = estimate_map(pa, pb, static_cast<double>(labels.shape().nz), o_.map);
+    const StageMap m =
+        estimate_map(pa, pb, static_cast<double>(std::max(labels.shape().nz, prev_.shape().nz)), o_.map);
     if (!o_.allow_extension && m.axial_scale() > 1 + o_.extension_tolerance)
       throw InputError(names_.back() + " -> " + name + ": the specimen gets " +
                        std::to_string((m.axial_scale() - 1) * 100) +
@@ -386,7 +388,7 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
     std::vector<int64_t> covered, covered1;
     std::vector<Overlap> ov1;
     const Eigen::Matrix3d Mi = m.M.inverse();
-    const std::vector<int64_t> unseen = mapped_outside(labels, rows, Mi, -(Mi * m.t), o_.threads);
+    const std::vector<int64_t> unseen = mapped_outside(labels, rows, Mi, -(Mi * m.t), prev_.shape(), o_.threads);
     auto ov = overlaps(prev_, ia, labels, m.M, shift, o_.threads);
     assign_parents(ov, ib, rows, unseen, o_, parent, covered);
     if (o_.refine) {
@@ -452,6 +454,11 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
       x.contact_faces = shared_faces(prev_, pa.label, prev_rows_[n].label, lo, hi);
     }
     link_stage(prev_rows_, rows, parent, o_, absorbed);
+    // Displacements in the frame of the files' origins: a stage cropped differently, with the
+    // crop recorded in origin_m, has not moved by the crop's offset.
+    const auto& g = labels.geometry();
+    for (auto& r : rows)
+      for (int ax = 0; ax < 3; ++ax) r.displacement_vox[ax] += (g.origin_m[ax] - prev_origin_m_[ax]) / g.voxel_size_m[ax];
     for (size_t q = 0; q < rows.size(); ++q)
       rows[q].quality = parent[q] < 0 ? 0.0 : static_cast<double>(covered[q]) / static_cast<double>(rows[q].volume_vox);
   }
@@ -466,6 +473,7 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
   lineage_.insert(lineage_.end(), rows.begin(), rows.end());
   prev_rows_ = std::move(rows);
   prev_whole_ = std::move(whole);
+  prev_origin_m_ = labels.geometry().origin_m;
   Volume<uint32_t> spent = std::move(prev_);
   prev_ = std::move(labels);
   names_.push_back(name);
@@ -635,7 +643,7 @@ TrackResult track_files(const std::vector<std::string>& paths, const TrackOption
     ro.progress = false;
     ro.reuse = &spare;
     Volume<uint32_t> labels = read_label_volume(spec, ro);
-    voxels = labels.size();
+    voxels = std::max(voxels, labels.size());  // stages cropped differently: the largest
     spare = tr.add_stage(std::move(labels), paths[s]);
     sec.push_back(seconds_since(t0));
     peak.push_back(peak_rss_bytes());

@@ -123,6 +123,7 @@
 // OpenMP slabs; the per-thread counts are integers merged in thread order,
 // so the result is identical for any thread count.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -209,7 +210,7 @@ struct TrackResult {
   std::vector<double> stage_seconds;
   std::vector<int64_t> peak_rss_bytes;
   bool own_peak = false;
-  int64_t voxels = 0;  // per stage
+  int64_t voxels = 0;  // per stage (the largest, when stages were cropped differently)
 };
 
 // Step 5 for one pair of stages: given each B particle's parent (index into
@@ -246,7 +247,9 @@ std::vector<SummaryRow> summarise(const std::vector<LineageRow>& lineage, const 
 class Tracker {
  public:
   explicit Tracker(TrackOptions options = {});
-  // Stages must share shape and voxel size (InputError naming `name`).
+  // Stages must share the voxel size (InputError naming `name`); their shapes
+  // may differ (each scan cropped to its own specimen): the map takes up the
+  // offset, and displacements are in the frame of the files' origin_m.
   // Returns the stage before's labels, no longer needed (their storage can
   // hold the next stage: ReadOptions::reuse).
   Volume<uint32_t> add_stage(Volume<uint32_t> labels, const std::string& name);
@@ -282,11 +285,12 @@ class Tracker {
   std::vector<LineageRow> lineage_;
   std::vector<StageMap> maps_;
   std::vector<double> seconds_;
+  std::array<double, 3> prev_origin_m_{0, 0, 0};  // the last stage's origin_m (its labels may be spilled)
 };
 
 // Reads label volumes (an .h5 file's /labels by default) in the order given
-// and tracks them. InputError names the file whose shape or voxel size
-// differs from the first, or the pair given out of order.
+// and tracks them. InputError names the file whose voxel size differs from
+// the first, or the pair given out of order.
 TrackResult track_files(const std::vector<std::string>& paths, const TrackOptions& options = {});
 
 // The three tables and their writer (DIR/lineage.csv, events.csv, summary.csv,

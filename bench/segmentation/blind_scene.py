@@ -109,7 +109,7 @@ def radial(shapes, idx, u):
     return shapes["r0"][idx] * bump / np.sqrt(q)
 
 
-def pack(rng, shape, R, spread, phi, pad_frac, pad):
+def pack(rng, shape, R, spread, phi, pad_frac, pad, elongation=1.0):
     """Centres (volume coordinates), shapes and a uniform draw u per grain
     of a dense random packing. The overlap of a pair is measured with each
     grain's radius along the line of centres (its shape, not a bounding
@@ -117,7 +117,7 @@ def pack(rng, shape, R, spread, phi, pad_frac, pad):
     u < pad_frac (the ones to be split) get pad more reach while relaxing,
     room for their halves' drift."""
     rmax = 1.5 * R
-    margin = rmax + 2.0
+    margin = rmax * 1.1 * elongation ** (2 / 3) + 2.0 if elongation != 1.0 else rmax + 2.0
     L = np.array(shape, float) + 2 * margin
     target = phi * float(np.prod(L))
     radii = []
@@ -128,7 +128,7 @@ def pack(rng, shape, R, spread, phi, pad_frac, pad):
         vol += 4.0 / 3.0 * math.pi * r ** 3
     r = np.array(radii)
     n = r.size
-    shapes = [make_shape(rng, rr) for rr in r]
+    shapes = [make_shape(rng, rr, elongation) for rr in r]
     shapes = {k: np.array([sh[k] for sh in shapes]) for k in shapes[0]}
     u = rng.uniform(size=n)
     extra = np.where(u < pad_frac, pad, 0.0)
@@ -168,10 +168,12 @@ def pack(rng, shape, R, spread, phi, pad_frac, pad):
                                 "box_solid_fraction": float(vol / np.prod(L))}
 
 
-def make_shape(rng, r0):
+def make_shape(rng, r0, elongation=1.0):
     """A near-sphere: ellipsoid axes r0 x U(0.92, 1.08), random orientation,
-    three odd cubic lobes of total amplitude 3 %."""
-    ax = rng.uniform(0.92, 1.08, 3)
+    three odd cubic lobes of total amplitude 3 %. With elongation e > 1 the
+    first axis is e times the other two at the same volume (a prolate grain,
+    e.g. 1.6 for an elongated sand): axes x (e^(2/3), e^(-1/3), e^(-1/3))."""
+    ax = rng.uniform(0.92, 1.08, 3) * np.array([elongation ** (2 / 3), elongation ** (-1 / 3), elongation ** (-1 / 3)])
     Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
     A = Q @ np.diag(1.0 / ax ** 2) @ Q.T
     amps = rng.uniform(-1, 1, 3)
@@ -250,7 +252,7 @@ def place_pores(rng, g, planes, a):
 
 def build(rng, a, shape):
     split_pad = a.drift / 2.0
-    centres, shapes, kinds, pstats = pack(rng, shape, a.radius, a.spread, a.phi, a.split_frac, split_pad)
+    centres, shapes, kinds, pstats = pack(rng, shape, a.radius, a.spread, a.phi, a.split_frac, split_pad, a.elongation)
     hi = np.array(shape, float)
     particles = []
     gid = 0
@@ -373,6 +375,8 @@ def main(argv=None):
     ap.add_argument("--size", type=parse_size, default=(192, 192, 192), help="scan size, voxels: N or nz,ny,nx (192)")
     ap.add_argument("--radius", type=float, default=20.0, help="mean grain radius, voxels (20)")
     ap.add_argument("--spread", type=float, default=0.12, help="relative standard deviation of the grain radii (0.12)")
+    ap.add_argument("--elongation", type=float, default=1.0,
+                    help="long axis over the other two of every grain, same volume (1.0: near-spheres)")
     ap.add_argument("--phi", type=float, default=0.58, help="solid fraction of the packing before cuts and pores (0.58)")
     ap.add_argument("--gap", type=float, default=1.0, help="fragment gap width, voxels (1.0)")
     ap.add_argument("--split-frac", type=float, default=0.15, help="fraction of grains split in two halves (0.15)")

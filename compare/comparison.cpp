@@ -74,6 +74,7 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
   std::vector<XctStage> xs;
   std::vector<Series> ideal(in.xct.size()), imaged(in.xct.size());
   std::vector<ContactSeries> exact(in.xct.size());  // the DEM's own contacts (from its spheres)
+  std::vector<measure::GradingSample> exact_shapes(in.xct.size());  // and its particles' shapes
   // The DEM's lineage at the same stages (compare/dem_lineage.hpp): which
   // snapshot each stage is, and its truth labels; and the tracker run on the
   // imaged DEM labels, each stage put on the first stage's grid (a scanner's
@@ -153,6 +154,7 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
     ideal[n] = std::move(d.ideal);
     imaged[n] = std::move(d.imaged);
     exact[n] = std::move(d.exact);
+    exact_shapes[n] = std::move(d.exact_shapes);
     ideal[n].broken_fraction = imaged[n].broken_fraction = b.fraction;
     ideal[n].broken_method = imaged[n].broken_method = b.method;
 
@@ -247,6 +249,7 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
     data.series.push_back({&xs[n].s, &ideal[n], opt.imaged_path ? &imaged[n] : nullptr});
     data.grey.push_back(xs[n].grey ? &*xs[n].grey : nullptr);
     data.exact.push_back(&exact[n]);
+    data.exact_shapes.push_back(&exact_shapes[n]);
   }
   data.history = dem.history;
   data.experiment_curve = expc;

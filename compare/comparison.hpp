@@ -15,7 +15,8 @@
 //   dem_imaged   segment() the voxelised grey scan and measure it, with the
 //                same SegmentOptions and ParticleOptions as the experiment
 //   dem_exact    the snapshot's own contacts (sphere pairs), for the contact
-//                fabric only (compare/fabric.hpp)
+//                fabric (compare/fabric.hpp), and its particles' FR and AR
+//                classes from their spheres, every particle however small
 //   distances    KS and W1 of PSD (Dmed by mass), FR, AR for
 //                experiment–dem_imaged, experiment–dem_ideal and
 //                dem_ideal–dem_imaged (= the segmentation bias)
@@ -36,7 +37,9 @@
 //   tracker_bias.csv    stage ("all" or a stage), quantity, value, count: the tracker's bias on
 //                       DEM data (dem_imaged scored against dem_exact by track::evaluate)
 //   psd.csv             stage, series, sieve_mm, passing_pct
-//   shape_classes.csv   stage, series, metric (fr|ar), class, percent
+//   shape_classes.csv   stage, series, metric (fr|ar), class, percent; series adds
+//                       dem_exact: every DEM particle's shape from its spheres, no
+//                       detection limit (compare/dem_stage.hpp exact_shape_sample)
 //   distances.csv       stage, pair, psd_ks, psd_w1_mm, fr_ks, fr_w1, ar_ks, ar_w1
 //   stress_strain.csv   series, strain, stress_mpa
 //   broken.csv          series, strain, broken_fraction, grains_broken, bonds_broken (DEM history counts)

@@ -4,11 +4,14 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <set>
 #include <unordered_map>
 
 #include "compare/report_files.hpp"
 #include "compare/voxelise.hpp"
+#include "measure/feret.hpp"
+#include "measure/hull.hpp"
 #include "core/errors.hpp"
 #include "dem/run_folder.hpp"
 
@@ -127,6 +130,54 @@ ContactSeries exact_contact_series(const SphereTable& s, double gap_tolerance) {
   return out;
 }
 
+measure::GradingSample exact_shape_sample(const SphereTable& s) {
+  std::map<int64_t, std::vector<size_t>> members;
+  for (size_t q = 0; q < s.size(); ++q) members[s.particle[q]].push_back(q);
+  std::vector<const std::vector<size_t>*> groups;
+  for (const auto& [id, m] : members) groups.push_back(&m);
+  // Points on a sphere: the golden-spiral half-sphere and its mirror image, pushed out so that
+  // their hull has the sphere's volume (the inscribed polytope of 256 points holds 1.6 % less):
+  // calipers then read between -0.1 % and +0.6 % of the radius instead of -0.6 % to 0.
+  std::vector<measure::Vec3> unit = measure::half_sphere_directions(128);
+  for (size_t q = 0, n = unit.size(); q < n; ++q) unit.push_back(-unit[q]);
+  const double scale = std::cbrt(4.0 / 3.0 * std::numbers::pi / measure::hull_volume(measure::convex_hull(unit)));
+  for (auto& u : unit) u *= scale;
+  const int64_t n = static_cast<int64_t>(groups.size());
+  std::vector<double> dmed(n), vol(n), deq(n), fr(n), ar(n);
+#pragma omp parallel for schedule(dynamic, 16)
+  for (int64_t g = 0; g < n; ++g) {
+    const std::vector<size_t>& m = *groups[static_cast<size_t>(g)];
+    double vs = 0;
+    for (size_t q : m) vs += 4.0 / 3.0 * std::numbers::pi * std::pow(s.r_m[q], 3);
+    deq[g] = 1e3 * std::cbrt(6.0 * vs / std::numbers::pi);
+    if (m.size() == 1) {  // a sphere: every caliper is its diameter
+      dmed[g] = deq[g], vol[g] = 1e9 * vs, fr[g] = 1, ar[g] = 1;
+      continue;
+    }
+    // Millimetres about the first sphere's centre: small coordinates for the hull's predicates.
+    const measure::Vec3 o(s.z_m[m[0]], s.y_m[m[0]], s.x_m[m[0]]);
+    std::vector<measure::Vec3> pts;
+    pts.reserve(m.size() * unit.size());
+    for (size_t q : m) {
+      const measure::Vec3 c = (measure::Vec3(s.z_m[q], s.y_m[q], s.x_m[q]) - o) * 1e3;
+      for (const auto& u : unit) pts.push_back(c + 1e3 * s.r_m[q] * u);
+    }
+    const measure::ConvexHull hull = measure::convex_hull(pts);
+    measure::Particle p;
+    p.feret = measure::feret_exact(hull);
+    p.stats.volume_m3 = measure::hull_volume(hull);  // mm^3 here: fill_sizing only takes ratios
+    measure::fill_sizing(p, measure::Sizing::feret);
+    dmed[g] = p.d_med_m, vol[g] = p.stats.volume_m3, fr[g] = p.fr, ar[g] = p.ar;
+  }
+  measure::GradingSample out;
+  out.size_mm = std::move(dmed);
+  out.mass = std::move(vol);
+  out.deq_mm = std::move(deq);
+  out.fr = std::move(fr);
+  out.ar = std::move(ar);
+  return out;
+}
+
 DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth::ImagingOptions& imaging,
                         const std::string& imaging_from, const CompareOptions& opt, const SegmentOptions& so,
                         const fs::path& slices, const std::string& stem, bool keep_labels) {
@@ -138,6 +189,7 @@ DemStage image_snapshot(const std::string& snapshot, double voxel_m, const synth
   Voxelised v = voxelise(spheres, vo);
   DemStage d;
   d.exact = exact_contact_series(spheres);
+  d.exact_shapes = exact_shape_sample(spheres);
   d.exact_coordination = mean_coordination(d.exact.by_size);
   d.particles = static_cast<int64_t>(v.particle_of_label.size()) - 1;
   measure_series(v.labels, opt.measure, d.ideal);

@@ -55,11 +55,27 @@ struct DemStage {
   int64_t particles = 0; // particles voxelised
   double exact_coordination = 0;  // mean coordination of the snapshot's particles (exact.by_size)
   ContactSeries exact;            // the snapshot's own contacts (exact_contact_series)
+  measure::GradingSample exact_shapes;  // every particle's shape from its spheres (exact_shape_sample)
   // Kept only when asked (keep_labels): for the DEM's lineage and the tracker
   // run on the imaged path (compare/dem_lineage.hpp).
   Volume<uint32_t> truth_labels, imaged_labels;
   std::vector<int64_t> particle_of_label;  // truth label -> particle id (index 0 unused)
 };
+// The shape of every DEM particle straight from its spheres: no voxels, no
+// detection limit. A particle is the convex hull of its spheres (the body a
+// fragment stands for, as voxelise's default cluster_body images it); Dmax
+// and Dmin by measure's exact Feret mode on that hull (each sphere's surface
+// sampled at 256 points, pushed out to the sphere's volume: calipers within
+// -0.1 % .. +0.6 % of its radius; a capsule's volume +0.3 %, FR +0.004), Dmed, FR and
+// AR by measure::fill_sizing from the hull's volume, as a scan's particle
+// table has them. A lone sphere is FR = AR = 1 exactly. size_mm is Dmed,
+// mass the hull volume (mm^3), deq_mm from the spheres' volume. Why: the
+// study's DEM shape classes at the end (78 % FR >= 0.9, 80 % AR < 2) count
+// the spheres that bond breakage set free, most of them far below a scan's
+// detection limit, which the imaged series (dem_ideal) cannot resolve
+// (bench/dem/RESULTS.md, "Shape classes of every DEM particle").
+measure::GradingSample exact_shape_sample(const SphereTable& s);
+
 // Voxelises `snapshot` at voxel_m with `imaging` (grey levels and noise),
 // measures the truth labels and, when opt.imaged_path, segments and measures
 // the grey scan with `so`; writes the mid-slices (STEM_dem_*). keep_labels:

@@ -140,6 +140,15 @@ void write_report_tables(const fs::path& out, const ReportData& d) {
     }
   write_csv(sum.table(), out / "summary.csv");
   write_csv(psd.table(), out / "psd.csv");
+  // The DEM's particles straight from its spheres: every one, however small (dem_stage.hpp).
+  for (size_t n = 0; n < rep.stages.size() && n < d.exact_shapes.size(); ++n) {
+    const measure::GradingSample* e = d.exact_shapes[n];
+    if (!e || e->fr.empty()) continue;
+    const auto fr = measure::class_percent(e->fr, measure::fr_thresholds());
+    const auto ar = measure::class_percent(e->ar, measure::ar_thresholds());
+    for (size_t q = 0; q < fr.size(); ++q) cls.row({rep.stages[n].name, kExactSeriesName, "fr", fr_names[q], fr[q]});
+    for (size_t q = 0; q < ar.size(); ++q) cls.row({rep.stages[n].name, kExactSeriesName, "ar", ar_names[q], ar[q]});
+  }
   write_csv(cls.table(), out / "shape_classes.csv");
 
   RowTable dist({"stage", "pair", "psd_ks", "psd_w1_mm", "fr_ks", "fr_w1", "ar_ks", "ar_w1"});

@@ -24,11 +24,14 @@ inline constexpr const char* kExactSeriesName = "dem_exact";
 
 // Everything the files are made from. Per stage: the three series
 // (dem_imaged nullptr when that path is off), the DEM's exact contacts and
+// particle shapes (shape_classes.csv's dem_exact rows: every particle, no
+// detection limit; compare/dem_stage.hpp exact_shape_sample), and
 // the grey-level estimate of the experiment's scan (nullptr for particle-table inputs).
 struct ReportData {
   const Report* report = nullptr;
   std::vector<std::array<const Series*, 3>> series;
   std::vector<const ContactSeries*> exact;
+  std::vector<const measure::GradingSample*> exact_shapes;  // every DEM particle's shape from its spheres (may be empty)
   std::vector<const GreyEstimate*> grey;
   Curve history, experiment_curve;
   int64_t initial_dem_particles = 0;

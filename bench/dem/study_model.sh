@@ -15,7 +15,8 @@
 # check:     dem/examples/oedometer_calibrated.toml itself on 1 and 2 threads
 #            (same bits; wall times).
 # shapes:    FR and AR classes of check's run at 15.48 %, imaged at 24.6 um
-#            (`compare`'s dem_ideal series, particles >= 0.2 mm). compare needs an
+#            (`compare`'s dem_ideal series, particles >= 0.2 mm) and of every
+#            particle from its spheres (dem_exact, the study's DEM count). compare needs an
 #            XCT stage: a synthetic sphere scan stands in for it and its rows are
 #            not read (no DEM-only shape command yet).
 # Without a step: all four. Long: each run takes 3-8 min of one core.
@@ -73,5 +74,5 @@ if [ "$STEP" = all ] || [ "$STEP" = shapes ]; then
   rm -rf "$S/report"
   "$BIN" compare --xct "$S/stand_in.csv" --xct-strains 0.1548 --voxel-um 24.6 --dem "$OUT/calibrated_t1" \
     --no-imaged --no-track --no-plots -o "$S/report" > /dev/null
-  grep dem_ideal "$S/report/shape_classes.csv"
+  grep -E "dem_ideal|dem_exact" "$S/report/shape_classes.csv"
 fi

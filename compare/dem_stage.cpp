@@ -164,7 +164,13 @@ measure::GradingSample exact_shape_sample(const SphereTable& s) {
     }
     const measure::ConvexHull hull = measure::convex_hull(pts);
     measure::Particle p;
-    p.feret = measure::feret_exact(hull);
+    // The tie rule as the particle table uses it (tolerance there: half a voxel, ~1 % of a grain's
+    // Dmax): a fragment's diameters form a ring (its 8 outer spheres), and the single longest pair
+    // of the sampled surfaces tilts out of the flat face by a few degrees, which moved its Dmin, so
+    // its AR and FR, by up to 0.1 with the fragment's turn (tests/compare/exact_shapes_test.cpp).
+    measure::FeretExactOptions fo;
+    fo.tie_tolerance = 0.01 * measure::hull_diameter(hull);
+    p.feret = measure::feret_exact(hull, fo);
     p.stats.volume_m3 = measure::hull_volume(hull);  // mm^3 here: fill_sizing only takes ratios
     measure::fill_sizing(p, measure::Sizing::feret);
     dmed[g] = p.d_med_m, vol[g] = p.stats.volume_m3, fr[g] = p.fr, ar[g] = p.ar;

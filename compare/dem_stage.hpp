@@ -64,7 +64,8 @@ struct DemStage {
 // The shape of every DEM particle straight from its spheres: no voxels, no
 // detection limit. A particle is the convex hull of its spheres (the body a
 // fragment stands for, as voxelise's default cluster_body images it); Dmax
-// and Dmin by measure's exact Feret mode on that hull (each sphere's surface
+// and Dmin by measure's exact Feret mode on that hull, with the particle
+// table's tie rule at 1 % of Dmax (each sphere's surface
 // sampled at 256 points, pushed out to the sphere's volume: calipers within
 // -0.1 % .. +0.6 % of its radius; a capsule's volume +0.3 %, FR +0.004), Dmed, FR and
 // AR by measure::fill_sizing from the hull's volume, as a scan's particle

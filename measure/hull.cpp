@@ -84,6 +84,26 @@ ConvexHull convex_hull(std::span<const Vec3> points) {
     }
     if (n == 3) h.faces.push_back(tri);
   }
+  // Canonical order: vertices sorted (lexicographically), each triangle rotated to start at its
+  // smallest index (orientation kept), triangles sorted. The mesh lists them in an order that
+  // follows its allocations, which differ from call to call, and sums over them (the hull's
+  // volume, the tie rule's mean directions) then differed in the last bits (two calls on the same
+  // points, tests/compare/exact_shapes_test.cpp).
+  std::vector<int32_t> order(h.vertices.size());
+  for (size_t q = 0; q < order.size(); ++q) order[q] = static_cast<int32_t>(q);
+  std::sort(order.begin(), order.end(), [&](int32_t a, int32_t b) {
+    return std::lexicographical_compare(h.vertices[a].data(), h.vertices[a].data() + 3, h.vertices[b].data(),
+                                        h.vertices[b].data() + 3);
+  });
+  std::vector<int32_t> rank(order.size());
+  std::vector<Vec3> sorted(order.size());
+  for (size_t q = 0; q < order.size(); ++q) rank[order[q]] = static_cast<int32_t>(q), sorted[q] = h.vertices[order[q]];
+  h.vertices = std::move(sorted);
+  for (auto& f : h.faces) {
+    for (auto& v : f) v = rank[v];
+    std::rotate(f.begin(), std::min_element(f.begin(), f.end()), f.end());
+  }
+  std::sort(h.faces.begin(), h.faces.end());
   return h;
 }
 

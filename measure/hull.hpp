@@ -36,7 +36,10 @@ struct ConvexHull {
   int dimension = 3;
 };
 
-// Hull of `points` (any count, duplicates allowed). O(n log h).
+// Hull of `points` (any count, duplicates allowed). O(n log h). Vertices in
+// lexicographic order, each triangle starting at its smallest vertex index,
+// triangles sorted: the same points give the same hull, bit for bit, on
+// every call and thread (sums over it do not change in the last bits).
 ConvexHull convex_hull(std::span<const Vec3> points);
 
 struct OrientedBoxOptions {

@@ -11,7 +11,7 @@
 namespace cmd_convert {
 
 struct Opts {
-  std::string in, out, to, range = "auto";
+  std::string in, out, to, range = "auto", crop;
   double voxel_um = 0;
   int compression = 0;
 };
@@ -74,10 +74,55 @@ tg::AnyVolume convert_type(tg::AnyVolume&& v, tg::DType to, const Opts& o) {
                        " is not supported (use --to uint16 or --to float32)");
 }
 
+// --crop Z0:Z1,Y0:Y1,X0:X1 (voxels, half-open; an empty bound is the volume's edge) as a box
+// inside `s`; UsageError naming the option otherwise.
+tg::Box parse_crop(const std::string& text, const tg::Shape& s, const std::string& file) {
+  const int64_t n[3] = {s.nz, s.ny, s.nx};
+  int64_t lo[3], hi[3];
+  size_t at = 0;
+  for (int a = 0; a < 3; ++a) {
+    const size_t end = a < 2 ? text.find(',', at) : text.size();
+    const std::string part = end == std::string::npos ? "" : text.substr(at, end - at);
+    const size_t colon = part.find(':');
+    auto bound = [&](const std::string& b, int64_t dflt) {
+      if (b.empty()) return dflt;
+      char* e = nullptr;
+      const long long v = std::strtoll(b.c_str(), &e, 10);
+      if (*e) throw tg::UsageError("--crop: '" + b + "' is not a voxel index (Z0:Z1,Y0:Y1,X0:X1)");
+      return static_cast<int64_t>(v);
+    };
+    if (end == std::string::npos || colon == std::string::npos)
+      throw tg::UsageError("--crop must be Z0:Z1,Y0:Y1,X0:X1 (voxels, half-open), got '" + text + "'");
+    lo[a] = bound(part.substr(0, colon), 0);
+    hi[a] = bound(part.substr(colon + 1), n[a]);
+    if (!(0 <= lo[a] && lo[a] < hi[a] && hi[a] <= n[a]))
+      throw tg::UsageError("--crop " + text + ": range " + std::to_string(lo[a]) + ":" + std::to_string(hi[a]) +
+                           " is empty or outside " + file + "'s " + s.str());
+    at = end + 1;
+  }
+  return tg::Box{lo[0], lo[1], lo[2], tg::Shape{hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}};
+}
+
+// The box of `v` as a volume of its own, its origin moved to the box's corner (a tracker or
+// a comparison then places the crop where it was).
+tg::AnyVolume crop(tg::AnyVolume&& v, const tg::Box& b) {
+  return std::visit(
+      [&](auto& vol) -> tg::AnyVolume {
+        using T = typename std::decay_t<decltype(vol)>::value_type;
+        const auto part = vol.view().sub(b);
+        tg::Volume<T> out(b.size, part.geometry());
+        for (int64_t k = 0; k < b.size.nz; ++k)
+          for (int64_t j = 0; j < b.size.ny; ++j) std::copy_n(part.row(k, j).data(), b.size.nx, &out(k, j, 0));
+        return out;
+      },
+      v);
+}
+
 int run_convert(const Opts& o) {
   tg::ReadOptions ro;
   ro.voxel_um = o.voxel_um;
   tg::AnyVolume v = tg::read_volume(o.in, ro);
+  if (!o.crop.empty()) v = crop(std::move(v), parse_crop(o.crop, tg::shape_of(v), o.in));
   if (!o.to.empty()) v = convert_type(std::move(v), tg::parse_dtype(o.to), o);
   else if (o.range != "auto") throw tg::UsageError("--range needs --to uint16");
   tg::WriteOptions wo;
@@ -102,12 +147,17 @@ static tg::app::Registrar reg{{"convert", 20,
       "  tomograin convert slices/ -o scan.h5 --voxel-um 12.3\n"
       "  tomograin convert recon.tif -o scan.h5 --to uint16 --range auto\n"
       "  tomograin convert recon.h5:/volume -o scan16.tif --to uint16 --range -0.2,1.5\n"
-      "  tomograin convert scan.h5 -o scan.json          (raw + JSON sidecar)",
+      "  tomograin convert scan.h5 -o scan.json          (raw + JSON sidecar)\n"
+      "  tomograin convert labels.h5 -o top.h5 --crop 0:600,:,:   (slices 0-599, origin kept)",
       [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<Opts>();
   sub->add_option("input", o->in, "Input volume (.tif/.tiff, folder, .json sidecar, .h5[:/dataset])")->required();
   sub->add_option("-o,--output", o->out, "Output volume; format from the name")->required();
   sub->add_option("--to", o->to, "Element type of the output: uint16 or float32 (default: keep)");
+  sub->add_option("--crop", o->crop,
+                  "Keep the box Z0:Z1,Y0:Y1,X0:X1 (voxels, half-open; an empty bound is the edge, e.g. 10:,:,: "
+                  "drops 10 slices); the origin moves with it (HDF5 and raw+JSON keep it: track then sees "
+                  "stages cropped differently in one frame)");
   sub->add_option("--range", o->range, "float32 -> uint16 grey range: auto (0.01/99.99 % percentiles) or LO,HI")
       ->capture_default_str();
   sub->add_option("--compress", o->compression, "HDF5 deflate level 0-9 (0 = none)")

@@ -44,6 +44,8 @@ mkdir mixed
 printf '{"shape_zyx":[1,64,60],"dtype":"uint16"}' > small.json; head -c 7680 /dev/urandom > small.raw
 "$TG" convert small.json -o mixed/slice_0099.tif >/dev/null
 expect_bad "mixed slice sizes" "mixed slice sizes" -- "$TG" convert mixed -o out.h5
+expect_bad "crop outside the volume" "range 0:9 is empty or outside good.tif" -- "$TG" convert good.tif -o out.h5 --crop 0:9,:,:
+expect_bad "crop not three ranges" "Z0:Z1,Y0:Y1,X0:X1" -- "$TG" convert good.tif -o out.h5 --crop 0:2
 
 printf '{"shape_zyx":[4,64,65],"dtype":"uint16","files":{"volume_raw":"good.raw"}}' > wrongsize.json
 expect_bad "sidecar with wrong size" "good.raw: file has 32768 bytes" -- "$TG" convert wrongsize.json -o out.tif

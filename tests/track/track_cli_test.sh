@@ -66,17 +66,11 @@ expect_bad() {  # NAME PATTERN -- COMMAND...
   fi
 }
 expect_bad out_of_order "out of loading order" -- "$TG" track run_stage2.h5 run_stage1.h5 -o bad
-# A stage cropped to its specimen (4 slices off the top, 3 columns off one side, the crop in
-# origin_m): tracked; its particles clear of the cut keep the parents of the uncropped run.
-/usr/bin/python3 - <<'PY' || fail "cropping run_stage1.h5"
-import h5py, numpy as np
-with h5py.File("run_stage1.h5") as f, h5py.File("crop_stage1.h5", "w") as g:
-    d = f["labels"]
-    c = g.create_dataset("labels", data=d[:-4, :, 3:])
-    for k, v in d.attrs.items():
-        c.attrs[k] = v
-    c.attrs["origin_m"] = np.asarray(d.attrs.get("origin_m", [0.0, 0.0, 0.0]), float) + [0, 0, 3 * float(d.attrs["voxel_size_m"][2])]
-PY
+# A stage cropped to its specimen by `convert --crop` (4 slices off the top, 3 columns off one
+# side; the crop in origin_m): tracked; its particles clear of the cut keep the parents of the
+# uncropped run.
+"$TG" convert run_stage1.h5:/labels -o crop_stage1.h5 --crop :44,:,3: > /dev/null || fail "convert --crop"
+"$TG" info crop_stage1.h5 | grep -q "^shape  *44 x 48 x 45" || fail "cropped shape: $("$TG" info crop_stage1.h5 | head -2)"
 if "$TG" track run_stage0.h5 crop_stage1.h5 -o crop > crop.log 2>&1; then
   "$TG" track run_stage0.h5 run_stage1.h5 -o whole > /dev/null 2>&1
   # stage-1 rows (label, parent, grain) of the cropped run found unchanged in the uncropped one

@@ -116,9 +116,12 @@ def plot_classes(out, stages, rows_, metric, classes, title):
             ax.bar(x0 + off, vals, width, color=CLASS_STYLE[s]["color"], alpha=0.35 + 0.65 * (ci + 1) / len(classes),
                    label=f"{CLASS_STYLE[s]['label']}: {metric.upper()} {c}")
             # The study's end-of-test share of the class it reports (FR 0.9-1.0, AR 1-2), over the
-            # last stage's bar of the same series: experiment beside the scan, DEM beside both DEM series.
+            # last stage's bar of the same series when that stage is at the study's end strain
+            # (within 1 %): experiment beside the scan, DEM beside both DEM series.
             study = STUDY["fr_top_class_end"] if metric == "fr" else STUDY["ar_first_class_end"]
-            if stages and ci == (len(classes) - 1 if metric == "fr" else 0):
+            last = stages[-1] if stages else {}
+            e = fnum((last.get("experiment" if s == "experiment" else "dem") or {}).get("strain"))
+            if abs(e - STUDY["end_strain"]) <= 0.01 and ci == (len(classes) - 1 if metric == "fr" else 0):
                 ax.plot([x0[-1] + off], [study["experiment" if s == "experiment" else "dem"]], **STUDY_STYLE,
                         label="study, end of test" if si == 0 else None)
     ax.set_xticks(x0)

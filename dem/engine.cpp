@@ -209,7 +209,8 @@ void Engine::update_inverse_masses() {
 }
 
 void Engine::run(int64_t steps) {
-  for (int64_t s = 0; s < steps; ++s) advance(s + 1 < steps);
+  overlap_handed_ = false;
+  for (int64_t s = 0; s < steps && !overlap_handed_; ++s) advance(s + 1 < steps);
 }
 
 void Engine::advance(bool fuse_next) {
@@ -287,7 +288,8 @@ void Engine::advance(bool fuse_next) {
   // kick (one pass over the spheres and one parallel region less a step);
   // the hook (breakage) may edit forces and spheres, so it is kicked after.
   const bool kick_in_gather = !force_hook_;
-  const bool fuse = kick_in_gather && fuse_next;
+  // (Not with an overlap hook: run() may return after any step of it.)
+  const bool fuse = kick_in_gather && fuse_next && !overlap_hook_;
   compute_forces(kick_in_gather, fuse);
   drifted_ = fuse;
   if (!kick_in_gather) {
@@ -371,6 +373,11 @@ void Engine::compute_pair_forces() {
     for (int64_t k = 0; k < np; ++k)
       if (bad_[k]) {
         const int64_t i = pi_[k], j = list_.j[k];
+        if (overlap_hook_ && overlap_hook_(i, j)) {
+          overlap_handed_ = true;
+          bad_[k] = 0;  // the gather reads the same flags per sphere
+          continue;
+        }
         const double dist = std::sqrt(std::pow(p.x[j] - p.x[i], 2) + std::pow(p.y[j] - p.y[i], 2) + std::pow(p.z[j] - p.z[i], 2));
         std::ostringstream os;
         os << "spheres " << i << " (r = " << p.r[i] << " m) and " << j << " (r = " << p.r[j] << " m) overlap by "
@@ -431,6 +438,11 @@ void Engine::gather_forces(bool kick, bool drift_next, double alpha) {
   if (flags & 1) {
     for (int64_t s = 0; s < n; ++s)
       if (bad_[s]) {
+        if (bad_[s] == 1 && overlap_hook_ && overlap_hook_(s, -1)) {
+          overlap_handed_ = true;
+          bad_[s] = 0;
+          continue;
+        }
         std::ostringstream os;
         os << "sphere " << s << " (r = " << p.r[s] << " m, at z = " << p.z[s] << " m)"
            << (bad_[s] == 2 ? " has a non-finite force" : " overlaps a wall by more than the limit");

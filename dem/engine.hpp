@@ -166,6 +166,15 @@ class Engine {
     force_hook_ = std::move(hook);
     slot_.assign(force_hook_ ? static_cast<size_t>(list_.pairs()) : 0, PairData{});  // kept only with a hook
   }
+  // Overlap hook (breakage): called for each sphere pair (i, j) whose overlap
+  // passes overlap_limit × the smaller radius, or a sphere i (j = -1) that
+  // passes it into a wall, in the step's force evaluation. It returns true
+  // when its model removes the sphere before the next step (a sub-limit
+  // sphere squeezed through its neighbour between two checks is fines, not
+  // an unstable run); the step then ends as usual, and run() returns after
+  // it so that the model can act. false, or no hook: the run stops with
+  // SimulationError, as before.
+  void set_overlap_hook(std::function<bool(int64_t, int64_t)> hook) { overlap_hook_ = std::move(hook); }
   // Replaces the time step (> 0): breakage creates smaller spheres.
   void set_time_step(double dt);
   // Read-only view of the last force evaluation (per-sphere contact statistics).
@@ -232,6 +241,8 @@ class Engine {
   bool drifted_ = false;    // this step's opening kick and drift are done (run())
   int pending_moved_ = 0;   // their skin test: 1 moved beyond skin/2, 3 not finite
   std::function<void(Engine&)> force_hook_;
+  std::function<bool(int64_t, int64_t)> overlap_hook_;
+  bool overlap_handed_ = false;  // this step passed a deep overlap to the hook: run() returns after it
 
   // Pair list (CSR by i, ascending j) with per-pair history and force slot.
   PairListCSR list_;

@@ -407,7 +407,7 @@ OedometerSummary run_oedometer(const OedometerSetup& s, const std::filesystem::p
     }
     if (c.stop_after_steps >= 0 && e.step_count() >= c.stop_after_steps) break;
     e.run(steps_to_next_event());
-    if (brk && e.step_count() % s.breakage_options.check_interval == 0) brk->check();
+    if (brk && brk->check_due()) brk->check();
     if (e.step_count() % s.history_every == 0) {
       record();
       if (!c.quiet) bar.update(100 * strain());

@@ -42,6 +42,26 @@ BreakageModel::BreakageModel(Engine& engine, const BreakageOptions& opt) : eng_(
   rec_.spheres = n;
   rec_.particles = n;
   eng_.set_force_hook([this](Engine& e) { add_bond_forces(e); });
+  eng_.set_overlap_hook([this](int64_t i, int64_t j) { return take_squeezed(i, j); });
+}
+
+bool BreakageModel::take_squeezed(int64_t i, int64_t j) {
+  // The rule of check(): a sub-limit sphere squeezed past fines_overlap × r
+  // is fines, unless the policy keeps every sphere. Past the engine's limit
+  // it is that by far; check() runs after this step (check_due) and removes it.
+  if (opt_.sublimit == SublimitPolicy::kKeep) return false;
+  const Particles& p = eng_.particles();
+  const double overlap = j < 0 ? wall_overlap(i) : p.r[i] + p.r[j] - norm(pos(p, j) - pos(p, i));
+  bool fines = false;
+  for (const int64_t s : {i, j})
+    if (s >= 0 && (p.flags[s] & kFlagBreakable) && 2 * p.r[s] < opt_.min_split_diameter_m &&
+        overlap > opt_.fines_overlap * p.r[s]) {
+      // Named here: a pair past the limit gets no contact (the engine skips
+      // it), so check()'s own overlap pass would not see it.
+      squeezed_.push_back(s);
+      fines = true;
+    }
+  return fines;
 }
 
 void BreakageModel::add_bond_forces(Engine& e) {
@@ -204,6 +224,7 @@ int BreakageModel::check() {
   // check, before any sphere is replaced.
   std::vector<SplitEvent> todo;
   std::vector<int64_t> fines;
+  fines.swap(squeezed_);  // past the engine's overlap limit since the last check (take_squeezed)
   // remove: squeezed sub-limit spheres and deep-born fragment spheres are
   // fines; remove_over: so are sub-limit spheres over their strength.
   const bool remove = opt_.sublimit != SublimitPolicy::kKeep;
@@ -312,6 +333,7 @@ int BreakageModel::check() {
     }
   }
   std::sort(fines.begin(), fines.end());
+  fines.erase(std::unique(fines.begin(), fines.end()), fines.end());
   if (!todo.empty()) {
     eng_.request_rebuild();
     update_time_step();
@@ -656,7 +678,7 @@ void BreakageModel::restore(const std::string& state) {
 void BreakageModel::run(int64_t steps) {
   for (int64_t k = 0; k < steps; ++k) {
     eng_.step();
-    if (eng_.step_count() % opt_.check_interval == 0) check();
+    if (check_due()) check();
   }
 }
 

@@ -199,6 +199,12 @@ class BreakageModel {
   void run(int64_t steps);
   // One grain check now; returns the number of spheres split.
   int check();
+  // Whether a check is due after the engine's last step: every
+  // check_interval steps, and at once after a step in which a sub-limit
+  // sphere was squeezed past the engine's overlap limit (the engine's
+  // overlap hook: such a sphere is fines, removed by that check, where the
+  // run used to stop as unstable; README, "Sub-limit spheres").
+  bool check_due() const { return !squeezed_.empty() || eng_.step_count() % opt_.check_interval == 0; }
   // Removes these spheres (indices now) as fines: volume to volume_lost and
   // fines_volume, their bonds dropped, the others renumbered in order
   // (Engine::remove_spheres). Used by check(); public for tests.
@@ -287,6 +293,8 @@ class BreakageModel {
   std::vector<BondBreak> bond_breaks_;
   std::vector<BondLoads> loads_;  // scratch, one per bond
   bool bonds_changed_ = false;
+  std::vector<int64_t> squeezed_;  // sub-limit spheres past the engine's overlap limit this step: fines now
+  bool take_squeezed(int64_t i, int64_t j);  // the engine's overlap hook
 };
 
 }  // namespace tg::dem::breakage

@@ -34,11 +34,10 @@ CrushResult run_crush(const CrushOptions& opt) {
   }
   const double final_travel = opt.final_travel_fraction * opt.diameter_m;
   const int64_t every = std::max<int64_t>(1, opt.history_every);
-  const int64_t interval = opt.breakage.check_interval;
   auto travel = [&] { return 2 * r - eng.walls().top_z; };
   while (travel() < final_travel) {
     eng.step();
-    if (model && eng.step_count() % interval == 0) model->check();
+    if (model && model->check_due()) model->check();
     if (eng.step_count() % every == 0) {
       CrushRow row{eng.step_count(), eng.time(), travel(), eng.wall_forces().top_z, {}};
       if (model) row.record = model->record();

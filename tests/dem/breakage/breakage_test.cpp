@@ -241,5 +241,62 @@ TEST(BreakageModel, SubLimitSpherePushedIntoANeighbourIsRemovedOrStopsTheRun) {
   EXPECT_EQ(keep.model->record().fines_removed, 0);
 }
 
+
+// A sub-limit sphere shot into a neighbour or a wall so fast that it passes
+// the engine's overlap limit (0.5 of the smaller radius) between two checks
+// (fragment spheres of a violent split: two 25 um spheres met at 93 m/s in a
+// calibration's crush test, 0.09 -> 0.52 r in 7 steps of a 10-step check
+// interval). The rule of check() (squeezed past fines_overlap: fines) holds
+// there too: the sphere is removed at once, by a check right after that
+// step, and the run goes on; kKeep, and spheres large enough to split, still
+// stop the run as unstable.
+struct Shot {
+  std::unique_ptr<Engine> eng;
+  std::unique_ptr<BreakageModel> model;
+};
+// Sphere 1 (radius r1, breakable) flies at `speed` along -z onto sphere 0
+// (radius r0, not breakable) or, with r0 = 0, onto the bottom platen.
+Shot shoot(double r0, double r1, double speed, SublimitPolicy policy) {
+  Particles p;
+  const double z0 = r0 > 0 ? 0.5e-3 : 0.0;  // 0.15 mm of flight either way
+  if (r0 > 0) p.append_sphere(0, 0, z0, r0, kRho, 0, 0, kFlagNone);
+  p.append_sphere(0, 0, z0 + r0 + r1 + 0.15e-3, r1, kRho, 1);
+  p.vz.back() = -speed;
+  Shot c;
+  c.eng = std::make_unique<Engine>(std::move(p), platens(2e-3, 1e-9));
+  BreakageOptions b = options(0);
+  b.sublimit = policy;
+  b.check_interval = 1000;  // the flight and the impact fall between two checks
+  b.strength.sigma_t0_Pa = 1e15;
+  c.model = std::make_unique<BreakageModel>(*c.eng, b);
+  return c;
+}
+
+TEST(BreakageModel, SubLimitSphereShotPastTheOverlapLimitIsFinesNotAnUnstableRun) {
+  const double r = 25e-6, R = 0.5e-3;
+  for (const SublimitPolicy policy : {SublimitPolicy::kRemove, SublimitPolicy::kKeepUnbreakable}) {
+    // Onto a large sphere: 800 m/s would take a Hertz contact of these
+    // radii to ~1 r of overlap (energy balance); the limit is 0.5 r.
+    Shot c = shoot(R, r, 800, policy);
+    c.model->run(500);  // impact after ~190 steps; no interval check before step 1000
+    ASSERT_EQ(c.eng->particles().size(), 1);
+    EXPECT_EQ(c.model->record().fines_removed, 1);
+    EXPECT_DOUBLE_EQ(c.model->record().fines_volume_m3, sphere_volume(r));
+    EXPECT_DOUBLE_EQ(c.eng->particles().r[0], R);  // the large sphere stays
+    // Onto the bottom platen.
+    Shot w = shoot(0, r, 800, policy);
+    w.model->run(500);
+    EXPECT_EQ(w.eng->particles().size(), 0);
+    EXPECT_EQ(w.model->record().fines_removed, 1);
+    w.model->run(100);  // and the run goes on
+  }
+  // kKeep: no sphere is ever fines, the run stops as before.
+  Shot keep = shoot(R, r, 800, SublimitPolicy::kKeep);
+  EXPECT_THROW(keep.model->run(500), SimulationError);
+  // A sphere large enough to split (0.3 mm > 0.2 mm) is not fines: stopped.
+  Shot big = shoot(R, 0.15e-3, 2000, SublimitPolicy::kRemove);
+  EXPECT_THROW(big.model->run(500), SimulationError);
+}
+
 }  // namespace
 }  // namespace tg::dem::breakage

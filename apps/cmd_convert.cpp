@@ -121,8 +121,18 @@ tg::AnyVolume crop(tg::AnyVolume&& v, const tg::Box& b) {
 int run_convert(const Opts& o) {
   tg::ReadOptions ro;
   ro.voxel_um = o.voxel_um;
-  tg::AnyVolume v = tg::read_volume(o.in, ro);
-  if (!o.crop.empty()) v = crop(std::move(v), parse_crop(o.crop, tg::shape_of(v), o.in));
+  tg::AnyVolume v;
+  if (o.crop.empty()) {
+    v = tg::read_volume(o.in, ro);
+  } else {
+    // Only the box's slices are read (a crop of a scan larger than memory);
+    // rows and columns are cut from them.
+    tg::Box box = parse_crop(o.crop, tg::read_volume_info(o.in, ro).shape, o.in);
+    ro.slices = {box.z0, box.size.nz};
+    v = tg::read_volume(o.in, ro);
+    box.z0 = 0;
+    if (box.size != tg::shape_of(v)) v = crop(std::move(v), box);
+  }
   if (!o.to.empty()) v = convert_type(std::move(v), tg::parse_dtype(o.to), o);
   else if (o.range != "auto") throw tg::UsageError("--range needs --to uint16");
   tg::WriteOptions wo;
@@ -142,7 +152,8 @@ static tg::app::Registrar reg{{"convert", 20,
       "linear normalisation: [LO, HI] -> [0, 65535], clipped; --range auto uses the 0.01 % and\n"
       "99.99 % percentiles of the grey values (printed). The output format follows its name;\n"
       "a name without extension or ending in '/' is a folder of slices. --crop keeps a box, its\n"
-      "origin moved with it. Output is written atomically: an error leaves nothing behind.\n\n"
+      "origin moved with it; only the box's slices are read (a part of a scan larger than memory).\n"
+      "Output is written atomically: an error leaves nothing behind.\n\n"
       "Examples:\n"
       "  tomograin convert slices/ -o scan.h5 --voxel-um 12.3\n"
       "  tomograin convert recon.tif -o scan.h5 --to uint16 --range auto\n"

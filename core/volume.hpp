@@ -41,6 +41,14 @@ struct Box {
   Shape size;
 };
 
+// Slices [z0, z0 + nz) of a volume on disk, nz < 0: to the last one. What a
+// reader (core/io) reads of a file: a slab of a scan larger than memory, the
+// slices of a crop; the slab's origin is moved to slice z0.
+struct SliceRange {
+  int64_t z0 = 0, nz = -1;
+  bool whole() const { return z0 == 0 && nz < 0; }
+};
+
 template <class T>
 class VolumeView {
  public:

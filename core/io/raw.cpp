@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.hpp"
+#include "core/io/volume_io.hpp"
 #include "core/progress.hpp"
 
 namespace tg {
@@ -41,18 +42,19 @@ void byteswap_all(T* p, int64_t n) {
 
 }  // namespace
 
-AnyVolume read_raw_checked(const std::string& path, bool progress);
+namespace {
 
-AnyVolume read_raw(const std::string& path, bool progress) {
-  // A field of the wrong JSON type ("byte_order": 2) is bad input, not an internal error.
-  try {
-    return read_raw_checked(path, progress);
-  } catch (const json::exception& e) {
-    throw InputError(path + ": invalid sidecar field (" + std::string(e.what()) + ")");
-  }
-}
+// What the sidecar says, checked against the raw file's size.
+struct Sidecar {
+  Shape shape;
+  DType dtype = DType::u16;
+  bool big_endian = false;
+  Geometry geometry;
+  int64_t header = 0;
+  fs::path raw;
+};
 
-AnyVolume read_raw_checked(const std::string& path, bool progress) {
+Sidecar read_sidecar_checked(const std::string& path) {
   std::ifstream jf(path);
   if (!jf) throw InputError(path + ": cannot open sidecar");
   json h;
@@ -66,49 +68,73 @@ AnyVolume read_raw_checked(const std::string& path, bool progress) {
   if (!sh.is_array() || sh.size() != 3 ||
       !std::all_of(sh.begin(), sh.end(), [](const json& e) { return e.is_number_integer(); }))
     throw InputError(path + ": 'shape_zyx' must be an array of 3 integers");
-  const Shape shape{sh[0].get<int64_t>(), sh[1].get<int64_t>(), sh[2].get<int64_t>()};
-  if (shape.nz <= 0 || shape.ny <= 0 || shape.nx <= 0)
-    throw InputError(path + ": 'shape_zyx' " + shape.str() + " must be positive");
-  DType dt = DType::u16;
+  Sidecar c;
+  c.shape = Shape{sh[0].get<int64_t>(), sh[1].get<int64_t>(), sh[2].get<int64_t>()};
+  if (c.shape.nz <= 0 || c.shape.ny <= 0 || c.shape.nx <= 0)
+    throw InputError(path + ": 'shape_zyx' " + c.shape.str() + " must be positive");
   try {
-    if (h.contains("dtype")) dt = parse_dtype(h["dtype"].get<std::string>());
+    if (h.contains("dtype")) c.dtype = parse_dtype(h["dtype"].get<std::string>());
   } catch (const std::exception& e) {
     throw InputError(path + ": 'dtype': " + e.what());
   }
   const std::string order = h.value("byte_order", std::string("little"));
   if (order != "little" && order != "big") throw InputError(path + ": 'byte_order' must be \"little\" or \"big\"");
-  Geometry g;
+  c.big_endian = order == "big";
+  Geometry& g = c.geometry;
   if (h.contains("voxel_size_m")) g.voxel_size_m = three(h["voxel_size_m"], "voxel_size_m", 1.0, path);
   else if (h.contains("voxel_size_um")) g.voxel_size_m = three(h["voxel_size_um"], "voxel_size_um", 1e-6, path);
   else if (h.contains("voxel_mm")) g.voxel_size_m = three(h["voxel_mm"], "voxel_mm", 1e-3, path);
   for (double v : g.voxel_size_m)
     if (!(std::isfinite(v) && v >= 0)) throw InputError(path + ": voxel size must be a positive number");
   if (h.contains("origin_m")) g.origin_m = three(h["origin_m"], "origin_m", 1.0, path);
-  const int64_t header = h.value("header_bytes", int64_t{0});
-  if (header < 0) throw InputError(path + ": 'header_bytes' must be >= 0");
+  c.header = h.value("header_bytes", int64_t{0});
+  if (c.header < 0) throw InputError(path + ": 'header_bytes' must be >= 0");
   std::string raw_name = fs::path(path).stem().string() + ".raw";
   if (h.contains("files") && h["files"].is_object() && h["files"].contains("volume_raw"))
     raw_name = h["files"]["volume_raw"].get<std::string>();
-  const fs::path raw = fs::path(path).parent_path() / raw_name;
-  if (!fs::is_regular_file(raw)) throw InputError(raw.string() + ": raw data file named by " + path + " not found");
-  const int64_t nbytes = shape.voxels() * dtype_bytes(dt);  // voxels() throws on overflow
-  const int64_t fsize = static_cast<int64_t>(fs::file_size(raw));
-  if (fsize != header + nbytes)
-    throw InputError(raw.string() + ": file has " + std::to_string(fsize) + " bytes, sidecar " + path + " implies " +
-                     std::to_string(header + nbytes) + " (" + shape.str() + " " + dtype_name(dt) + ")");
-  AnyVolume out = make_volume(dt, shape, g);
+  c.raw = fs::path(path).parent_path() / raw_name;
+  if (!fs::is_regular_file(c.raw)) throw InputError(c.raw.string() + ": raw data file named by " + path + " not found");
+  const int64_t nbytes = c.shape.voxels() * dtype_bytes(c.dtype);  // voxels() throws on overflow
+  const int64_t fsize = static_cast<int64_t>(fs::file_size(c.raw));
+  if (fsize != c.header + nbytes)
+    throw InputError(c.raw.string() + ": file has " + std::to_string(fsize) + " bytes, sidecar " + path + " implies " +
+                     std::to_string(c.header + nbytes) + " (" + c.shape.str() + " " + dtype_name(c.dtype) + ")");
+  return c;
+}
+
+// A field of the wrong JSON type ("byte_order": 2) is bad input, not an internal error.
+Sidecar read_sidecar(const std::string& path) {
+  try {
+    return read_sidecar_checked(path);
+  } catch (const json::exception& e) {
+    throw InputError(path + ": invalid sidecar field (" + std::string(e.what()) + ")");
+  }
+}
+
+}  // namespace
+
+Shape raw_shape(const std::string& json_path) { return read_sidecar(json_path).shape; }
+
+AnyVolume read_raw(const std::string& path, bool progress, SliceRange slices) {
+  const Sidecar c = read_sidecar(path);
+  const SliceRange r = slices_within(slices, c.shape.nz, path);
+  const Shape shape{r.nz, c.shape.ny, c.shape.nx};
+  Geometry g = c.geometry;
+  g.origin_m[0] += double(r.z0) * g.voxel_size_m[0];
+  const int64_t nbytes = shape.voxels() * dtype_bytes(c.dtype);
+  AnyVolume out = make_volume(c.dtype, shape, g);
   std::visit(
       [&](auto& v) {
-        std::ifstream f(raw, std::ios::binary);
-        f.seekg(header);
+        std::ifstream f(c.raw, std::ios::binary);
+        f.seekg(c.header + r.z0 * c.shape.slice_voxels() * dtype_bytes(c.dtype));
         auto* p = reinterpret_cast<char*>(v.data());
-        Progress bar("reading " + raw.filename().string(), static_cast<double>(nbytes));
+        Progress bar("reading " + c.raw.filename().string(), static_cast<double>(nbytes));
         for (int64_t off = 0; off < nbytes; off += kChunk) {
           const int64_t n = std::min(kChunk, nbytes - off);
-          if (!f.read(p + off, n)) throw InputError(raw.string() + ": read failed at byte " + std::to_string(off));
+          if (!f.read(p + off, n)) throw InputError(c.raw.string() + ": read failed at byte " + std::to_string(off));
           if (progress) bar.update(static_cast<double>(off + n));
         }
-        if ((order == "big") == (std::endian::native == std::endian::little)) byteswap_all(v.data(), v.size());
+        if (c.big_endian == (std::endian::native == std::endian::little)) byteswap_all(v.data(), v.size());
       },
       out);
   return out;

@@ -18,7 +18,11 @@
 
 namespace tg {
 
-AnyVolume read_raw(const std::string& json_path, bool progress);
+// `slices`: only their bytes are read; the origin moves to the first
+// (core/io/volume_io.hpp, ReadOptions::slices).
+AnyVolume read_raw(const std::string& json_path, bool progress, SliceRange slices = {});
+// The shape the sidecar gives (checked against the raw file's size).
+Shape raw_shape(const std::string& json_path);
 // Writes JSON_PATH and the raw file beside it (stem + ".raw"), little-endian.
 void write_raw(const AnyVolume& v, const std::string& json_path, bool progress);
 template <class T>

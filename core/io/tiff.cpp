@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/atomic_file.hpp"
+#include "core/io/volume_io.hpp"
 #include "core/progress.hpp"
 
 namespace tg {
@@ -211,20 +212,29 @@ Geometry read_geometry(TIFF* t) {
   return g;
 }
 
+// The origin of slices starting at z0: the file's, moved down z0 slices.
+Geometry slab_geometry(Geometry g, int64_t z0) {
+  g.origin_m[0] += double(z0) * g.voxel_size_m[0];
+  return g;
+}
+
+// Pages [r.z0, r.z0 + r.nz) (a range within the file); t at page 0.
 template <class T>
-Volume<T> read_pages(TIFF* t, const std::string& path, int npages, const PageInfo& first, bool progress) {
-  Geometry g = read_geometry(t);
-  Volume<T> v(Shape{npages, first.height, first.width}, g);
-  Progress bar("reading " + fs::path(path).filename().string(), npages);
-  for (int k = 0; k < npages; ++k) {
-    if (k > 0 && !TIFFReadDirectory(t)) fail(path, "page " + std::to_string(k) + " cannot be read");
-    const PageInfo p = page_info(t, path, k);
+Volume<T> read_pages(TIFF* t, const std::string& path, SliceRange r, const PageInfo& first, bool progress) {
+  Volume<T> v(Shape{r.nz, first.height, first.width}, slab_geometry(read_geometry(t), r.z0));
+  if (r.z0 > 0 && !TIFFSetDirectory(t, static_cast<tdir_t>(r.z0)))
+    fail(path, "page " + std::to_string(r.z0) + " cannot be read");
+  Progress bar("reading " + fs::path(path).filename().string(), double(r.nz));
+  for (int64_t q = 0; q < r.nz; ++q) {
+    const int64_t k = r.z0 + q;
+    if (q > 0 && !TIFFReadDirectory(t)) fail(path, "page " + std::to_string(k) + " cannot be read");
+    const PageInfo p = page_info(t, path, int(k));
     if (p.width != first.width || p.height != first.height || p.dtype != first.dtype)
       fail(path, "page " + std::to_string(k) + " is " + std::to_string(p.width) + "x" + std::to_string(p.height) +
                      " " + dtype_name(p.dtype) + ", page 0 is " + std::to_string(first.width) + "x" +
                      std::to_string(first.height) + " " + dtype_name(first.dtype));
-    read_page(t, path, k, p, reinterpret_cast<unsigned char*>(v.data() + k * v.shape().slice_voxels()));
-    if (progress) bar.update(k + 1);
+    read_page(t, path, int(k), p, reinterpret_cast<unsigned char*>(v.data() + q * v.shape().slice_voxels()));
+    if (progress) bar.update(double(q + 1));
   }
   return v;
 }
@@ -310,7 +320,7 @@ std::vector<std::string> tiff_slices_in(const std::string& dir) {
   return names;
 }
 
-AnyVolume read_tiff(const std::string& path, bool progress) {
+AnyVolume read_tiff(const std::string& path, bool progress, SliceRange slices) {
   TiffPtr t = open_read(path);
   g_tiff_error.clear();
   const int npages = TIFFNumberOfDirectories(t.get());
@@ -325,28 +335,38 @@ AnyVolume read_tiff(const std::string& path, bool progress) {
       fail(path, "truncated: ImageJ metadata announces " + std::to_string(std::atoi(im + 8)) + " pages, file holds " +
                      std::to_string(npages));
   }
+  const SliceRange r = slices_within(slices, npages, path);
   const PageInfo first = page_info(t.get(), path, 0);
   switch (first.dtype) {
-    case DType::u8: return read_pages<uint8_t>(t.get(), path, npages, first, progress);
-    case DType::u16: return read_pages<uint16_t>(t.get(), path, npages, first, progress);
-    case DType::u32: return read_pages<uint32_t>(t.get(), path, npages, first, progress);
-    case DType::f32: return read_pages<float>(t.get(), path, npages, first, progress);
+    case DType::u8: return read_pages<uint8_t>(t.get(), path, r, first, progress);
+    case DType::u16: return read_pages<uint16_t>(t.get(), path, r, first, progress);
+    case DType::u32: return read_pages<uint32_t>(t.get(), path, r, first, progress);
+    case DType::f32: return read_pages<float>(t.get(), path, r, first, progress);
   }
   fail(path, "unsupported sample type");
 }
 
-AnyVolume read_tiff_folder(const std::string& dir, bool progress) {
+int64_t tiff_page_count(const std::string& path) {
+  TiffPtr t = open_read(path);
+  return TIFFNumberOfDirectories(t.get());
+}
+
+AnyVolume read_tiff_folder(const std::string& dir, bool progress, SliceRange slices) {
   const auto names = tiff_slices_in(dir);
+  const SliceRange r = slices_within(slices, static_cast<int64_t>(names.size()), dir);
+  // Sizes, type and voxel size from the first slice of the folder, the
+  // origin moved to the first slice read.
   const std::string first_path = (fs::path(dir) / names[0]).string();
   TiffPtr t0 = open_read(first_path);
   const PageInfo first = page_info(t0.get(), first_path, 0);
-  Geometry g = read_geometry(t0.get());
+  const Geometry g = slab_geometry(read_geometry(t0.get()), r.z0);
   t0.reset();
-  AnyVolume out = make_volume(first.dtype, Shape{static_cast<int64_t>(names.size()), first.height, first.width}, g);
-  Progress bar("reading " + fs::path(dir).filename().string(), static_cast<double>(names.size()));
+  AnyVolume out = make_volume(first.dtype, Shape{r.nz, first.height, first.width}, g);
+  Progress bar("reading " + fs::path(dir).filename().string(), static_cast<double>(r.nz));
   std::visit(
       [&](auto& v) {
-        for (size_t k = 0; k < names.size(); ++k) {
+        for (int64_t q = 0; q < r.nz; ++q) {
+          const size_t k = static_cast<size_t>(r.z0 + q);
           const std::string p = (fs::path(dir) / names[k]).string();
           TiffPtr t = open_read(p);
           const PageInfo info = page_info(t.get(), p, 0);
@@ -354,9 +374,8 @@ AnyVolume read_tiff_folder(const std::string& dir, bool progress) {
             throw InputError(p + ": slice is " + std::to_string(info.width) + "x" + std::to_string(info.height) + " " +
                              dtype_name(info.dtype) + " but " + names[0] + " is " + std::to_string(first.width) + "x" +
                              std::to_string(first.height) + " " + dtype_name(first.dtype) + " (mixed slice sizes)");
-          read_page(t.get(), p, 0, info,
-                    reinterpret_cast<unsigned char*>(v.data() + static_cast<int64_t>(k) * v.shape().slice_voxels()));
-          if (progress) bar.update(static_cast<double>(k + 1));
+          read_page(t.get(), p, 0, info, reinterpret_cast<unsigned char*>(v.data() + q * v.shape().slice_voxels()));
+          if (progress) bar.update(static_cast<double>(q + 1));
         }
       },
       out);

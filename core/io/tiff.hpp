@@ -17,8 +17,12 @@
 
 namespace tg {
 
-AnyVolume read_tiff(const std::string& path, bool progress);
-AnyVolume read_tiff_folder(const std::string& dir, bool progress);
+// `slices`: only those pages (slice files) are decoded; the origin moves to
+// the first (core/io/volume_io.hpp, ReadOptions::slices).
+AnyVolume read_tiff(const std::string& path, bool progress, SliceRange slices = {});
+AnyVolume read_tiff_folder(const std::string& dir, bool progress, SliceRange slices = {});
+// Pages of a multi-page TIFF (the slices), without decoding them.
+int64_t tiff_page_count(const std::string& path);
 void write_tiff(const AnyVolume& v, const std::string& path, bool progress);
 template <class T>
 void write_tiff(const Volume<T>& v, const std::string& path, bool progress);

@@ -47,6 +47,49 @@ FileFormat format_of(const std::string& spec, bool for_writing) {
 
 static AnyVolume read_volume_unchecked(const std::string& spec, const ReadOptions& opt);
 
+namespace {
+// The dataset a spec names, or the default one: /volume, else /labels.
+std::string volume_dataset(const H5Reader& r, const std::string& path, const std::string& ds) {
+  if (!ds.empty()) return ds;
+  if (r.has("/volume")) return "/volume";
+  if (r.has("/labels")) return "/labels";
+  throw InputError(path + ": no /volume or /labels dataset; name one as " + path + ":/DATASET");
+}
+}  // namespace
+
+SliceRange slices_within(SliceRange range, int64_t depth, const std::string& where) {
+  if (range.nz < 0 && range.z0 >= 0) range.nz = depth - range.z0;
+  if (range.z0 < 0 || range.nz < 1 || range.z0 + range.nz > depth)
+    throw InputError(where + ": slices " + std::to_string(range.z0) + ".." + std::to_string(range.z0 + range.nz - 1) +
+                     " are outside its " + std::to_string(depth) + " slices");
+  return range;
+}
+
+VolumeInfo read_volume_info(const std::string& spec, const ReadOptions& opt) {
+  const auto [path, ds] = split_dataset_spec(spec);
+  if (!fs::exists(path)) throw InputError(path + ": no such file or folder");
+  int64_t depth = 0;
+  switch (format_of(spec, false)) {
+    case FileFormat::tiff: depth = tiff_page_count(path); break;
+    case FileFormat::tiff_folder: depth = static_cast<int64_t>(tiff_slices_in(path).size()); break;
+    case FileFormat::raw: depth = raw_shape(path).nz; break;
+    case FileFormat::hdf5: {
+      H5Reader r(path);
+      depth = r.shape(volume_dataset(r, path, ds)).nz;
+      break;
+    }
+  }
+  // Type, slice size and geometry from the first slice (its origin is the file's).
+  ReadOptions one = opt;
+  one.slices = {0, 1};
+  one.progress = false;
+  one.nonfinite = NonFinite::allow;
+  one.reuse = nullptr;
+  const AnyVolume first = read_volume(spec, one);
+  const Shape s = shape_of(first);
+  return VolumeInfo{Shape{depth, s.ny, s.nx}, dtype_of(first), geometry_of(first)};
+}
+
 std::pair<int64_t, int64_t> count_nonfinite(const Volume<float>& v) {
   int64_t n = 0, first = -1;
   const float* p = v.data();
@@ -75,18 +118,18 @@ static AnyVolume read_volume_unchecked(const std::string& spec, const ReadOption
   if (!fs::exists(path)) throw InputError(path + ": no such file or folder");
   AnyVolume v;
   switch (format_of(spec, false)) {
-    case FileFormat::tiff: v = read_tiff(path, opt.progress); break;
-    case FileFormat::tiff_folder: v = read_tiff_folder(path, opt.progress); break;
-    case FileFormat::raw: v = read_raw(path, opt.progress); break;
+    case FileFormat::tiff: v = read_tiff(path, opt.progress, opt.slices); break;
+    case FileFormat::tiff_folder: v = read_tiff_folder(path, opt.progress, opt.slices); break;
+    case FileFormat::raw: v = read_raw(path, opt.progress, opt.slices); break;
     case FileFormat::hdf5: {
       H5Reader r(path);
-      std::string name = ds;
-      if (name.empty()) {
-        if (r.has("/volume")) name = "/volume";
-        else if (r.has("/labels")) name = "/labels";
-        else throw InputError(path + ": no /volume or /labels dataset; name one as " + path + ":/DATASET");
+      const std::string name = volume_dataset(r, path, ds);
+      if (opt.slices.whole()) {
+        v = r.read_volume(name, opt.progress, opt.reuse);
+      } else {
+        const SliceRange s = slices_within(opt.slices, r.shape(name).nz, spec);
+        v = r.read_slab(name, s.z0, s.nz, opt.reuse);
       }
-      v = r.read_volume(name, opt.progress, opt.reuse);
       break;
     }
   }

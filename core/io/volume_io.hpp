@@ -25,7 +25,24 @@ struct ReadOptions {
   // one before last instead of fresh pages the kernel must zero (a third of
   // `track`'s time at 1220^3).
   AnyVolume* reuse = nullptr;
+  // Only these slices (every format reads just them: a TIFF its pages, a raw
+  // file its bytes, HDF5 a hyperslab), the origin moved to the first one.
+  // Outside the file: InputError naming it.
+  SliceRange slices;
 };
+
+// What a volume file holds, from its metadata and one slice: the voxels are
+// not read (a 3.6 GB scan's shape before deciding how to read it).
+struct VolumeInfo {
+  Shape shape;
+  DType dtype = DType::u16;
+  Geometry geometry;
+};
+VolumeInfo read_volume_info(const std::string& spec, const ReadOptions& opt = {});
+
+// `range` within a volume of `depth` slices (nz < 0 taken as to the last);
+// InputError "WHERE: slices A..B are outside its DEPTH slices" otherwise.
+SliceRange slices_within(SliceRange range, int64_t depth, const std::string& where);
 
 struct WriteOptions {
   int compression = 0;  // HDF5 deflate level 0..9 (0 = none)

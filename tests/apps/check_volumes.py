@@ -21,6 +21,14 @@ for k, dt in [("u8", "<u1"), ("u16", "<u2"), ("u32", "<u4"), ("f32", "<f4")]:
         check(np.array_equal(f["volume" if k != "u32" else "labels"][...], ref), f"h5py reads {k}.h5 bit-exact")
         vs = f["volume" if k != "u32" else "labels"].attrs["voxel_size_m"]
         check(np.allclose(vs, 12.3e-6, rtol=1e-6), f"{k}.h5 voxel_size_m attribute")
+# convert --crop 1:4,2:30,:40 of u16 from TIFF, a slice folder, raw and HDF5: numpy's box,
+# its origin moved to the box's corner (slices and rows of 12.3 um)
+u16 = np.fromfile(f"{w}/u16.raw", dtype="<u2").reshape(5, 33, 47)
+for src in ["u16_tif", "u16_slices_u16_slices", "u16_json", "u16_h5"]:
+    with h5py.File(f"{w}/crop_{src}.h5", "r") as f:
+        check(np.array_equal(f["volume"][...], u16[1:4, 2:30, :40]), f"--crop of {src} = numpy's box")
+        check(np.allclose(f["volume"].attrs["origin_m"], [12.3e-6, 2 * 12.3e-6, 0], rtol=1e-6, atol=1e-12),
+              f"--crop of {src}: origin at the box's corner")
 # float -> u16: the study's linear map of [lo, hi] to [0, 65535] with clipping, rounded.
 f32 = np.fromfile(f"{w}/f32.raw", dtype="<f4").reshape(5, 33, 47).astype(np.float64)
 given = tifffile.imread(f"{w}/norm_given.tif")

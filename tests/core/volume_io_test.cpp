@@ -91,6 +91,45 @@ TYPED_TEST(RoundTrip, EveryFormatBitExact) {
   }
 }
 
+// ReadOptions::slices: every format reads just the slices asked for, the
+// same values as those slices of the whole volume, the origin moved to the
+// first; read_volume_info gives shape, type and geometry without the voxels.
+TYPED_TEST(RoundTrip, EveryFormatReadsASliceRange) {
+  TempDir d;
+  const auto v = random_volume<TypeParam>(Shape{9, 5, 6}, 7);
+  const double dz = v.geometry().voxel_size_m[0];
+  for (const std::string name : {"a.tif", "slices", "a.json", "a.h5", "b.h5:/group/data"}) {
+    write_volume(v, d / name);
+    ReadOptions ro;
+    ro.nonfinite = NonFinite::allow;
+    const VolumeInfo info = read_volume_info(d / name, ro);
+    EXPECT_EQ(info.shape, v.shape()) << name;
+    EXPECT_EQ(info.dtype, dtype_of<TypeParam>()) << name;
+    const bool tiff = name.find(".h5") == std::string::npos && name != "a.json";  // no origin in TIFF
+    const double z_origin = tiff ? 0.0 : v.geometry().origin_m[0];
+    EXPECT_DOUBLE_EQ(info.geometry.origin_m[0], z_origin) << name;
+    for (const SliceRange r : {SliceRange{0, 9}, SliceRange{3, 4}, SliceRange{8, 1}, SliceRange{2, -1}}) {
+      ro.slices = r;
+      const AnyVolume got = read_volume(d / name, ro);
+      const int64_t nz = r.nz < 0 ? 9 - r.z0 : r.nz;
+      Volume<TypeParam> want(Shape{nz, 5, 6});
+      std::copy_n(v.data() + r.z0 * 30, nz * 30, want.data());
+      expect_same(want, got);
+      EXPECT_NEAR(geometry_of(got).origin_m[0], z_origin + double(r.z0) * dz, 1e-15) << name << " z0 " << r.z0;
+    }
+    for (const SliceRange bad : {SliceRange{9, 1}, SliceRange{4, 6}, SliceRange{-1, 2}, SliceRange{2, 0}}) {
+      ro.slices = bad;
+      try {
+        (void)read_volume(d / name, ro);
+        ADD_FAILURE() << name << ": slices " << bad.z0 << "+" << bad.nz << " read";
+      } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("outside its 9 slices"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(split_dataset_spec(d / name).first), std::string::npos) << e.what();
+      }
+    }
+  }
+}
+
 TEST(VolumeIO, HDF5CompressedAndTables) {
   TempDir d;
   const auto v = random_volume<uint16_t>(Shape{20, 30, 40}, 3);

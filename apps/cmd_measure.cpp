@@ -28,14 +28,20 @@ using namespace tg;
 
 namespace tg::app {
 
-Volume<uint32_t> read_labels(const std::string& in, double voxel_um) {
-  // An .h5 without a dataset name: its /labels (the file may also hold /volume).
-  std::string spec = in;
+namespace {
+// The labels of `in`: an .h5 without a dataset name means its /labels (the
+// file may also hold /volume).
+std::string labels_spec(const std::string& in) {
   const auto [path, ds] = split_dataset_spec(in);
-  if (format_of(in, false) == FileFormat::hdf5 && ds.empty() && H5Reader(path).has("/labels")) spec = path + ":/labels";
+  if (format_of(in, false) == FileFormat::hdf5 && ds.empty() && H5Reader(path).has("/labels")) return path + ":/labels";
+  return in;
+}
+}  // namespace
+
+Volume<uint32_t> read_labels(const std::string& in, double voxel_um) {
   ReadOptions ro;
   ro.voxel_um = voxel_um;
-  Volume<uint32_t> labels = read_label_volume(spec, ro);
+  Volume<uint32_t> labels = read_label_volume(labels_spec(in), ro);
   if (!labels.geometry().has_voxel_size()) throw InputError(in + ": no voxel size in the file; give --voxel-um");
   return labels;
 }
@@ -63,28 +69,29 @@ void print_measured(const MeasureJob& o, const std::vector<measure::Particle>& p
                                                : "Feret calipers (" + measure::sizing_name(po) + ")");
 }
 
-// A uint16 grey scan in HDF5 read slab by slab into one buffer
-// (measure::GreySlabSource): no copy of the whole scan, no fresh pages
-// after the first slab. `open` is false when the dataset is not uint16 (the
-// caller then reads and converts the whole scan).
+// A uint16 grey scan read slab by slab (measure::GreySlabSource), each
+// slab's slices alone: no copy of the whole scan; from HDF5 into one buffer,
+// so no fresh pages after the first slab. `open` is false when the scan is
+// not uint16 (the caller then reads and converts the whole scan).
 struct GreyFile {
-  std::string name, ds;
-  std::unique_ptr<H5Reader> reader;
+  std::string spec;
+  VolumeInfo info;
   AnyVolume buf;
-  bool open(const std::string& spec) {
-    const auto [gpath, gds] = split_dataset_spec(spec);
-    name = spec;
-    reader = std::make_unique<H5Reader>(gpath);
-    ds = !gds.empty() ? gds : "/volume";
-    if (!reader->has(ds)) throw InputError(spec + ": no " + ds + " dataset; name one as " + gpath + ":/DATASET");
-    return std::holds_alternative<Volume<uint16_t>>(reader->read_slab(ds, 0, 1));
+  bool open(const std::string& s) {
+    spec = s;
+    info = read_volume_info(s);
+    return info.dtype == DType::u16;
   }
-  Shape shape() const { return reader->shape(ds); }
+  Shape shape() const { return info.shape; }
   measure::GreySlabSource source() {
     return [this](int64_t z0, int64_t nz) -> const Volume<uint16_t>& {
-      buf = reader->read_slab(ds, z0, nz, &buf);
+      ReadOptions ro;
+      ro.progress = false;
+      ro.slices = {z0, nz};
+      ro.reuse = &buf;
+      buf = read_volume(spec, ro);
       const auto* g = std::get_if<Volume<uint16_t>>(&buf);
-      if (!g) throw InputError(name + ": slab-by-slab measuring reads uint16 grey scans only");
+      if (!g) throw InputError(spec + ": slab-by-slab measuring reads uint16 grey scans only");
       return *g;
     };
   }
@@ -114,11 +121,10 @@ PhaseLevels checked_levels(const measure::GreySlabSource& grey, int64_t nz, int6
   return checked_levels(std::move(hist), name);
 }
 
-// Labels (and grey scan) over --memory-limit: slab by slab from their HDF5
-// files (measure/measure_chunked.hpp), the same table. CSV output only (an
-// .h5 output would copy the labels).
-int run_measure_chunked(const MeasureJob& o, measure::ParticleOptions po, const std::string& lab_path,
-                        const std::string& lab_ds, const Shape& shape, const Geometry& geom,
+// Labels (and grey scan) over --memory-limit: slab by slab from their files
+// (any format; measure/measure_chunked.hpp), the same table. CSV output only
+// (an .h5 output would copy the labels).
+int run_measure_chunked(const MeasureJob& o, measure::ParticleOptions po, const Shape& shape, const Geometry& geom,
                         const measure::MeasureChunkPlan& plan, int64_t limit) {
   for (const auto& out : o.out)
     if (is_hdf5(out))
@@ -130,22 +136,22 @@ int run_measure_chunked(const MeasureJob& o, measure::ParticleOptions po, const 
              "slices, then as the boundary lists leave room (planned {})\n",
              o.in, shape.str(), human_bytes(double(plan.estimate_bytes)), human_bytes(double(limit)), plan.core,
              human_bytes(double(plan.list_bytes)));
-  H5Reader lr(lab_path);
+  const std::string lab_spec = labels_spec(o.in);
   measure::LabelSlabSource labels = [&](int64_t z0, int64_t nz) {
-    AnyVolume v = lr.read_slab(lab_ds, z0, nz);
-    auto* l = std::get_if<Volume<uint32_t>>(&v);
-    if (!l) throw InputError(o.in + ": labels must be uint32 (this dataset is " + dtype_name(dtype_of(v)) + ")");
-    l->set_geometry(geom);
-    return std::move(*l);
+    ReadOptions ro;
+    ro.progress = false;
+    ro.slices = {z0, nz};
+    Volume<uint32_t> l = read_label_volume(lab_spec, ro);
+    l.set_geometry(geom);
+    return l;
   };
   GreyFile gf;
   measure::GreySlabSource grey;
   PhaseLevels levels;
   if (!o.grey.empty()) {
-    if (!is_hdf5(o.grey))
-      throw UsageError(o.grey + ": with --memory-limit the grey scan is read slab by slab from HDF5 only "
-                       "(tomograin convert)");
-    gf.open(o.grey);
+    if (!gf.open(o.grey))
+      throw UsageError(o.grey + ": with --memory-limit the grey scan is read slab by slab as uint16 only (this one is " +
+                       dtype_name(gf.info.dtype) + "; tomograin convert --to uint16)");
     if (!(gf.shape() == shape))
       throw InputError(o.grey + ": grey scan " + gf.shape().str() + " is not the shape of the labels " + shape.str());
     grey = gf.source();
@@ -215,23 +221,19 @@ int run_measure(const MeasureJob& o) {
     const int64_t limit = parse_byte_size(o.memory_limit);
     if (limit <= 0)
       throw UsageError("--memory-limit " + o.memory_limit + ": not a size (e.g. 16GiB, 512MiB, 2G, 1000000000)");
-    if (!is_hdf5(o.in))
-      throw UsageError(o.in + ": --memory-limit reads labels slab by slab from HDF5 only (tomograin convert)");
-    const auto [lp, lds] = split_dataset_spec(o.in);
-    H5Reader r(lp);
-    const std::string ds = lds.empty() ? (r.has("/labels") ? "/labels" : "/volume") : lds;
-    const Shape shape = r.shape(ds);
-    Geometry geom = geometry_of(r.read_slab(ds, 0, std::min<int64_t>(1, shape.nz)));
-    if (o.voxel_um > 0) geom.voxel_size_m = {o.voxel_um * 1e-6, o.voxel_um * 1e-6, o.voxel_um * 1e-6};
-    if (!geom.has_voxel_size()) throw InputError(o.in + ": no voxel size in the file; give --voxel-um");
-    // A uint16 HDF5 grey scan is read slab by slab below, in one buffer.
+    // The labels' shape without reading their voxels (any format).
+    ReadOptions ro;
+    ro.voxel_um = o.voxel_um;
+    const VolumeInfo info = read_volume_info(labels_spec(o.in), ro);
+    if (!info.geometry.has_voxel_size()) throw InputError(o.in + ": no voxel size in the file; give --voxel-um");
+    // A uint16 grey scan is read slab by slab below (in one buffer from HDF5).
     measure::GreyHeld held = measure::GreyHeld::none;
     if (!o.grey.empty()) {
       GreyFile probe;
-      held = is_hdf5(o.grey) && probe.open(o.grey) ? measure::GreyHeld::slabs : measure::GreyHeld::whole;
+      held = probe.open(o.grey) ? measure::GreyHeld::slabs : measure::GreyHeld::whole;
     }
-    const auto plan = measure::plan_measure_chunks(shape, held, limit);
-    if (!plan.in_memory) return run_measure_chunked(o, po, lp, ds, shape, geom, plan, limit);
+    const auto plan = measure::plan_measure_chunks(info.shape, held, limit);
+    if (!plan.in_memory) return run_measure_chunked(o, po, info.shape, info.geometry, plan, limit);
   }
   Volume<uint32_t> read;
   if (!o.labels) read = read_labels(o.in, o.voxel_um);

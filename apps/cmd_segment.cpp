@@ -102,9 +102,10 @@ void print_plan(const SegmentJob& o, const tg::SegmentOptions& s) {
 }
 
 // A scan that does not fit under --memory-limit: slab by slab from its
-// HDF5 file into the labels' HDF5 file (segment_chunked.hpp).
-int run_segment_chunked(const SegmentJob& o, const std::string& in_path, const std::string& in_ds,
-                        const tg::Shape& shape, const tg::Geometry& geom, const tg::ChunkedOptions& co) {
+// file (any format: each slab's slices alone) into the labels' HDF5 file
+// (segment_chunked.hpp).
+int run_segment_chunked(const SegmentJob& o, const tg::Shape& shape, const tg::Geometry& geom,
+                        const tg::ChunkedOptions& co) {
   const auto [path, ds] = tg::split_dataset_spec(o.out);
   if (tg::format_of(o.out, true) != tg::FileFormat::hdf5)
     throw tg::UsageError(o.out + ": a scan segmented slab by slab (--memory-limit) is written to HDF5 only");
@@ -116,14 +117,14 @@ int run_segment_chunked(const SegmentJob& o, const std::string& in_path, const s
              tg::human_bytes(double(co.memory_limit_bytes)), plan.slabs, plan.core, plan.margin,
              tg::human_bytes(double(plan.slab_bytes)), s.resolved().grain_radius_vox);
   print_plan(o, s);
-  tg::H5Reader reader(in_path);
   auto read = [&](int64_t z0, int64_t nz) {
-    tg::AnyVolume v = reader.read_slab(in_ds, z0, nz);
+    tg::ReadOptions ro;
+    ro.voxel_um = o.voxel_um;  // as the whole scan's reader applies it
+    ro.progress = false;
+    ro.slices = {z0, nz};
+    tg::AnyVolume v = tg::read_volume(o.in, ro);
     auto* g = std::get_if<tg::Volume<uint16_t>>(&v);
     if (!g) throw tg::InputError(o.in + ": slab-by-slab segmentation (--memory-limit) reads uint16 scans only");
-    tg::Geometry sg = g->geometry();
-    sg.voxel_size_m = geom.voxel_size_m;  // --voxel-um, as the whole scan's reader applies it
-    g->set_geometry(sg);
     return std::move(*g);
   };
   const std::string out_ds = ds.empty() ? "/labels" : ds;
@@ -167,24 +168,18 @@ int run_segment(SegmentJob& o) {
     co.memory_limit_bytes = tg::parse_byte_size(o.memory_limit);
     if (co.memory_limit_bytes <= 0)
       throw tg::UsageError("--memory-limit " + o.memory_limit + ": not a size (e.g. 16GiB, 512MiB, 2G, 1000000000)");
-    // The scan's shape without reading it: slabs are read from HDF5 only.
-    const auto [in_path, in_ds] = tg::split_dataset_spec(o.in);
-    if (tg::is_hdf5(o.in)) {
-      tg::H5Reader r(in_path);
-      const std::string ds = in_ds.empty() ? "/volume" : in_ds;
-      const tg::Shape shape = r.shape(ds);
-      const tg::AnyVolume probe = r.read_slab(ds, 0, 1);
-      tg::Geometry geom = tg::geometry_of(probe);
-      if (o.voxel_um > 0) geom.voxel_size_m = {o.voxel_um * 1e-6, o.voxel_um * 1e-6, o.voxel_um * 1e-6};
-      const tg::SegmentOptions so = segment_options(o, geom, 65535);
-      const double radius = so.resolved().grain_radius_vox;
-      co.bytes_per_voxel = tg::segment_bytes_per_voxel(so);
-      if (!tg::plan_chunks(shape, radius, co).in_memory) {
-        if (tg::dtype_of(probe) != tg::DType::u16)
-          throw tg::UsageError(o.in + ": slab-by-slab segmentation (--memory-limit) reads uint16 scans only (this one "
-                               "is " + tg::dtype_name(tg::dtype_of(probe)) + ")");
-        return run_segment_chunked(o, in_path, ds, shape, geom, co);
-      }
+    // The scan's shape without reading its voxels (any format).
+    tg::ReadOptions ro;
+    ro.voxel_um = o.voxel_um;
+    const tg::VolumeInfo info = tg::read_volume_info(o.in, ro);
+    const tg::SegmentOptions so = segment_options(o, info.geometry, 65535);
+    const double radius = so.resolved().grain_radius_vox;
+    co.bytes_per_voxel = tg::segment_bytes_per_voxel(so);
+    if (!tg::plan_chunks(info.shape, radius, co).in_memory) {
+      if (info.dtype != tg::DType::u16)
+        throw tg::UsageError(o.in + ": slab-by-slab segmentation (--memory-limit) reads uint16 scans only (this one "
+                             "is " + tg::dtype_name(info.dtype) + "; tomograin convert --to uint16)");
+      return run_segment_chunked(o, info.shape, info.geometry, co);
     }
   }
   int top = 65535;
@@ -195,7 +190,7 @@ int run_segment(SegmentJob& o) {
         tg::plan_chunks(grey.shape(), 1.0, {co.memory_limit_bytes, 0, tg::segment_bytes_per_voxel(segment_options(o, geom, top))});
     if (!plan.in_memory)
       throw tg::UsageError(o.in + ": segmenting it needs about " + tg::human_bytes(double(plan.estimate_bytes)) +
-                           ", over --memory-limit; slab by slab needs an HDF5 scan (tomograin convert)");
+                           ", over --memory-limit");
   }
 
   tg::SegmentOptions s = segment_options(o, geom, top);
@@ -293,8 +288,9 @@ static tg::app::Registrar reg{{"segment", 30,
     "    is an error (exit 2).\n"
     "  uneven brightness (cupping, drift along z): --threshold local, Tsai per block of\n"
     "    --local-window-vox voxels (default 4 R), interpolated between block centres.\n\n"
-    "Scans larger than memory: with --memory-limit, a uint16 HDF5 scan whose segmentation needs\n"
-    "more than the limit (~8 B/voxel + 128 MiB) is segmented slab by slab along z: one pass for\n"
+    "Scans larger than memory: with --memory-limit, a uint16 scan (any format: each slab's slices\n"
+    "are read alone) whose segmentation needs more than the limit (~8 B/voxel + 128 MiB) is\n"
+    "segmented slab by slab along z into an HDF5 labels file: one pass for\n"
     "the field of view, histogram and threshold, then slabs of core slices (a multiple of 16),\n"
     "each read with 5 R + 4 slices of margin below and above (--slab-margin-vox), written into\n"
     "the labels file slab by slab. The labels are the same, voxel for voxel and number for\n"
@@ -402,7 +398,7 @@ static tg::app::Registrar reg{{"segment", 30,
       ->capture_default_str();
   sub->add_option("--memory-limit", o->memory_limit,
                   "Memory to stay under, e.g. 16GiB, 512MiB, 2G or a byte count. A scan whose segmentation needs more "
-                  "(~8 B/voxel) is segmented slab by slab from its HDF5 file, with the same labels")
+                  "(~8 B/voxel) is segmented slab by slab (its slices read a slab at a time), with the same labels")
       ->type_name("SIZE");
   sub->add_option("--slab-margin-vox", o->slab_margin_vox,
                   "Slices read below and above each slab's core (default 5 R + 4, rounded up to 16)")

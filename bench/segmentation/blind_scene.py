@@ -18,14 +18,25 @@ Method
   2. Shapes: a slightly ellipsoidal (axes x U(0.92,1.08), random
      orientation), slightly bumpy (three odd cubic lobes, +-3 %) star-shaped
      body, described by the approximate signed distance d = |v| - r(v/|v|).
+     With --angularity A > 0 (crushed, faceted sand) each body is intersected
+     with K = 12 half-spaces n_k . v <= h_k in the grain's own frame (random
+     unit normals n_k, h_k = r0 (1 - A U(0,1))): d = max(|v| - r(v/|v|),
+     max_k (n_k . v - h_k)), flat facets with sharp edges and corners; the
+     facets move with a split grain's halves. The packing still places the
+     unfaceted bodies, so faceting only removes solid: angular packings are
+     looser (lower solid fraction) than A = 0 ones. A = 0 draws no facet
+     random numbers (scenes identical to those before the option).
      A split grain (--split-frac) is cut by a random plane through
      c + U(-0.15,0.15) R n; the gap (--gap voxels) is centred on the plane;
      each half moves --drift/2 voxels away along n (translation only, no
      rotation). A chipped grain (--chip-frac) loses the cap beyond a plane at
-     U(0.6,0.85) R from its centre; the chip is KEPT as a separate particle
-     (kind chip) with the gap centred on the cut plane. 2-5 spherical pores
-     per grain, radius U(--pores), fully inside, apart from each other and at
-     least 3 voxels from any cut.
+     U(0.6,0.85) r from its centre (r = r0; with facets the smaller of r0
+     and the distance along n to the first facet plane, so that a facet does
+     not remove the whole cap); the chip is KEPT as a separate particle (kind
+     chip) with the gap centred on the cut plane. 2-5 spherical pores per
+     grain, radius U(--pores), fully inside (1.5 voxels clear of the star
+     body's inscribed sphere and of every facet plane), apart from each other
+     and at least 3 voxels from any cut.
   3. Partial volume: the signed distance at each voxel centre in the
      particle's bounding box; voxels within 1 voxel of a surface are
      supersampled (--supersample s per axis, each sample's cover
@@ -78,6 +89,7 @@ from scipy.spatial import cKDTree
 VOID, SOLID = 10000.0, 30000.0
 SHELL = 1.0           # voxels: a centre closer than this to a surface is supersampled (> sqrt(3)/2)
 PORE_CLEAR = 3.0      # voxels between a pore and a cut plane's gap
+FACETS = 12           # facet planes per grain with --angularity > 0
 
 
 def parse_size(s):
@@ -109,13 +121,14 @@ def radial(shapes, idx, u):
     return shapes["r0"][idx] * bump / np.sqrt(q)
 
 
-def pack(rng, shape, R, spread, phi, pad_frac, pad, elongation=1.0):
+def pack(rng, shape, R, spread, phi, pad_frac, pad, elongation=1.0, angularity=0.0):
     """Centres (volume coordinates), shapes and a uniform draw u per grain
     of a dense random packing. The overlap of a pair is measured with each
     grain's radius along the line of centres (its shape, not a bounding
     sphere), so contacts are contacts and not fused lenses. Grains with
     u < pad_frac (the ones to be split) get pad more reach while relaxing,
-    room for their halves' drift."""
+    room for their halves' drift. Facets (angularity > 0) are not seen by
+    the packing: it places the unfaceted bodies."""
     rmax = 1.5 * R
     margin = rmax * 1.1 * elongation ** (2 / 3) + 2.0 if elongation != 1.0 else rmax + 2.0
     L = np.array(shape, float) + 2 * margin
@@ -128,7 +141,7 @@ def pack(rng, shape, R, spread, phi, pad_frac, pad, elongation=1.0):
         vol += 4.0 / 3.0 * math.pi * r ** 3
     r = np.array(radii)
     n = r.size
-    shapes = [make_shape(rng, rr, elongation) for rr in r]
+    shapes = [make_shape(rng, rr, elongation, angularity) for rr in r]
     shapes = {k: np.array([sh[k] for sh in shapes]) for k in shapes[0]}
     u = rng.uniform(size=n)
     extra = np.where(u < pad_frac, pad, 0.0)
@@ -168,23 +181,49 @@ def pack(rng, shape, R, spread, phi, pad_frac, pad, elongation=1.0):
                                 "box_solid_fraction": float(vol / np.prod(L))}
 
 
-def make_shape(rng, r0, elongation=1.0):
+def make_shape(rng, r0, elongation=1.0, angularity=0.0):
     """A near-sphere: ellipsoid axes r0 x U(0.92, 1.08), random orientation,
     three odd cubic lobes of total amplitude 3 %. With elongation e > 1 the
     first axis is e times the other two at the same volume (a prolate grain,
-    e.g. 1.6 for an elongated sand): axes x (e^(2/3), e^(-1/3), e^(-1/3))."""
+    e.g. 1.6 for an elongated sand): axes x (e^(2/3), e^(-1/3), e^(-1/3)).
+    With angularity A > 0, FACETS planes (unit normals fn, distances from the
+    centre fh = r0 (1 - A U(0,1))) cut the body; A = 0 draws nothing more
+    (fn, fh empty)."""
     ax = rng.uniform(0.92, 1.08, 3) * np.array([elongation ** (2 / 3), elongation ** (-1 / 3), elongation ** (-1 / 3)])
     Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
     A = Q @ np.diag(1.0 / ax ** 2) @ Q.T
     amps = rng.uniform(-1, 1, 3)
     amps *= 0.03 / max(np.abs(amps).sum(), 1e-9)
-    return {"r0": r0, "A": A, "lobes": random_unit(rng, 3), "amps": amps,
-            "rmin": r0 * ax.min() * 0.97, "rmax": r0 * ax.max() * 1.03}
+    sh = {"r0": r0, "A": A, "lobes": random_unit(rng, 3), "amps": amps,
+          "rmin": r0 * ax.min() * 0.97, "rmax": r0 * ax.max() * 1.03}
+    if angularity > 0:
+        sh["fn"] = random_unit(rng, FACETS)
+        sh["fh"] = r0 * (1.0 - angularity * rng.uniform(size=FACETS))
+    else:
+        sh["fn"], sh["fh"] = np.zeros((0, 3)), np.zeros(0)
+    return sh
+
+
+def facet_distance(g, x):
+    """max_k (n_k . x - h_k) over the grain's facet planes, x (..., 3)
+    relative to the grain centre: the signed distance of the facets'
+    intersection (exact inside; a lower bound outside, beyond edges and
+    corners). Only for grains with facets."""
+    return (x @ g["fn"].T - g["fh"]).max(axis=-1)
+
+
+def facet_ray(g, n):
+    """Distance from the grain centre along unit n to the first facet
+    plane (inf without facets)."""
+    c = g["fn"].astype(np.float64) @ n
+    up = c > 1e-9
+    return float(np.min(g["fh"][up] / c[up])) if up.any() else math.inf
 
 
 class Particle:
-    """One solid piece: a grain body, intersected with half-spaces, minus
-    pores. d(p) is an approximate signed distance (negative inside)."""
+    """One solid piece: a grain body (faceted with --angularity),
+    intersected with half-spaces, minus pores. d(p) is an approximate signed
+    distance (negative inside)."""
 
     def __init__(self, grain, kind, cuts, shift):
         self.g = grain          # dict: c, r0, A, lobes, amps, pores, id
@@ -211,6 +250,8 @@ class Particle:
         bump = 1.0 + (lob * lob * lob) @ g["amps"]
         # |x| - r0 bump / sqrt(u.A.u), with sqrt(u.A.u) = sqrt(q) / |x|
         d = d2 * inv - g["r0"] * bump * np.sqrt(d2 / q)
+        if len(g["fh"]):
+            d = np.maximum(d, facet_distance(g, x))
         for n, off, side, half_gap in self.cuts:
             d = np.maximum(d, half_gap - side * (x @ n - off))
         return d.reshape(v.shape[:-1])
@@ -225,13 +266,16 @@ class Particle:
 def make_grain(gid, c, shapes, k):
     g = {key: shapes[key][k] for key in shapes}
     g.update(id=gid, c=c, amps=g["amps"].astype(np.float32),
-             M=np.hstack([g["A"], g["lobes"].T]).astype(np.float32))
+             M=np.hstack([g["A"], g["lobes"].T]).astype(np.float32),
+             fn=g["fn"].astype(np.float32), fh=g["fh"].astype(np.float32))
     return g
 
 
 def place_pores(rng, g, planes, a):
     """2-5 pores inside the grain, clear of each other and of every cut plane
-    (planes: list of (n, offset, half_gap) relative to the grain centre)."""
+    (planes: list of (n, offset, half_gap) relative to the grain centre).
+    Inside: within rmin - 1.5 voxels of the centre (rmin bounds the star body
+    from below) and, with facets, 1.5 voxels inside every facet plane."""
     pores = []
     want = int(rng.integers(2, 6))
     for _ in range(200):
@@ -242,6 +286,8 @@ def place_pores(rng, g, planes, a):
         if reach <= 0:
             continue
         p = random_unit(rng) * reach * rng.uniform(0, 1) ** (1 / 3)
+        if len(g["fh"]) and facet_distance(g, p) > -(pr + 1.5):
+            continue
         if any(abs(p @ n - off) < pr + hg + PORE_CLEAR for n, off, hg in planes):
             continue
         if any(np.linalg.norm(p - q) < pr + qr + 1.0 for q, qr in pores):
@@ -252,7 +298,8 @@ def place_pores(rng, g, planes, a):
 
 def build(rng, a, shape):
     split_pad = a.drift / 2.0
-    centres, shapes, kinds, pstats = pack(rng, shape, a.radius, a.spread, a.phi, a.split_frac, split_pad, a.elongation)
+    centres, shapes, kinds, pstats = pack(rng, shape, a.radius, a.spread, a.phi, a.split_frac, split_pad, a.elongation,
+                                          a.angularity)
     hi = np.array(shape, float)
     particles = []
     gid = 0
@@ -275,7 +322,9 @@ def build(rng, a, shape):
                 particles.append(p)
         elif kinds[k] < a.split_frac + a.chip_frac:
             n = random_unit(rng)
-            off = rng.uniform(0.6, 0.85) * r0
+            # the cap is measured on the faceted body: a facet nearer than r0 along n
+            # would otherwise leave an empty or sliver chip
+            off = rng.uniform(0.6, 0.85) * (min(r0, facet_ray(g, n)) if len(g["fh"]) else r0)
             pores = place_pores(rng, g, [(n, off, hg)], a)
             body = Particle(g, "chipped", [(n, off, -1.0, hg)], np.zeros(3))
             body.pores = [(pc, pr) for pc, pr in pores if pc @ n < off]
@@ -377,6 +426,9 @@ def main(argv=None):
     ap.add_argument("--spread", type=float, default=0.12, help="relative standard deviation of the grain radii (0.12)")
     ap.add_argument("--elongation", type=float, default=1.0,
                     help="long axis over the other two of every grain, same volume (1.0: near-spheres)")
+    ap.add_argument("--angularity", type=float, default=0.0,
+                    help="facet every grain with 12 random planes at r0 (1 - A U(0,1)) from its centre "
+                         "(crushed, angular sand; 0 <= A <= 0.6; 0.0: no facets)")
     ap.add_argument("--phi", type=float, default=0.58, help="solid fraction of the packing before cuts and pores (0.58)")
     ap.add_argument("--gap", type=float, default=1.0, help="fragment gap width, voxels (1.0)")
     ap.add_argument("--split-frac", type=float, default=0.15, help="fraction of grains split in two halves (0.15)")
@@ -400,8 +452,8 @@ def main(argv=None):
     ap.add_argument("--tif", action="store_true", help="also write PREFIX.tif (the scan; scikit-image peer input)")
     ap.add_argument("--no-measure", action="store_true", help="skip the CNR and gap measurements")
     a = ap.parse_args(argv)
-    if not 0 < a.gap or a.split_frac + a.chip_frac > 1 or a.supersample < 1:
-        ap.error("need gap > 0, split-frac + chip-frac <= 1, supersample >= 1")
+    if not 0 < a.gap or a.split_frac + a.chip_frac > 1 or a.supersample < 1 or not 0 <= a.angularity <= 0.6:
+        ap.error("need gap > 0, split-frac + chip-frac <= 1, supersample >= 1, 0 <= angularity <= 0.6")
     import h5py
     t0 = time.perf_counter()
     rng = np.random.default_rng(a.seed)

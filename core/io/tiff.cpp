@@ -8,6 +8,7 @@
 #include <cstdarg>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <type_traits>
 #include <vector>
@@ -320,35 +321,106 @@ std::vector<std::string> tiff_slices_in(const std::string& dir) {
   return names;
 }
 
-AnyVolume read_tiff(const std::string& path, bool progress, SliceRange slices) {
-  TiffPtr t = open_read(path);
+namespace {
+
+// The slices of a multi-page TIFF. ImageJ saves a stack past 4 GB (and
+// may save any stack) as ONE directory, "images=N" in its description and
+// the N pages' pixels stored one after the other, uncompressed, from page
+// 0's first strip: `contiguous` then, the pages read straight from the file
+// (as ImageJ and tifffile read them).
+struct TiffStack {
+  int64_t pages = 0;
+  bool contiguous = false;
+  uint64_t offset = 0;     // contiguous: file offset of page 0's pixels
+  int64_t page_bytes = 0;  // contiguous: bytes of one page
+};
+
+TiffStack stack_of(TIFF* t, const std::string& path) {
   g_tiff_error.clear();
-  const int npages = TIFFNumberOfDirectories(t.get());
-  if (npages <= 0) fail(path, "TIFF holds no pages");
+  TiffStack st;
+  st.pages = TIFFNumberOfDirectories(t);
+  if (st.pages <= 0) fail(path, "TIFF holds no pages");
   // A cut file keeps its first pages readable; libtiff then reports a broken
   // link to the next page. Refuse it rather than return fewer slices.
-  if (!g_tiff_error.empty()) fail(path, "truncated or corrupt: the chain of pages breaks after page " + std::to_string(npages - 1));
+  if (!g_tiff_error.empty())
+    fail(path, "truncated or corrupt: the chain of pages breaks after page " + std::to_string(st.pages - 1));
+  TIFFSetDirectory(t, 0);
   char* desc = nullptr;
-  if (TIFFGetField(t.get(), TIFFTAG_IMAGEDESCRIPTION, &desc) && desc && std::strncmp(desc, "ImageJ=", 7) == 0) {
-    const char* im = std::strstr(desc, "\nimages=");
-    if (im && std::atoi(im + 8) > npages)
-      fail(path, "truncated: ImageJ metadata announces " + std::to_string(std::atoi(im + 8)) + " pages, file holds " +
-                     std::to_string(npages));
+  if (!(TIFFGetField(t, TIFFTAG_IMAGEDESCRIPTION, &desc) && desc && std::strncmp(desc, "ImageJ=", 7) == 0)) return st;
+  const char* im = std::strstr(desc, "\nimages=");
+  const int64_t images = im ? std::atoll(im + 8) : 0;
+  if (images <= st.pages) return st;
+  const auto truncated = [&](const std::string& why) {
+    fail(path, "truncated: ImageJ metadata announces " + std::to_string(images) + " pages, file holds " +
+                   std::to_string(st.pages) + why);
+  };
+  // One directory for many images: contiguous pixels, if everything says so.
+  const PageInfo p = page_info(t, path, 0);
+  uint16_t compression = COMPRESSION_NONE;
+  TIFFGetFieldDefaulted(t, TIFFTAG_COMPRESSION, &compression);
+  if (st.pages != 1 || TIFFIsTiled(t) || compression != COMPRESSION_NONE || p.src_bits != 0) truncated("");
+  const tstrip_t nstrips = TIFFNumberOfStrips(t);
+  uint64_t *offsets = nullptr, *counts = nullptr;
+  if (nstrips == 0 || !TIFFGetField(t, TIFFTAG_STRIPOFFSETS, &offsets) || !TIFFGetField(t, TIFFTAG_STRIPBYTECOUNTS, &counts))
+    truncated("");
+  st.page_bytes = int64_t(p.width) * p.height * dtype_bytes(p.dtype);
+  for (tstrip_t k = 0; k + 1 < nstrips; ++k)
+    if (offsets[k + 1] != offsets[k] + counts[k]) truncated(" (page 0's strips are not contiguous)");
+  st.offset = offsets[0];
+  const uint64_t need = st.offset + uint64_t(images) * uint64_t(st.page_bytes);
+  const uint64_t size = fs::file_size(path);
+  if (size < need)
+    truncated(" and " + std::to_string(size) + " bytes, " + std::to_string(need) + " needed for contiguous pages");
+  st.pages = images;
+  st.contiguous = true;
+  return st;
+}
+
+// Pages [r.z0, r.z0 + r.nz) of an ImageJ contiguous stack, straight from the file.
+template <class T>
+Volume<T> read_contiguous(TIFF* t, const std::string& path, const TiffStack& st, SliceRange r, const PageInfo& first,
+                          bool progress) {
+  Volume<T> v(Shape{r.nz, first.height, first.width}, slab_geometry(read_geometry(t), r.z0));
+  std::ifstream f(path, std::ios::binary);
+  f.seekg(static_cast<std::streamoff>(st.offset + uint64_t(r.z0) * uint64_t(st.page_bytes)));
+  Progress bar("reading " + fs::path(path).filename().string(), double(r.nz));
+  for (int64_t q = 0; q < r.nz; ++q) {
+    if (!f.read(reinterpret_cast<char*>(v.data() + q * v.shape().slice_voxels()), st.page_bytes))
+      fail(path, "page " + std::to_string(r.z0 + q) + " cannot be read");
+    if (progress) bar.update(double(q + 1));
   }
-  const SliceRange r = slices_within(slices, npages, path);
+  if (TIFFIsByteSwapped(t) && sizeof(T) > 1)
+    for (T& x : v) {
+      auto* b = reinterpret_cast<unsigned char*>(&x);
+      std::reverse(b, b + sizeof(T));
+    }
+  return v;
+}
+
+}  // namespace
+
+AnyVolume read_tiff(const std::string& path, bool progress, SliceRange slices) {
+  TiffPtr t = open_read(path);
+  const TiffStack st = stack_of(t.get(), path);
+  const SliceRange r = slices_within(slices, st.pages, path);
   const PageInfo first = page_info(t.get(), path, 0);
+  const auto read = [&](auto tag) -> AnyVolume {
+    using T = decltype(tag);
+    if (st.contiguous) return read_contiguous<T>(t.get(), path, st, r, first, progress);
+    return read_pages<T>(t.get(), path, r, first, progress);
+  };
   switch (first.dtype) {
-    case DType::u8: return read_pages<uint8_t>(t.get(), path, r, first, progress);
-    case DType::u16: return read_pages<uint16_t>(t.get(), path, r, first, progress);
-    case DType::u32: return read_pages<uint32_t>(t.get(), path, r, first, progress);
-    case DType::f32: return read_pages<float>(t.get(), path, r, first, progress);
+    case DType::u8: return read(uint8_t{});
+    case DType::u16: return read(uint16_t{});
+    case DType::u32: return read(uint32_t{});
+    case DType::f32: return read(float{});
   }
   fail(path, "unsupported sample type");
 }
 
 int64_t tiff_page_count(const std::string& path) {
   TiffPtr t = open_read(path);
-  return TIFFNumberOfDirectories(t.get());
+  return stack_of(t.get(), path).pages;
 }
 
 AnyVolume read_tiff_folder(const std::string& dir, bool progress, SliceRange slices) {

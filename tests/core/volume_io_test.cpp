@@ -183,6 +183,81 @@ TEST(VolumeIO, HDF5SlabsWriteAndRead) {
   EXPECT_THROW(r.read_slab("/labels", 35, 6), InputError);
 }
 
+// ImageJ saves a stack past 4 GB as one TIFF directory, "images=N" in its
+// description and the N pages' pixels one after the other (what tifffile and
+// ImageJ read back). Built here byte by byte (small: the layout, not the size,
+// is the point): read as N slices, in ranges too; cut short, a clear error.
+namespace {
+void write_imagej_contiguous(const std::string& path, const Volume<uint16_t>& v, bool big_endian) {
+  const uint32_t w = uint32_t(v.shape().nx), h = uint32_t(v.shape().ny), n = uint32_t(v.shape().nz);
+  const std::string desc = "ImageJ=1.54f\nimages=" + std::to_string(n) + "\nslices=" + std::to_string(n) +
+                           "\nunit=micron\nspacing=12.5\nloop=false\n";
+  std::string out;
+  auto put = [&](uint64_t x, int bytes) {
+    for (int b = 0; b < bytes; ++b) out.push_back(char(big_endian ? (x >> (8 * (bytes - 1 - b))) : (x >> (8 * b))));
+  };
+  const uint32_t entries = 12, ifd = 8, desc_at = ifd + 2 + entries * 12 + 4;
+  const uint32_t res_at = desc_at + uint32_t(desc.size() + 1), data_at = res_at + 16;
+  out += big_endian ? "MM" : "II";
+  put(42, 2);
+  put(ifd, 4);
+  put(entries, 2);
+  auto entry = [&](uint16_t tag, uint16_t type, uint32_t count, uint32_t value) {
+    put(tag, 2), put(type, 2), put(count, 4);
+    if (type == 3 && count == 1) put(value, 2), put(0, 2);  // a SHORT sits in the first two bytes
+    else put(value, 4);
+  };
+  entry(256, 4, 1, w);                            // ImageWidth
+  entry(257, 4, 1, h);                            // ImageLength
+  entry(258, 3, 1, 16);                           // BitsPerSample
+  entry(259, 3, 1, 1);                            // Compression: none
+  entry(262, 3, 1, 1);                            // Photometric: black is zero
+  entry(270, 2, uint32_t(desc.size() + 1), desc_at);  // ImageDescription
+  entry(273, 4, 1, data_at);                      // StripOffsets: one strip, page 0
+  entry(277, 3, 1, 1);                            // SamplesPerPixel
+  entry(278, 4, 1, h);                            // RowsPerStrip
+  entry(279, 4, 1, w * h * 2);                    // StripByteCounts: page 0 only
+  entry(282, 5, 1, res_at);                       // XResolution: 8/100 pixels per micron
+  entry(283, 5, 1, res_at + 8);                   // YResolution
+  put(0, 4);                                      // no next directory
+  out += desc;
+  out.push_back('\0');
+  for (int k = 0; k < 2; ++k) put(8, 4), put(100, 4);
+  for (const uint16_t x : v) put(x, 2);           // every page, contiguous
+  std::ofstream(path, std::ios::binary) << out;
+}
+}  // namespace
+
+TEST(VolumeIO, ImageJContiguousStackOfOneDirectory) {
+  TempDir d;
+  const auto v = random_volume<uint16_t>(Shape{6, 9, 11}, 3);
+  for (const bool big : {false, true}) {
+    const std::string path = d / (big ? "ij_be.tif" : "ij.tif");
+    write_imagej_contiguous(path, v, big);
+    const AnyVolume r = read_volume(path);
+    expect_same(v, r);
+    EXPECT_NEAR(geometry_of(r).voxel_size_m[0], 12.5e-6, 1e-12);
+    EXPECT_EQ(read_volume_info(path).shape, v.shape());
+    ReadOptions ro;
+    ro.slices = {2, 3};
+    Volume<uint16_t> want(Shape{3, 9, 11});
+    std::copy_n(v.data() + 2 * 99, 3 * 99, want.data());
+    expect_same(want, read_volume(path, ro));
+  }
+  // The last page cut short: "truncated", naming the file and the bytes missing.
+  fs::copy_file(d / "ij.tif", d / "cut.tif");
+  fs::resize_file(d / "cut.tif", fs::file_size(d / "ij.tif") - 50);
+  try {
+    (void)read_volume(d / "cut.tif");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.rfind(d / "cut.tif", 0), 0u) << m;
+    EXPECT_NE(m.find("ImageJ metadata announces 6 pages"), std::string::npos) << m;
+    EXPECT_NE(m.find("needed for contiguous pages"), std::string::npos) << m;
+  }
+}
+
 TEST(VolumeIO, NaturalSortOfSlices) {
   EXPECT_TRUE(natural_less("slice_9.tif", "slice_10.tif"));
   EXPECT_FALSE(natural_less("slice_10.tif", "slice_9.tif"));

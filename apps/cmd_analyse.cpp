@@ -148,7 +148,7 @@ static tg::app::Registrar reg{{"analyse", 50,
   sub->add_option("--feret", o->feret, "Feret orientations N, or 'exact'")->capture_default_str();
   sub->add_flag("--box", o->box, "Also compute CGAL's oriented box (obb_* columns; slow on large scans)");
   sub->add_option("--memory-limit", o->memory_limit,
-                  "Memory to stay under, e.g. 16GiB: a scan (HDF5) over it is segmented and measured slab by slab "
+                  "Memory to stay under, e.g. 16GiB: a uint16 scan (any format) over it is segmented and measured slab by slab "
                   "with the same labels and table; see segment and measure --help");
   return [o] { return run_analyse(*o); };
 }}};

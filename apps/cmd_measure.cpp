@@ -244,14 +244,16 @@ int run_measure(const MeasureJob& o) {
   // A uint16 HDF5 scan is read slab by slab (twice: the histogram, then the
   // volumes), into one buffer of ~256 MiB: reading a 1220^3 scan whole into
   // fresh memory took ~6 s of kernel page clearing alone, and 2 B/voxel.
-  // Other formats and types are read whole (and converted to 16 bits).
+  // So is a uint16 scan of another format under --memory-limit (the plan
+  // above counted it in slabs; each slab's slices read alone, twice).
+  // Otherwise other formats and types are read whole (and converted to 16 bits).
   Volume<uint16_t> grey;
   VolumeView<const uint16_t> grey_view;
   GreyFile gf;
   measure::GreySlabSource grey_slabs;
   PhaseLevels levels;
   if (!o.grey.empty()) {
-    if (is_hdf5(o.grey) && gf.open(o.grey)) {
+    if ((is_hdf5(o.grey) || !o.memory_limit.empty()) && gf.open(o.grey)) {
       if (!(gf.shape() == labels.shape()))
         throw InputError(o.grey + ": grey scan " + gf.shape().str() + " is not the shape of the labels " +
                          labels.shape().str());
@@ -380,8 +382,8 @@ tg::app::Registrar reg_measure{{"measure", 40,
                   "estimates from its grey levels, void lines and threshold bias included "
                   "(measure/grey_volume.hpp); d_med_mm and fr stay on the labels; volume_from says which");
   sub->add_option("--memory-limit", o->memory_limit,
-                  "Memory to stay under, e.g. 16GiB, 512MiB, 2G or a byte count. Labels (HDF5) whose measuring "
-                  "needs more (~5 B/voxel, 7 with a --grey scan read whole; a uint16 HDF5 one is read in slabs) are measured slab by slab, with the same table; .csv "
+                  "Memory to stay under, e.g. 16GiB, 512MiB, 2G or a byte count. Labels (any format) whose measuring "
+                  "needs more (~5 B/voxel, 7 with a --grey scan read whole; a uint16 one is read in slabs) are measured slab by slab, with the same table; .csv "
                   "output only");
   tg::app::add_threads_option(sub, o->threads);
   tg::app::add_voxel_option(sub, o->voxel_um);

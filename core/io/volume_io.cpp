@@ -60,8 +60,9 @@ std::string volume_dataset(const H5Reader& r, const std::string& path, const std
 SliceRange slices_within(SliceRange range, int64_t depth, const std::string& where) {
   if (range.nz < 0 && range.z0 >= 0) range.nz = depth - range.z0;
   if (range.z0 < 0 || range.nz < 1 || range.z0 + range.nz > depth)
-    throw InputError(where + ": slices " + std::to_string(range.z0) + ".." + std::to_string(range.z0 + range.nz - 1) +
-                     " are outside its " + std::to_string(depth) + " slices");
+    throw InputError(where + ": slices [" + std::to_string(range.z0) + ", " +
+                     (range.nz < 0 ? std::string("end") : std::to_string(range.z0 + range.nz)) + ") are not within its " +
+                     std::to_string(depth) + " slices");
   return range;
 }
 

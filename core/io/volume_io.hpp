@@ -41,7 +41,7 @@ struct VolumeInfo {
 VolumeInfo read_volume_info(const std::string& spec, const ReadOptions& opt = {});
 
 // `range` within a volume of `depth` slices (nz < 0 taken as to the last);
-// InputError "WHERE: slices A..B are outside its DEPTH slices" otherwise.
+// InputError "WHERE: slices [A, B) are not within its DEPTH slices" otherwise.
 SliceRange slices_within(SliceRange range, int64_t depth, const std::string& where);
 
 struct WriteOptions {

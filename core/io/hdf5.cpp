@@ -511,6 +511,16 @@ Shape H5Reader::shape(const std::string& dataset) const {
   return Shape{static_cast<int64_t>(dims[0]), static_cast<int64_t>(dims[1]), static_cast<int64_t>(dims[2])};
 }
 
+int H5Reader::rank(const std::string& dataset) const {
+  const std::string ds = norm(dataset);
+  const std::string where = impl_->path + ":" + ds;
+  if (!has(ds)) throw InputError(where + ": no such dataset");
+  Handle d = dset_h(H5Dopen2(impl_->file.get(), ds.c_str(), H5P_DEFAULT));
+  if (!d.ok()) throw InputError(where + ": not a dataset");
+  Handle sp = space_h(H5Dget_space(d.get()));
+  return H5Sget_simple_extent_ndims(sp.get());
+}
+
 Table H5Reader::read_table(const std::string& group) const {
   const std::string g = norm(group);
   const std::string where = impl_->path + ":" + g;

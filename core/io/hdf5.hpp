@@ -57,6 +57,7 @@ class H5Reader {
   AnyVolume read_slab(const std::string& dataset, int64_t z0, int64_t nz, AnyVolume* reuse = nullptr) const;
   // The dataset's shape (z, y, x) without reading it; a 2-D dataset is one slice.
   Shape shape(const std::string& dataset) const;
+  int rank(const std::string& dataset) const;  // dimensions of a dataset (InputError if it is none)
   Table read_table(const std::string& group) const;
   std::string read_attribute(const std::string& name) const;  // "" if absent
 

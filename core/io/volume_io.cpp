@@ -48,12 +48,23 @@ FileFormat format_of(const std::string& spec, bool for_writing) {
 static AnyVolume read_volume_unchecked(const std::string& spec, const ReadOptions& opt);
 
 namespace {
-// The dataset a spec names, or the default one: /volume, else /labels.
+// The dataset a spec names, or the default one: /volume, else /labels, else
+// the file's only 3-D dataset (files written by other tools name theirs
+// /data, /exchange/data, /segmentation, ...: one volume leaves no doubt).
 std::string volume_dataset(const H5Reader& r, const std::string& path, const std::string& ds) {
   if (!ds.empty()) return ds;
   if (r.has("/volume")) return "/volume";
   if (r.has("/labels")) return "/labels";
-  throw InputError(path + ": no /volume or /labels dataset; name one as " + path + ":/DATASET");
+  std::vector<std::string> volumes;
+  for (const auto& d : r.datasets()) {
+    if (r.rank(d) == 3) volumes.push_back(d);  // table columns are rank 1
+  }
+  if (volumes.size() == 1) return volumes.front();
+  std::string listed;
+  for (const auto& v : volumes) listed += (listed.empty() ? "" : ", ") + v;
+  throw InputError(path + ": no /volume or /labels dataset" +
+                   (volumes.empty() ? std::string(" and no 3-D dataset") : " and several 3-D ones (" + listed + ")") +
+                   "; name one as " + path + ":/DATASET");
 }
 }  // namespace
 

@@ -159,6 +159,44 @@ TEST(VolumeIO, HDF5CompressedAndTables) {
   EXPECT_THROW(read_volume(d / "f.h5:/nope"), InputError);
 }
 
+// Files written by other tools name their volume as they like (/exchange/data
+// of a tomography beamline, /segmentation, ...): the only 3-D dataset of a
+// file is read without being named; with two, the error lists them.
+TEST(VolumeIO, HDF5OnlyThreeDimensionalDatasetIsTheDefault) {
+  TempDir d;
+  const auto v = random_volume<uint16_t>(Shape{4, 5, 6}, 7);
+  auto write = [&](const std::string& file, const std::vector<std::string>& volumes) {
+    const hid_t f = H5Fcreate(file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    const hid_t lcpl = H5Pcreate(H5P_LINK_CREATE);
+    H5Pset_create_intermediate_group(lcpl, 1);
+    const hsize_t dims[3] = {4, 5, 6}, angles[1] = {180};
+    for (const auto& name : volumes) {
+      const hid_t sp = H5Screate_simple(3, dims, nullptr);
+      const hid_t ds = H5Dcreate2(f, name.c_str(), H5T_NATIVE_UINT16, sp, lcpl, H5P_DEFAULT, H5P_DEFAULT);
+      H5Dwrite(ds, H5T_NATIVE_UINT16, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+      H5Dclose(ds);
+      H5Sclose(sp);
+    }
+    const hid_t sp = H5Screate_simple(1, angles, nullptr);  // a 1-D array beside it is not a volume
+    H5Dclose(H5Dcreate2(f, "/exchange/theta", H5T_NATIVE_FLOAT, sp, lcpl, H5P_DEFAULT, H5P_DEFAULT));
+    H5Sclose(sp);
+    H5Pclose(lcpl);
+    H5Fclose(f);
+  };
+  write(d / "one.h5", {"/exchange/data"});
+  expect_same(v, read_volume(d / "one.h5"));
+  EXPECT_EQ(read_volume_info(d / "one.h5").shape.nz, 4);
+  write(d / "two.h5", {"/exchange/data", "/exchange/dark"});
+  try {
+    read_volume(d / "two.h5");
+    FAIL() << "two 3-D datasets and none named";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/exchange/dark"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("two.h5:/DATASET"), std::string::npos) << e.what();
+  }
+  expect_same(v, read_volume(d / "two.h5:/exchange/dark"));
+}
+
 // Slabs of z written out of order into one dataset, read back whole and as
 // slabs (origin moved to the slab's first slice); out-of-range slabs are errors.
 TEST(VolumeIO, HDF5SlabsWriteAndRead) {

@@ -90,9 +90,11 @@ void print_plan(const SegmentJob& o, const tg::SegmentOptions& s) {
   fmt::print("  markers: h-maxima of the distance map, h = {:.3g} voxels; watershed {}; merge ratio {}\n", r.h,
              s.watershed_lines ? "with lines" : "without lines", s.merge ? fmt::format("{}", s.merge_ratio) : "off");
   fmt::print("  split repair: {}\n",
-             s.split ? fmt::format("labels whose grey, smoothed over {:.3g} voxels, holds two cores {:.3g} noise sigmas "
+             s.split ? fmt::format("labels whose grey, smoothed over {} voxels, holds two cores {:.3g} noise sigmas "
                                    "above the sheet between them are cut apart",
-                                   s.split_smoothing_vox, s.split_depth_sigmas)
+                                   s.split_smoothing_vox > 0 ? fmt::format("{:.3g}", s.split_smoothing_vox)
+                                                             : std::string("0.7 or 1 (from the noise)"),
+                                   s.split_depth_sigmas)
                      : std::string("off"));
   fmt::print("  noise specks: {}\n", s.noise_specks ? fmt::format("labels whose mean grey is void noise over the "
                                                                  "threshold (z < {:.3g}) and that have no core are "
@@ -223,9 +225,10 @@ int run_segment(SegmentJob& o) {
              res.pores.filled, res.pores.enclosed, res.markers, res.merge.merges, res.count, res.dropped,
              r.min_size_vox);
   if (res.split_used)
-    fmt::print("  split repair: {} of {} labels split ({} pieces added); depth {:.0f} grey levels (smoothed noise sigma "
-               "{:.0f})\n",
-               res.split.split, res.split.tested, res.split.pieces_added, res.split_depth, res.smoothed_noise_sigma);
+    fmt::print("  split repair: {} of {} labels split ({} pieces added); depth {:.0f} grey levels (noise sigma {:.0f} "
+               "smoothed over {:.2g} voxels)\n",
+               res.split.split, res.split.tested, res.split.pieces_added, res.split_depth, res.smoothed_noise_sigma,
+               res.split_smoothing_vox);
   double total = 0;
   for (const auto& [name, sec] : res.stage_seconds) total += sec;
   fmt::print("  {:.2f} s, peak memory {} ({:.1f} B/voxel)\n", total, tg::human_bytes(double(res.peak_rss_bytes)),
@@ -390,8 +393,10 @@ static tg::app::Registrar reg{{"segment", 30,
       ->check(CLI::Range(0.0, 0.5))
       ->capture_default_str();
   sub->add_option("--split-smoothing-vox", o->seg.split_smoothing_vox,
-                  "Gaussian sigma, voxels, of the grey the split repair reads")
-      ->check(CLI::PositiveNumber)
+                  "Gaussian sigma, voxels, of the grey the split repair reads; 0: 0.7 (keeps chips 2-3 voxels thin) "
+                  "unless the noise needs 1 (the depth, 6 sigmas of the smoothed noise, would pass half the solid's "
+                  "height above the threshold: CNR under ~7)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   sub->add_option("--min-size", o->seg.min_size_vox, "Smallest label kept, voxels")
       ->check(CLI::PositiveNumber)

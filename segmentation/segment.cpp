@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <fmt/core.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 #include <omp.h>
 
@@ -42,6 +43,8 @@ void validate(const SegmentOptions& o) {
   if (o.threshold == ThresholdMethod::manual && (o.manual_threshold < 0 || o.manual_threshold > 65535))
     throw UsageError("segment: a manual threshold must be a grey level in 0..65535");
   if (o.min_size_vox < 1) throw UsageError("segment: the minimum label size must be >= 1 voxel");
+  if (!(o.split_smoothing_vox >= 0) || !std::isfinite(o.split_smoothing_vox))
+    throw UsageError("segment: the split repair's smoothing must be >= 0 voxels (0: chosen from the noise)");
   if (o.saturation_level < 1 || o.saturation_level > 65535)
     throw UsageError("segment: the saturation level must be a grey level in 1..65535");
   if (o.local_window_vox < 0 || o.local_window_vox == 1)
@@ -52,8 +55,8 @@ void validate(const SegmentOptions& o) {
 // The threshold and the bright level from the histogram inside the field
 // of view (the local threshold's blocks need the volume: run_from_grey);
 // the split repair's depth from the smoothed sample slices' histogram.
-void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist, const std::vector<int64_t>& smoothed,
-                              const SegmentOptions& o) {
+void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
+                              const std::vector<std::vector<int64_t>>& smoothed, const SegmentOptions& o) {
   d.levels = screen_levels(hist, o.saturation_level);
   bool any = false;
   for (const int64_t c : hist) any = any || c > 0;
@@ -86,15 +89,23 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist, cons
     d.noise_sigma = peak.sigma;
     d.graded = d.bright > d.t.value;  // no dim band: the plain mask's chain (no second pore pass)
   }
-  if (o.split && o.threshold != ThresholdMethod::local && smoothed.size() == hist.size()) {
+  const std::vector<double> sigmas = split_smoothing_candidates(o);
+  if (o.split && o.threshold != ThresholdMethod::local && smoothed.size() == sigmas.size()) {
     // The smoothed solid's noise from the upper side of its peak (as the
     // raw one: partial volume only widens the lower side); the floor keeps
-    // a noiseless scan from splitting at every smoothing ripple.
-    const SolidPeak sm = solid_peak(smoothed, d.t.value);
+    // a noiseless scan from splitting at every smoothing ripple. The least
+    // smoothing whose depth a gap's dip can still pass (segment.hpp
+    // kSplitSmoothingLadder).
     const SolidPeak raw = solid_peak(hist, d.t.value);
-    d.smoothed_sigma = sm.sigma;
-    d.split_depth = std::max(o.split_depth_sigmas * sm.sigma,
-                             o.split_min_depth_contrast * std::max(0.0, raw.mode - double(d.t.value)));
+    const double height = std::max(0.0, raw.mode - double(d.t.value));
+    for (size_t k = 0; k < sigmas.size(); ++k) {
+      if (smoothed[k].size() != hist.size()) break;
+      const SolidPeak sm = solid_peak(smoothed[k], d.t.value);
+      d.split_smoothing = sigmas[k];
+      d.smoothed_sigma = sm.sigma;
+      d.split_depth = std::max(o.split_depth_sigmas * sm.sigma, o.split_min_depth_contrast * height);
+      if (o.split_depth_sigmas * sm.sigma <= kSplitDepthShare * height) break;
+    }
   }
   if (o.noise_specks && o.threshold != ThresholdMethod::local) {
     // The void's noise above t (noise_specks.hpp): the void peak's mode and
@@ -114,9 +125,10 @@ GreyDecisions choose_threshold(const Volume<uint16_t>& grey, const SegmentOption
   GreyDecisions d;
   d.fov = find_field_of_view(grey, o.fov);
   auto hist = histogram_in_fov(grey, d.fov);
-  std::vector<int64_t> smoothed;
+  std::vector<std::vector<int64_t>> smoothed;
   if (o.split && o.threshold != ThresholdMethod::local)
-    smoothed_sample_histogram(grey, 0, grey.shape().nz, d.fov, o.split_smoothing_vox, smoothed);
+    for (const double s : split_smoothing_candidates(o))
+      smoothed_sample_histogram(grey, 0, grey.shape().nz, d.fov, s, smoothed.emplace_back());
   threshold_from_histogram(d, hist, smoothed, o);
   if (o.threshold == ThresholdMethod::local) {
     d.t.method = ThresholdMethod::local;
@@ -178,7 +190,9 @@ SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* ow
   const GreyCode& c = d.split_code;
   SpeckTest st = d.speck_test;  // in the code's units
   st.threshold = (st.threshold - c.lo) / c.step, st.void_level = (st.void_level - c.lo) / c.step, st.sigma /= c.step;
-  return segment_graded(std::move(mask), opt, d.graded, slab, split || specks ? &code : nullptr,
+  SegmentOptions o = opt;
+  o.split_smoothing_vox = d.split_smoothing;  // chosen from the noise (decide_grey) unless given
+  return segment_graded(std::move(mask), o, d.graded, slab, split || specks ? &code : nullptr,
                         split ? d.split_depth / c.step : 0.0, (double(t.value) - c.lo) / c.step, specks ? &st : nullptr);
 }
 
@@ -209,6 +223,7 @@ void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& o
   r.bright_value = d.bright;
   r.solid_noise_sigma = d.noise_sigma;
   r.smoothed_noise_sigma = d.smoothed_sigma;
+  r.split_smoothing_vox = d.split_smoothing;
   r.split_depth = r.split_used ? d.split_depth : 0.0;
   r.split_code = d.split_code;
   r.speck_test = d.speck_test;
@@ -242,8 +257,13 @@ void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& o
   r.local = std::move(d.local);
 }
 
-GreyDecisions decide_grey(FieldOfView fov, std::vector<int64_t> hist, const std::vector<int64_t>& smoothed_hist,
-                          const SegmentOptions& opt) {
+std::vector<double> split_smoothing_candidates(const SegmentOptions& opt) {
+  if (opt.split_smoothing_vox > 0) return {opt.split_smoothing_vox};
+  return std::vector<double>(std::begin(kSplitSmoothingLadder), std::end(kSplitSmoothingLadder));
+}
+
+GreyDecisions decide_grey(FieldOfView fov, std::vector<int64_t> hist,
+                          const std::vector<std::vector<int64_t>>& smoothed_hist, const SegmentOptions& opt) {
   validate(opt);
   if (opt.threshold == ThresholdMethod::local)
     throw UsageError("segment: --threshold local needs the whole volume at once (its blocks' thresholds); it does not "
@@ -551,7 +571,12 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                 {"passing_pairs", r.merge.candidates},
                 {"merges", r.merge.merges}};
   j["split"] = {{"enabled", r.split_used},
-                {"smoothing_sigma_vox", o.split_smoothing_vox},
+                {"smoothing_sigma_vox", r.split_smoothing_vox},
+                {"smoothing_rule", o.split_smoothing_vox > 0
+                                       ? std::string("given")
+                                       : fmt::format("the least of {} voxel whose depth_sigmas x smoothed noise sigma "
+                                                     "is <= {} x (solid peak - threshold), else the last",
+                                                     fmt::join(kSplitSmoothingLadder, ", "), kSplitDepthShare)},
                 {"smoothed_noise_sigma", r.smoothed_noise_sigma},
                 {"depth_sigmas", o.split_depth_sigmas},
                 {"min_depth_contrast", o.split_min_depth_contrast},

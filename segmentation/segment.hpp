@@ -154,11 +154,14 @@ struct SegmentOptions {
   // Split repair (split_labels.hpp): grey scans with a global threshold.
   // depth = max(split_depth_sigmas x the smoothed solid's noise sigma,
   // split_min_depth_contrast x (solid peak - threshold)).
+  // split_smoothing_vox 0 (default): chosen from the scan's noise, the
+  // least of kSplitSmoothingLadder whose depth stays within
+  // kSplitDepthShare of the solid's height above the threshold (below).
   bool split = true;
-  double split_smoothing_vox = 1.0;
+  double split_smoothing_vox = 0;
   double split_depth_sigmas = 6.0;
   double split_min_depth_contrast = 0.1;  // floor for noiseless scans
-  double split_min_piece_fraction = 0.01;
+  double split_min_piece_fraction = 0.005;
 
   // Noise specks (noise_specks.hpp): labels whose grey says "void noise
   // above the threshold" are cleared (grey scans with a global threshold).
@@ -189,6 +192,7 @@ struct SegmentResult {
   MergeResult merge;
   bool split_used = false;        // the split repair ran (a grey scan, a global threshold, split on)
   double smoothed_noise_sigma = 0;// the smoothed solid's noise sigma, grey levels (split_labels.hpp)
+  double split_smoothing_vox = 0; // the Gaussian sigma the split repair read the grey with (chosen or given)
   double split_depth = 0;         // grey levels
   GreyCode split_code;
   SplitResult split;
@@ -229,19 +233,41 @@ struct GreyDecisions {
   // histogram, smoothed_sample_histogram) and the depth it sets; 0: off.
   double smoothed_sigma = 0;
   double split_depth = 0;
+  double split_smoothing = 0;  // sigma_s, voxels, that smoothed_sigma and split_depth are for
   GreyCode split_code;  // the one-byte grey it reads (0.1th..99.9th percentile of the histogram)
   // Noise specks: the test in grey levels (sigma 0: off); it reads the same code.
   SpeckTest speck_test;
 };
 
+// The split repair's smoothing, chosen from the noise when not given
+// (split_smoothing_vox 0). Why: a chip or fragment 2-3 voxels thin keeps a
+// bright core under 0.7 voxel of smoothing and loses it under 1 voxel
+// (its peak sinks to the sheet's level), while the depth a piece must
+// stand out by, 6 sigma of the smoothed noise, is 1.7x larger at 0.7 than
+// at 1 (white noise falls as sigma_s^-3/2); once that depth passes half the
+// solid's height above the threshold, the dip of a 1-voxel gap cannot
+// reach it and the halves of split grains stay glued. So: the least sigma of
+// the ladder whose depth is <= kSplitDepthShare x (solid peak - threshold),
+// else the largest. Measured (bench/segmentation/RESULTS.md, "Thin chips and
+// the split repair's smoothing"): 0.7 chosen from CNR ~7 up; on blind_scene
+// scans (R 20, dev seeds 1-3) 0.7 against 1.0 keeps F1 within +0.003 at
+// every gap, PSF, CNR >= 5, pore and R point, and loses halves at CNR 4
+// (59 -> 44 of 61, seed 2), where the rule keeps 1.0.
+inline constexpr double kSplitSmoothingLadder[] = {0.7, 1.0};
+inline constexpr double kSplitDepthShare = 0.5;
+// The sigmas whose smoothed sample histograms decide_grey needs: the given
+// one, or the ladder.
+std::vector<double> split_smoothing_candidates(const SegmentOptions& opt);
+
 // From the field of view (FovScan or given_field_of_view) and the 65536-bin
 // histogram of the voxels inside it (histogram_in_fov, summed over slabs),
-// and that of the smoothed sample slices (smoothed_sample_histogram; empty
-// when opt.split is off).
+// and those of the smoothed sample slices (smoothed_sample_histogram), one
+// per split_smoothing_candidates(opt) in that order (empty when opt.split
+// is off).
 // UsageError for ThresholdMethod::local; InputError for an empty histogram
 // or a saturated scan, as segment().
-GreyDecisions decide_grey(FieldOfView fov, std::vector<int64_t> hist, const std::vector<int64_t>& smoothed_hist,
-                          const SegmentOptions& opt);
+GreyDecisions decide_grey(FieldOfView fov, std::vector<int64_t> hist,
+                          const std::vector<std::vector<int64_t>>& smoothed_hists, const SegmentOptions& opt);
 
 // Puts the decisions into a result: threshold, bright level, field of
 // view, level screen, and their notes (segment() does the same).

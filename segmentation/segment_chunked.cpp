@@ -94,7 +94,9 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
   FieldOfView fov = given_field_of_view(opt.fov, shape);
   const bool detect = !fov.active && opt.fov.detect && !(opt.fov.radius_vox > 0);
   FovScan scan(shape.ny, shape.nx);
-  std::vector<int64_t> hist(65536, 0), smoothed;
+  std::vector<int64_t> hist(65536, 0);
+  const std::vector<double> sigmas = split_smoothing_candidates(opt);
+  std::vector<std::vector<int64_t>> smoothed(opt.split ? sigmas.size() : 0);
   // The slabs start at multiples of 16 slices (step is one), so the
   // smoothed sample slices find their neighbours in the slab
   // (split_labels.hpp smoothed_sample_histogram): the same histograms as
@@ -102,7 +104,8 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
   auto add_hist = [&](const Volume<uint16_t>& g, int64_t z0) {
     const auto h = histogram_in_fov(g, fov);
     for (size_t b = 0; b < hist.size(); ++b) hist[b] += h[b];
-    if (opt.split) smoothed_sample_histogram(g, z0, shape.nz, fov, opt.split_smoothing_vox, smoothed);
+    for (size_t k = 0; k < smoothed.size(); ++k)
+      smoothed_sample_histogram(g, z0, shape.nz, fov, sigmas[k], smoothed[k]);
   };
   for (int64_t z0 = 0; z0 < shape.nz; z0 += step) {
     const Volume<uint16_t> g = read(z0, std::min(step, shape.nz - z0));
@@ -114,7 +117,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
     if (fov.active) {  // the histograms again, inside the field of view now known
       cr.pass1_reads = 2;
       std::fill(hist.begin(), hist.end(), 0);
-      std::fill(smoothed.begin(), smoothed.end(), 0);
+      for (auto& h : smoothed) std::fill(h.begin(), h.end(), 0);
       for (int64_t z0 = 0; z0 < shape.nz; z0 += step) add_hist(read(z0, std::min(step, shape.nz - z0)), z0);
     }
   }

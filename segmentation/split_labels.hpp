@@ -43,10 +43,16 @@
 // give the same F1 within 0.004 on gap 0.5 voxel, PSF 1.5 and CNR 8 (26-30
 // halves of ~30 glued pairs rejoined per scene); 4 splits one intact grain
 // of the middle setting, 6-9 none; 6 is the default. Smoothing 0.7, 1 and
-// 1.5 voxels: F1 within 0.008 of each other (1 is in the middle).
+// 1.5 voxels: F1 within 0.008 of each other on those scenes; thin chips
+// (2-3 voxels) keep a core only under the least smoothing, so segment()
+// takes 0.7 unless the noise needs 1 (segment.hpp kSplitSmoothingLadder:
+// on data_synth's 256^3 stage series, r_eq 11.6 voxels, chipping events
+// tracked 0.62 -> 0.71 recall, 0.71 -> 0.81 precision).
 // min_piece_fraction 0.03 -> 0.01 -> 0.005: gap 0.5 F1 0.973 -> 0.977 ->
-// 0.979, no false split at any; 0.01 (a sphere of radius ~3.4 voxels in a
-// grain of R 16) was kept, R 12's scenes were no better at 0.005.
+// 0.979, no false split at any; segment() takes 0.005 (a sphere of radius
+// ~2.7 voxels in a grain of R 16; with 0.7 smoothing it adds chips of
+// small grains that 0.01 left out: recall 0.70 -> 0.71, precision 0.78 ->
+// 0.81 on the series above).
 // The flood is 6-connected: the same labels as 26 on the dev scenes (one
 // more split at gap 0.5) in 40 % of the time.
 //
@@ -76,10 +82,10 @@
 namespace tg {
 
 struct SplitOptions {
-  double smoothing_sigma_vox = 1.0;  // σ_s of the Gaussian, voxels
+  double smoothing_sigma_vox = 1.0;  // σ_s of the Gaussian, voxels (segment() chooses 0.7 or 1)
   double depth = 0;                  // grey levels a piece's peak must stand above the sheet between pieces
   double floor = 0;                  // grey level: a label not split above it is left whole (the threshold)
-  double min_piece_fraction = 0.01;  // of the label's voxels
+  double min_piece_fraction = 0.01;  // of the label's voxels (segment() passes its 0.005)
   int64_t min_piece_vox = 27;        // and at least this many voxels (3^3)
   int64_t max_box_vox = int64_t(1) << 28;
 };

@@ -102,6 +102,34 @@ TEST(Segment, AutoThresholdTakesTheMidpointOnlyWhereTheNoiseAllows) {
   }
 }
 
+// The split repair's smoothing (segment.hpp kSplitSmoothingLadder): 0.7
+// voxel while 6 sigmas of the noise smoothed so stay within half the
+// solid's height above the threshold (white noise: sigma / 3.9 at 0.7, so
+// from CNR ~6 on), 1 voxel for a noisier scan; a given sigma is kept.
+TEST(Segment, SplitSmoothingFollowsTheNoiseUnlessGiven) {
+  auto m = Volume<uint8_t>::filled(Shape{28, 28, 46}, 0);
+  draw_ball(m, 13.5, 13.5, 13.5, 10);
+  draw_ball(m, 13.5, 13.5, 31.5, 10);
+  for (const double sigma : {1000.0, 6000.0}) {  // CNR 20 and 3.3 on a contrast of 20000
+    Volume<uint16_t> g(m.shape(), m.geometry());
+    std::mt19937 rng(12);
+    std::normal_distribution<double> noise(0.0, sigma);
+    for (int64_t i = 0; i < m.size(); ++i)
+      g[i] = uint16_t(std::clamp(std::lround((m[i] ? 30000 : 10000) + noise(rng)), 0L, 65535L));
+    const auto r = segment(g, opts(10));
+    EXPECT_EQ(r.split_smoothing_vox, sigma < 2000 ? 0.7 : 1.0) << "noise sigma " << sigma;
+    // The rule's own quantities: the chosen sigma's depth within half the height, or the last rung.
+    const double height = 30000 - double(r.threshold.value);
+    if (sigma < 2000) EXPECT_LE(6 * r.smoothed_noise_sigma, 0.5 * height);
+    else EXPECT_GT(6 * r.smoothed_noise_sigma * 1.6, 0.5 * height);  // at 0.7 the noise is (1 / 0.7)^1.5 = 1.7x
+    SegmentOptions given = opts(10);
+    given.split_smoothing_vox = 1.5;
+    const auto rg = segment(g, given);
+    EXPECT_EQ(rg.split_smoothing_vox, 1.5);
+    EXPECT_NE(summary_json(rg, given).find("\"smoothing_rule\": \"given\""), std::string::npos);
+  }
+}
+
 TEST(Segment, SplitHalvesWithAOneVoxelGapAreTwoParticles) {
   auto m = Volume<uint8_t>::filled(Shape{32, 32, 33}, 0);
   draw_ball(m, 16, 16, 16, 13);

@@ -10,6 +10,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <algorithm>
+#include <tuple>
 #include <limits>
 
 namespace tg::measure {
@@ -66,42 +67,67 @@ ConvexHull convex_hull(std::span<const Vec3> points) {
   }
   Mesh mesh;
   CGAL::convex_hull_3(p.begin(), p.end(), mesh);
-  // Surface_mesh indices may have gaps only after removals; convex_hull_3
-  // builds a fresh mesh, but remap anyway so the output is dense.
-  std::vector<int32_t> remap(mesh.number_of_vertices() + mesh.number_of_removed_vertices(), -1);
-  for (auto v : mesh.vertices()) {
-    remap[v.idx()] = static_cast<int32_t>(h.vertices.size());
-    const Point& q = mesh.point(v);
-    h.vertices.emplace_back(q.x(), q.y(), q.z());
-  }
-  h.faces.reserve(mesh.number_of_faces());
-  for (auto f : mesh.faces()) {
-    std::array<int32_t, 3> tri{};
-    int n = 0;
-    for (auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) {
-      if (n < 3) tri[n] = remap[v.idx()];
-      ++n;
-    }
-    if (n == 3) h.faces.push_back(tri);
-  }
-  // Canonical order: vertices sorted (lexicographically), each triangle rotated to start at its
-  // smallest index (orientation kept), triangles sorted. The mesh lists them in an order that
-  // follows its allocations, which differ from call to call, and sums over them (the hull's
-  // volume, the tie rule's mean directions) then differed in the last bits (two calls on the same
-  // points, tests/compare/exact_shapes_test.cpp).
-  std::vector<int32_t> order(h.vertices.size());
-  for (size_t q = 0; q < order.size(); ++q) order[q] = static_cast<int32_t>(q);
-  std::sort(order.begin(), order.end(), [&](int32_t a, int32_t b) {
-    return std::lexicographical_compare(h.vertices[a].data(), h.vertices[a].data() + 3, h.vertices[b].data(),
-                                        h.vertices[b].data() + 3);
+  // Vertices in lexicographic order (rank[v]: a mesh vertex's place in it).
+  std::vector<Mesh::Vertex_index> verts(mesh.vertices().begin(), mesh.vertices().end());
+  std::sort(verts.begin(), verts.end(), [&](Mesh::Vertex_index a, Mesh::Vertex_index b) {
+    const Point &x = mesh.point(a), &y = mesh.point(b);
+    return std::make_tuple(x.x(), x.y(), x.z()) < std::make_tuple(y.x(), y.y(), y.z());
   });
-  std::vector<int32_t> rank(order.size());
-  std::vector<Vec3> sorted(order.size());
-  for (size_t q = 0; q < order.size(); ++q) rank[order[q]] = static_cast<int32_t>(q), sorted[q] = h.vertices[order[q]];
-  h.vertices = std::move(sorted);
-  for (auto& f : h.faces) {
-    for (auto& v : f) v = rank[v];
-    std::rotate(f.begin(), std::min_element(f.begin(), f.end()), f.end());
+  std::vector<int32_t> rank(mesh.number_of_vertices() + mesh.number_of_removed_vertices(), -1);
+  for (size_t q = 0; q < verts.size(); ++q) {
+    rank[verts[q].idx()] = static_cast<int32_t>(q);
+    const Point& x = mesh.point(verts[q]);
+    h.vertices.emplace_back(x.x(), x.y(), x.z());
+  }
+  // Faces, canonical. A planar facet of the hull with more than three
+  // vertices (points sampled on spheres of a cluster, the flat faces of a
+  // voxelised grain) comes out of CGAL cut into triangles along diagonals
+  // that depend on its processing order, which differs from call to call and
+  // thread to thread (its containers follow memory addresses); sums over the
+  // triangles (the volume, the tie rule's mean directions) then moved in the
+  // last bits with the thread count (tests/compare/exact_shapes_test.cpp). So
+  // the facets are rebuilt: triangles joined across an edge whose four points
+  // are coplanar (exact predicate) form one polygon, cut again as a fan from
+  // its least vertex, each triangle starting at that vertex, all sorted.
+  const size_t nf = mesh.number_of_faces() + mesh.number_of_removed_faces();
+  std::vector<int32_t> group(nf);
+  for (size_t f = 0; f < nf; ++f) group[f] = static_cast<int32_t>(f);
+  auto root = [&](int32_t f) {
+    while (group[size_t(f)] != f) f = group[size_t(f)] = group[size_t(group[size_t(f)])];
+    return f;
+  };
+  for (auto e : mesh.edges()) {
+    const auto a = mesh.halfedge(e), b = mesh.opposite(a);
+    if (!CGAL::coplanar(mesh.point(mesh.source(a)), mesh.point(mesh.target(a)),
+                        mesh.point(mesh.target(mesh.next(a))), mesh.point(mesh.target(mesh.next(b)))))
+      continue;
+    const int32_t x = root(int32_t(mesh.face(a).idx())), y = root(int32_t(mesh.face(b).idx()));
+    if (x != y) group[size_t(std::max(x, y))] = std::min(x, y);
+  }
+  // Each polygon's boundary: its halfedges whose opposite face lies in
+  // another polygon, chained source to target (a convex polygon visits
+  // each of its vertices once).
+  std::vector<std::vector<Mesh::Halfedge_index>> boundary(nf);
+  for (auto hh : mesh.halfedges()) {
+    const int32_t g = root(int32_t(mesh.face(hh).idx()));
+    if (g != root(int32_t(mesh.face(mesh.opposite(hh)).idx()))) boundary[size_t(g)].push_back(hh);
+  }
+  for (auto& ring : boundary) {
+    if (ring.size() < 3) continue;
+    std::vector<int32_t> from(ring.size()), to(ring.size());
+    size_t start = 0;
+    for (size_t q = 0; q < ring.size(); ++q) {
+      from[q] = rank[mesh.source(ring[q]).idx()], to[q] = rank[mesh.target(ring[q]).idx()];
+      if (from[q] < from[start]) start = q;
+    }
+    std::vector<int32_t> poly{from[start]};
+    for (size_t at = start; poly.size() < ring.size();) {
+      const auto next = std::find(from.begin(), from.end(), to[at]);
+      if (next == from.end() || *next == poly.front()) break;
+      at = size_t(next - from.begin());
+      poly.push_back(from[at]);
+    }
+    for (size_t q = 1; q + 1 < poly.size(); ++q) h.faces.push_back({poly[0], poly[q], poly[q + 1]});
   }
   std::sort(h.faces.begin(), h.faces.end());
   return h;

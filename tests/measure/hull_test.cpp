@@ -2,12 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
 
 #include "measure/feret.hpp"
 #include "measure/label_stats.hpp"
+#include "measure/particles.hpp"
 #include "tests/measure/shapes.hpp"
 
 namespace tg::measure {
@@ -39,6 +41,29 @@ TEST(ConvexHull, ContainsEveryPointAndIsOutwardOriented) {
     EXPECT_GT(n.dot(h.vertices[f[0]] - c), 0);  // counter-clockwise from outside
     for (const auto& q : p) EXPECT_LE(n.dot(q - h.vertices[f[0]]), 1e-9 * n.norm());
   }
+}
+
+// Planar facets with many vertices (a voxelised grain's flat faces, a
+// cluster's sampled spheres) are cut into triangles one way only: the same
+// hull, bit for bit, whatever order the points come in (CGAL's own cut
+// follows its processing order), and the volume of a box is exact.
+TEST(ConvexHull, CoplanarFacetsAreCutTheSameWayForAnyPointOrder) {
+  std::vector<Vec3> p;
+  for (int k = 0; k <= 4; ++k)  // a 2 x 3 x 4 box: 5 x 5 x 5 grid points on it, many on each face
+    for (int j = 0; j <= 4; ++j)
+      for (int i = 0; i <= 4; ++i) p.emplace_back(0.5 * k, 0.75 * j, 1.0 * i);
+  for (int q = 0; q < 12; ++q) p.emplace_back(0.5 * (q % 5), 3.0, 0.25 * q);  // on the y = 3 face and its edges
+  std::mt19937 rng(5);
+  const ConvexHull first = convex_hull(p);
+  ASSERT_EQ(first.dimension, 3);
+  for (int t = 0; t < 20; ++t) {
+    std::shuffle(p.begin(), p.end(), rng);
+    const ConvexHull h = convex_hull(p);
+    ASSERT_EQ(h.vertices, first.vertices) << "order " << t;
+    ASSERT_EQ(h.faces, first.faces) << "order " << t;
+  }
+  EXPECT_DOUBLE_EQ(hull_volume(first), 2.0 * 3.0 * 4.0);
+  for (const auto& f : first.faces) EXPECT_LT(f[0], std::min(f[1], f[2]));  // each fan starts at its least vertex
 }
 
 TEST(ConvexHull, DegenerateInputs) {

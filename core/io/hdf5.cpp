@@ -497,28 +497,34 @@ AnyVolume H5Reader::read_slab(const std::string& dataset, int64_t z0, int64_t nz
   return read_range(impl_->file.get(), impl_->path, ds, z0, nz, false, reuse);
 }
 
+namespace {
+// The extent of a dataset known to exist, one entry per dimension.
+std::vector<hsize_t> dataset_dims(hid_t file, const std::string& ds, const std::string& where) {
+  Handle d = dset_h(H5Dopen2(file, ds.c_str(), H5P_DEFAULT));
+  if (!d.ok()) throw InputError(where + ": not a dataset");
+  Handle sp = space_h(H5Dget_space(d.get()));
+  std::vector<hsize_t> dims(size_t(std::max(0, H5Sget_simple_extent_ndims(sp.get()))));
+  H5Sget_simple_extent_dims(sp.get(), dims.data(), nullptr);
+  return dims;
+}
+}  // namespace
+
 Shape H5Reader::shape(const std::string& dataset) const {
   const std::string ds = norm(dataset);
   const std::string where = impl_->path + ":" + ds;
   if (!has(ds)) throw InputError(where + ": no such dataset");
-  Handle d = dset_h(H5Dopen2(impl_->file.get(), ds.c_str(), H5P_DEFAULT));
-  if (!d.ok()) throw InputError(where + ": not a dataset");
-  Handle sp = space_h(H5Dget_space(d.get()));
-  const int rank = H5Sget_simple_extent_ndims(sp.get());
-  if (rank != 3 && rank != 2) throw InputError(where + ": dataset has rank " + std::to_string(rank) + ", expected 3 (z, y, x)");
-  hsize_t dims[3] = {1, 1, 1};
-  H5Sget_simple_extent_dims(sp.get(), rank == 3 ? dims : dims + 1, nullptr);
-  return Shape{static_cast<int64_t>(dims[0]), static_cast<int64_t>(dims[1]), static_cast<int64_t>(dims[2])};
+  const std::vector<hsize_t> d = dataset_dims(impl_->file.get(), ds, where);
+  if (d.size() != 3 && d.size() != 2)
+    throw InputError(where + ": dataset has rank " + std::to_string(d.size()) + ", expected 3 (z, y, x)");
+  if (d.size() == 2) return Shape{1, static_cast<int64_t>(d[0]), static_cast<int64_t>(d[1])};
+  return Shape{static_cast<int64_t>(d[0]), static_cast<int64_t>(d[1]), static_cast<int64_t>(d[2])};
 }
 
 int H5Reader::rank(const std::string& dataset) const {
   const std::string ds = norm(dataset);
   const std::string where = impl_->path + ":" + ds;
   if (!has(ds)) throw InputError(where + ": no such dataset");
-  Handle d = dset_h(H5Dopen2(impl_->file.get(), ds.c_str(), H5P_DEFAULT));
-  if (!d.ok()) throw InputError(where + ": not a dataset");
-  Handle sp = space_h(H5Dget_space(d.get()));
-  return H5Sget_simple_extent_ndims(sp.get());
+  return static_cast<int>(dataset_dims(impl_->file.get(), ds, where).size());
 }
 
 Table H5Reader::read_table(const std::string& group) const {

@@ -37,9 +37,11 @@ struct ConvexHull {
 };
 
 // Hull of `points` (any count, duplicates allowed). O(n log h). Vertices in
-// lexicographic order, each triangle starting at its smallest vertex index,
-// triangles sorted: the same points give the same hull, bit for bit, on
-// every call and thread (sums over it do not change in the last bits).
+// lexicographic order; a planar facet of more than three vertices cut as a
+// fan from its least vertex (not along CGAL's diagonals); each triangle
+// starting at its smallest vertex index, triangles sorted: the same points
+// give the same hull, bit for bit, in any order, on every call and thread
+// (sums over it do not change in the last bits).
 ConvexHull convex_hull(std::span<const Vec3> points);
 
 struct OrientedBoxOptions {

@@ -248,8 +248,8 @@ struct GreyDecisions {
 // solid's height above the threshold, the dip of a 1-voxel gap cannot
 // reach it and the halves of split grains stay glued. So: the least sigma of
 // the ladder whose depth is <= kSplitDepthShare x (solid peak - threshold),
-// else the largest. Measured (bench/segmentation/RESULTS.md, "Thin chips and
-// the split repair's smoothing"): 0.7 chosen from CNR ~7 up; on blind_scene
+// else the largest. Measured (bench/segmentation/RESULTS.md, "The split
+// repair's smoothing from the noise"): 0.7 chosen from CNR ~7 up; on blind_scene
 // scans (R 20, dev seeds 1-3) 0.7 against 1.0 keeps F1 within +0.003 at
 // every gap, PSF, CNR >= 5, pore and R point, and loses halves at CNR 4
 // (59 -> 44 of 61, seed 2), where the rule keeps 1.0.

@@ -71,6 +71,7 @@ tg::SegmentOptions segment_options(const SegmentJob& o, const tg::Geometry& geom
   s.watershed_lines = !o.no_lines;
   s.merge = !o.no_merge;
   s.split = !o.no_split;
+  s.face_caps = !o.no_face_caps;
   s.noise_specks = !o.keep_noise_specks;
   s.grey_evidence = !o.no_grey_evidence;
   if (o.grain_radius_vox > 0) {
@@ -229,6 +230,9 @@ int run_segment(SegmentJob& o) {
                "smoothed over {:.2g} voxels)\n",
                res.split.split, res.split.tested, res.split.pieces_added, res.split_depth, res.smoothed_noise_sigma,
                res.split_smoothing_vox);
+  if (res.face_caps_used && res.face_caps.candidates)
+    fmt::print("  face caps: {} of {} candidate labels on the scan's faces split ({} pieces added)\n",
+               res.face_caps.split, res.face_caps.candidates, res.face_caps.pieces_added);
   double total = 0;
   for (const auto& [name, sec] : res.stage_seconds) total += sec;
   fmt::print("  {:.2f} s, peak memory {} ({:.1f} B/voxel)\n", total, tg::human_bytes(double(res.peak_rss_bytes)),
@@ -370,6 +374,10 @@ static tg::app::Registrar reg{{"segment", 30,
   sub->add_flag("--no-split", o->no_split,
                 "Do not split labels whose smoothed grey holds two bright cores parted by a darker sheet (two "
                 "fragments whose gap blur and noise bridged)");
+  sub->add_flag("--no-face-caps", o->no_face_caps,
+                "Do not look for grains cut by a face of the scan whose thin cap the watershed gave to a neighbour "
+                "(two distance maxima in a label's footprint on the face, parted by a dim contact); runs with the "
+                "split repair");
   sub->add_flag("--keep-noise-specks", o->keep_noise_specks,
                 "Keep labels whose mean grey says they are void noise lifted over the threshold (by default such "
                 "specks are cleared: noise_specks.hpp, the summary's noise_specks)");

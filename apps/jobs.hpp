@@ -16,7 +16,8 @@ struct SegmentJob {
   double voxel_um = 0, grain_radius_vox = 0, grain_diameter_um = 1360.0;
   int manual = -1;
   tg::SegmentOptions seg;
-  bool no_pores = false, no_lines = false, no_merge = false, no_grey_evidence = false, no_split = false;
+  bool no_pores = false, no_lines = false, no_merge = false, no_grey_evidence = false, no_split = false,
+       no_face_caps = false;
   bool keep_noise_specks = false;
   bool no_fov = false;                // --no-fov: no field-of-view detection
   std::vector<double> fov_centre;     // --fov-centre-vox Y,X (empty: the slice centre)

@@ -98,6 +98,7 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
     // kSplitSmoothingLadder).
     const SolidPeak raw = solid_peak(hist, d.t.value);
     const double height = std::max(0.0, raw.mode - double(d.t.value));
+    d.solid_level = raw.mode;
     for (size_t k = 0; k < sigmas.size(); ++k) {
       if (smoothed[k].size() != hist.size()) break;
       const SolidPeak sm = solid_peak(smoothed[k], d.t.value);
@@ -150,7 +151,7 @@ struct SlabRun {
 // noise-speck test (in the code's units) runs first.
 SegmentResult segment_graded(Volume<uint8_t> mask, const SegmentOptions& opt, bool graded, SlabRun* slab = nullptr,
                              const Volume<uint8_t>* grey_code = nullptr, double split_depth = 0,
-                             double split_floor = 0, const SpeckTest* specks = nullptr);
+                             double split_floor = 0, const SpeckTest* specks = nullptr, double solid_level = 0);
 
 // grey -> mask with the decisions d, then the chain. The core's solid count
 // (slab) or the field of view's goes to *nsolid_out.
@@ -193,7 +194,8 @@ SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* ow
   SegmentOptions o = opt;
   o.split_smoothing_vox = d.split_smoothing;  // chosen from the noise (decide_grey) unless given
   return segment_graded(std::move(mask), o, d.graded, slab, split || specks ? &code : nullptr,
-                        split ? d.split_depth / c.step : 0.0, (double(t.value) - c.lo) / c.step, specks ? &st : nullptr);
+                        split ? d.split_depth / c.step : 0.0, (double(t.value) - c.lo) / c.step, specks ? &st : nullptr,
+                        (d.solid_level - c.lo) / c.step);
 }
 
 
@@ -324,7 +326,7 @@ namespace {
 // 1 dim, 2 bright (the header's grey evidence).
 SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in, bool graded, SlabRun* slab,
                              const Volume<uint8_t>* grey_code, double split_depth, double split_floor,
-                             const SpeckTest* specks) {
+                             const SpeckTest* specks, double solid_level) {
   const SegmentOptions opt = opt_in.resolved();
   SegmentResult r;
   StageClock clock(r);
@@ -474,12 +476,25 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
     so.min_piece_fraction = opt.split_min_piece_fraction;
     uint32_t count = r.count;
     r.split = split_by_grey(lab, &count, *grey_code, so);
-    if (r.split.pieces_added > 0) {
+    clock.lap("split");
+    if (opt.face_caps) {
+      // Face caps (split_labels.hpp split_face_caps): the scan's faces only
+      // (a slab's cut faces are not).
+      r.face_caps_used = true;
+      FaceCapOptions fo;
+      if (slab) fo.faces[0] = slab->window.scan_bottom, fo.faces[1] = slab->window.scan_top;
+      fo.spacing = eo.spacing;
+      fo.solid = solid_level;
+      fo.floor = split_floor;
+      r.face_caps = split_face_caps(lab, &count, *grey_code, fo);
+      clock.lap("face_caps");
+    }
+    if (r.split.pieces_added + r.face_caps.pieces_added > 0) {
       rl = relabel_consecutive(lab, opt.min_size_vox);
       r.count = rl.count;
       r.dropped += rl.dropped;
+      clock.lap("renumber");
     }
-    clock.lap("split");
   }
   r.labels = std::move(lab);
   if (slab) slab->out->sizes = std::move(rl.sizes);
@@ -590,6 +605,15 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                 {"labels_split", r.split.split},
                 {"pieces_added", r.split.pieces_added},
                 {"labels_too_large_to_test", r.split.skipped_large}};
+  j["face_caps"] = {{"enabled", r.face_caps_used},
+                    {"rule", "a label touching a scan face whose footprint there holds two or more distance maxima "
+                             "(dynamic >= 1 voxel, >= 2 voxels deep) is parted among them, the footprint's parts seeding "
+                             "a watershed of the label's own distance map; a piece of >= 27 voxels leaves it when the raw grey on the sheet between it and the "
+                             "largest piece lies >= 0.25 of (solid peak - threshold) below the solid peak "
+                             "(split_labels.hpp split_face_caps)"},
+                    {"candidates", r.face_caps.candidates},
+                    {"labels_split", r.face_caps.split},
+                    {"pieces_added", r.face_caps.pieces_added}};
   j["noise_specks"] = {{"enabled", r.specks.used},
                        {"rule", "a label is void noise, and cleared, when z = (m - mu0) / (s0 / sqrt(n)) < z_crit "
                                 "(m its mean grey's excess over the threshold in noise sigmas, n its voxels, mu0 and s0 "

@@ -162,6 +162,8 @@ struct SegmentOptions {
   double split_depth_sigmas = 6.0;
   double split_min_depth_contrast = 0.1;  // floor for noiseless scans
   double split_min_piece_fraction = 0.005;
+  // Face caps (split_labels.hpp split_face_caps): with the split repair.
+  bool face_caps = true;
 
   // Noise specks (noise_specks.hpp): labels whose grey says "void noise
   // above the threshold" are cleared (grey scans with a global threshold).
@@ -196,6 +198,8 @@ struct SegmentResult {
   double split_depth = 0;         // grey levels
   GreyCode split_code;
   SplitResult split;
+  bool face_caps_used = false;  // the face-cap repair ran (with the split repair, face_caps on)
+  FaceCapResult face_caps;
   SpeckTest speck_test;     // grey levels (not the code's units)
   SpeckResult specks;
   uint32_t count = 0;       // final labels
@@ -235,6 +239,7 @@ struct GreyDecisions {
   double split_depth = 0;
   double split_smoothing = 0;  // sigma_s, voxels, that smoothed_sigma and split_depth are for
   GreyCode split_code;  // the one-byte grey it reads (0.1th..99.9th percentile of the histogram)
+  double solid_level = 0;  // the solid's grey peak (split repair on): the face-cap repair's dip
   // Noise specks: the test in grey levels (sigma 0: off); it reads the same code.
   SpeckTest speck_test;
 };
@@ -280,6 +285,7 @@ struct SlabWindow {
   int64_t core_begin = 0, core_end = 0;
   double buckets_per_unit = 0;
   double fixed_units = 0;  // the whole scan's fixed_point_units (distance_transform.hpp)
+  bool scan_bottom = false, scan_top = false;  // its first / last slice is the scan's
 };
 
 struct SlabOutcome {

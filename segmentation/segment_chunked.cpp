@@ -152,7 +152,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
     const int64_t c0 = s * plan.core, c1 = std::min(shape.nz, c0 + plan.core);
     const int64_t z0 = std::max<int64_t>(0, c0 - plan.margin), z1 = std::min(shape.nz, c1 + plan.margin);
     const int64_t cb = c0 - z0, ce = c1 - z0;
-    SlabOutcome out = segment_slab(read(z0, z1 - z0), d, opt, {cb, ce, q, units});
+    SlabOutcome out = segment_slab(read(z0, z1 - z0), d, opt, {cb, ce, q, units, z0 == 0, z1 == shape.nz});
     const float deepest = std::max(dmax_seen, out.core_dmax);
     if (q_for(deepest) != q || fixed_point_units(deepest) != units) {
       dmax_seen = deepest;
@@ -253,6 +253,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
   r.count = running;
   r.dropped = dropped;
   r.split_used = split_used;
+  r.face_caps_used = split_used && opt.face_caps;
   r.specks.used = specks_used;
   r.stage_seconds = std::move(stage_sum);
   r.stage_seconds.insert(r.stage_seconds.begin(), {"pass1", cr.pass1_seconds});
@@ -277,6 +278,7 @@ std::string summary_json(const ChunkedResult& cr, const SegmentOptions& opt) {
   j["markers"]["count"] = nullptr;
   for (const char* k : {"touching_pairs", "passing_pairs", "merges"}) j["merge"][k] = nullptr;
   for (const char* k : {"labels_tested", "labels_split", "pieces_added", "labels_too_large_to_test"}) j["split"][k] = nullptr;
+  for (const char* k : {"candidates", "labels_split", "pieces_added"}) j["face_caps"][k] = nullptr;
   for (const char* k : {"mu0", "s0", "labels_tested", "labels_dropped", "voxels_dropped"}) j["noise_specks"][k] = nullptr;
   json slabs = json::array();
   for (const auto& [range, sec] : cr.slab_seconds) slabs.push_back({{"core_slices", range}, {"seconds", sec}});

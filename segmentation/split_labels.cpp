@@ -3,11 +3,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <omp.h>
 #include <stdexcept>
 
 #include "core/errors.hpp"
+#include "segmentation/distance_transform.hpp"
+#include "segmentation/markers.hpp"
 #include "segmentation/neighbourhood.hpp"
+#include "segmentation/watershed.hpp"
 
 namespace tg {
 namespace {
@@ -451,6 +455,258 @@ void smoothed_sample_histogram(const Volume<uint16_t>& slab, int64_t z0, int64_t
     }
     for (size_t g = 0; g < h.size(); ++g) hist[g] += h[g];
   }
+}
+
+namespace {
+
+// One face of the volume: axis a (0 z, 1 y, 2 x) at coordinate c; the face
+// slice's pixels (u, v) run over the two other axes in (z, y, x) order.
+struct Face {
+  int a = 0;
+  int64_t c = 0, nu = 0, nv = 0;
+  int64_t index(const Shape& S, int64_t u, int64_t v) const {
+    if (a == 0) return S.index(c, u, v);
+    if (a == 1) return S.index(u, c, v);
+    return S.index(u, v, c);
+  }
+};
+
+struct Box2 {
+  int64_t u0 = INT64_MAX, u1 = -1, v0 = INT64_MAX, v1 = -1;
+};
+
+// The part of a footprint's piece that seeds the flood in depth: its
+// pixels at least this share of the piece's deepest (the core of the disc,
+// not the rim where two discs meet).
+constexpr float kFaceSeedCore = 0.5f;
+
+struct Seed {
+  int64_t voxel;  // global index, on the face
+  uint32_t id;    // 1.. (the footprint's significant maxima)
+};
+
+// Step 1 of the header for label l's footprint within `b` on face f: the
+// seeds (empty: not a candidate).
+std::vector<Seed> footprint_seeds(const Volume<uint32_t>& labels, uint32_t l, const Face& f, const Box2& b,
+                                  const FaceCapOptions& opt) {
+  const Shape S = labels.shape();
+  const uint32_t* L = labels.data();
+  const int64_t u0 = std::max<int64_t>(b.u0 - 1, 0), u1 = std::min(b.u1 + 1, f.nu - 1);
+  const int64_t v0 = std::max<int64_t>(b.v0 - 1, 0), v1 = std::min(b.v1 + 1, f.nv - 1);
+  const int64_t hu = u1 - u0 + 1, hv = v1 - v0 + 1;
+  Volume<uint8_t> fp(Shape{1, hu, hv});
+  uint8_t* F = fp.data();
+  int64_t area = 0;
+  for (int64_t u = 0; u < hu; ++u)
+    for (int64_t v = 0; v < hv; ++v) area += F[u * hv + v] = L[f.index(S, u0 + u, v0 + v)] == l;
+  // Holes: the pixels no 4-path of non-footprint pixels joins to the box's
+  // border (pores cut by the face) become footprint.
+  std::vector<int64_t> stack;
+  auto visit = [&](int64_t q) {
+    if (F[q] == 0) F[q] = 2, stack.push_back(q);
+  };
+  for (int64_t u = 0; u < hu; ++u) visit(u * hv), visit(u * hv + hv - 1);
+  for (int64_t v = 0; v < hv; ++v) visit(v), visit((hu - 1) * hv + v);
+  while (!stack.empty()) {
+    const int64_t q = stack.back();
+    stack.pop_back();
+    const int64_t u = q / hv, v = q % hv;
+    if (u > 0) visit(q - hv);
+    if (u + 1 < hu) visit(q + hv);
+    if (v > 0) visit(q - 1);
+    if (v + 1 < hv) visit(q + 1);
+  }
+  for (int64_t q = 0; q < hu * hv; ++q) F[q] = F[q] == 2 ? 0 : 1;
+  if (double(area) < 2 * M_PI * opt.min_peak * opt.min_peak) return {};  // no room for two discs min_peak deep
+  EdtOptions eo;
+  const std::array<double, 3> sp = opt.spacing;
+  eo.spacing = f.a == 0 ? std::array<double, 3>{1.0, sp[1], sp[2]}
+               : f.a == 1 ? std::array<double, 3>{1.0, sp[0], sp[2]}
+                          : std::array<double, 3>{1.0, sp[0], sp[1]};
+  Volume<float> dist;
+  distance_transform(fp, dist, eo);
+  const float* D = dist.data();
+  for (int64_t q = 0; q < hu * hv; ++q)
+    if (!std::isfinite(D[q])) return {};  // the footprint fills the whole face
+  Volume<uint32_t> markers;
+  const uint32_t k = find_markers(dist, markers, {opt.h, 26});
+  if (k < 2) return {};
+  const uint32_t* M = markers.data();
+  std::vector<float> peak(size_t(k) + 1, 0.0f);
+  for (int64_t q = 0; q < hu * hv; ++q) peak[M[q]] = std::max(peak[M[q]], D[q]);
+  std::vector<uint32_t> id(size_t(k) + 1, 0);
+  uint32_t deep = 0;
+  for (uint32_t m = 1; m <= k; ++m)
+    if (peak[m] >= opt.min_peak) id[m] = ++deep;
+  if (deep < 2) return {};
+  // The whole footprint parted among the deep maxima (a watershed of its
+  // distance map, no lines), so that each piece's face layer is its own
+  // before the flood in depth: seeded at the maxima alone, the bright
+  // neighbour's front took most of a thin cap (dev scenes: the cap's IoU
+  // 0.69-0.86 -> 0.84-0.91).
+  uint32_t* Mw = markers.data();
+  for (int64_t q = 0; q < hu * hv; ++q) Mw[q] = id[Mw[q]];
+  watershed(dist, fp, markers, {false, 26, 4.0});
+  std::vector<float> top(size_t(deep) + 1, 0.0f);
+  for (uint32_t m = 1; m <= k; ++m)
+    if (id[m]) top[id[m]] = peak[m];
+  std::vector<Seed> seeds;
+  for (int64_t u = 0; u < hu; ++u)
+    for (int64_t v = 0; v < hv; ++v) {
+      const int64_t g = f.index(S, u0 + u, v0 + v);
+      const uint32_t m = M[u * hv + v];
+      if (m && L[g] == l && D[u * hv + v] >= kFaceSeedCore * top[m]) seeds.push_back({g, m});
+    }
+  return seeds;
+}
+
+// Steps 2 and 3 for one candidate: the voxels that leave label l, with
+// their piece ordinal 1.. (Pieces::count - 1 new labels).
+Pieces split_cap(const Volume<uint32_t>& labels, const Volume<uint8_t>& grey, uint32_t l, const LabelBox& bx,
+                 const std::vector<Seed>& seeds, const FaceCapOptions& opt) {
+  Pieces out;
+  const Shape S = labels.shape();
+  const uint32_t* L = labels.data();
+  const uint8_t* G = grey.data();
+  // The label's box, one voxel wider where it is not at a face of the
+  // volume: there the neighbouring voxels are not the label's (void for
+  // its distance map), beyond a face nothing is (not void, as segment()'s
+  // distance map).
+  const int64_t z0 = std::max<int64_t>(bx.z0 - 1, 0), y0 = std::max<int64_t>(bx.y0 - 1, 0),
+                x0 = std::max<int64_t>(bx.x0 - 1, 0);
+  const int64_t z1 = std::min(bx.z1 + 1, S.nz - 1), y1 = std::min(bx.y1 + 1, S.ny - 1), x1 = std::min(bx.x1 + 1, S.nx - 1);
+  const Shape B{z1 - z0 + 1, y1 - y0 + 1, x1 - x0 + 1};
+  Volume<uint8_t> mask(B);
+  Volume<uint32_t> piece = Volume<uint32_t>::filled(B, 0u);
+  uint8_t* V = mask.data();
+  uint32_t* P = piece.data();
+  auto global = [&](int64_t k, int64_t j, int64_t i) { return S.index(z0 + k, y0 + j, x0 + i); };
+  for (int64_t k = 0; k < B.nz; ++k)
+    for (int64_t j = 0; j < B.ny; ++j)
+      for (int64_t i = 0; i < B.nx; ++i) V[B.index(k, j, i)] = L[global(k, j, i)] == l;
+  uint32_t ids = 0;
+  for (const Seed& sd : seeds) {
+    const auto [k, j, i] = S.coords(sd.voxel);
+    P[B.index(k - z0, j - y0, i - x0)] = sd.id;
+    ids = std::max(ids, sd.id);
+  }
+  EdtOptions eo;
+  eo.spacing = opt.spacing;
+  Volume<float> dist;
+  distance_transform(mask, dist, eo);
+  watershed(dist, mask, piece, {false, 26, 4.0});
+  std::vector<int64_t> size(size_t(ids) + 1, 0);
+  for (int64_t q = 0; q < B.voxels(); ++q) ++size[P[q]];
+  uint32_t main = 1;
+  for (uint32_t m = 2; m <= ids; ++m)
+    if (size[m] > size[main]) main = m;
+  // The sheet between each piece and the largest: their voxels that touch
+  // the other (6-neighbours), both sides, raw grey.
+  std::vector<double> sheet_sum(size_t(ids) + 1, 0.0);
+  std::vector<int64_t> sheet_n(size_t(ids) + 1, 0);
+  const int64_t step[3] = {B.ny * B.nx, B.nx, 1};
+  for (int64_t k = 0; k < B.nz; ++k)
+    for (int64_t j = 0; j < B.ny; ++j)
+      for (int64_t i = 0; i < B.nx; ++i) {
+        const int64_t q = B.index(k, j, i);
+        const uint32_t p = P[q];
+        if (p == 0 || V[q] == 0) continue;
+        const int64_t c[3] = {k, j, i}, n[3] = {B.nz, B.ny, B.nx};
+        uint32_t other = 0;
+        for (int ax = 0; ax < 3 && !other; ++ax)
+          for (int d = -1; d <= 1 && !other; d += 2) {
+            if (c[ax] + d < 0 || c[ax] + d >= n[ax]) continue;
+            const uint32_t o = P[q + d * step[ax]];
+            if (o && o != p && V[q + d * step[ax]] && (p == main || o == main)) other = o;
+          }
+        if (!other) continue;
+        const uint32_t side = p == main ? other : p;
+        sheet_sum[side] += G[global(k, j, i)];
+        ++sheet_n[side];
+      }
+  const double height = opt.solid - opt.floor;
+  std::vector<int32_t> ordinal(size_t(ids) + 1, 0);
+  for (uint32_t m = 1; m <= ids; ++m) {
+    if (m == main || size[m] < opt.min_piece_vox || sheet_n[m] == 0 || !(height > 0)) continue;
+    const double dip = (opt.solid - sheet_sum[m] / double(sheet_n[m])) / height;
+    if (dip >= opt.min_dip) ordinal[m] = out.count++;
+  }
+  if (out.count < 2) return out;
+  for (int64_t k = 0; k < B.nz; ++k)
+    for (int64_t j = 0; j < B.ny; ++j)
+      for (int64_t i = 0; i < B.nx; ++i) {
+        const int64_t q = B.index(k, j, i);
+        if (V[q] && ordinal[P[q]]) out.voxel.push_back(global(k, j, i)), out.piece.push_back(ordinal[P[q]]);
+      }
+  return out;
+}
+
+}  // namespace
+
+FaceCapResult split_face_caps(Volume<uint32_t>& labels, uint32_t* count, const Volume<uint8_t>& grey,
+                              const FaceCapOptions& opt) {
+  if (!(labels.shape() == grey.shape())) throw std::logic_error("split_face_caps: labels and grey differ in shape");
+  FaceCapResult res;
+  const uint32_t n = *count;
+  const Shape S = labels.shape();
+  if (n == 0 || S.empty()) return res;
+  const uint32_t* L = labels.data();
+  // Step 1 on every face, the footprints in parallel (each one's maxima
+  // depend on it alone); a label's first candidate face (in the order of
+  // opt.faces) gives its seeds.
+  struct Task {
+    Face f;
+    uint32_t l;
+    Box2 b;
+  };
+  std::vector<Task> tasks;
+  for (int fi = 0; fi < 6; ++fi) {
+    if (!opt.faces[size_t(fi)]) continue;
+    Face f;
+    f.a = fi / 2;
+    const int64_t dims[3] = {S.nz, S.ny, S.nx};
+    f.c = fi % 2 ? dims[f.a] - 1 : 0;
+    f.nu = f.a == 0 ? S.ny : S.nz;
+    f.nv = f.a == 2 ? S.ny : S.nx;
+    std::map<uint32_t, Box2> boxes;
+    for (int64_t u = 0; u < f.nu; ++u)
+      for (int64_t v = 0; v < f.nv; ++v) {
+        const uint32_t l = L[f.index(S, u, v)];
+        if (!l) continue;
+        Box2& b = boxes[l];
+        b.u0 = std::min(b.u0, u), b.u1 = std::max(b.u1, u), b.v0 = std::min(b.v0, v), b.v1 = std::max(b.v1, v);
+      }
+    for (const auto& [l, b] : boxes) tasks.push_back({f, l, b});
+  }
+  std::vector<std::vector<Seed>> found(tasks.size());
+#pragma omp parallel for schedule(dynamic, 4)
+  for (int64_t t = 0; t < int64_t(tasks.size()); ++t) {
+    const Task& k = tasks[size_t(t)];
+    found[size_t(t)] = footprint_seeds(labels, k.l, k.f, k.b, opt);
+  }
+  std::map<uint32_t, std::vector<Seed>> candidate;
+  for (size_t t = 0; t < tasks.size(); ++t)
+    if (!found[t].empty() && !candidate.count(tasks[t].l)) candidate.emplace(tasks[t].l, std::move(found[t]));
+  res.candidates = int64_t(candidate.size());
+  if (candidate.empty()) return res;
+  const std::vector<LabelBox> box = label_boxes(labels, n);
+  uint32_t next = n;
+  uint32_t* Lw = labels.data();
+  for (const auto& [l, seeds] : candidate) {
+    const LabelBox& b = box[l];
+    const int64_t bv = (b.z1 - b.z0 + 1) * (b.y1 - b.y0 + 1) * (b.x1 - b.x0 + 1);
+    if (bv > int64_t(1) << 28) continue;
+    const Pieces p = split_cap(labels, grey, l, b, seeds, opt);
+    if (p.count < 2) continue;
+    if (uint64_t(next) + uint64_t(p.count) > uint64_t(UINT32_MAX))
+      throw ResourceError("segment: more than 2^32 - 1 labels after the face-cap repair");
+    for (size_t v = 0; v < p.voxel.size(); ++v) Lw[p.voxel[v]] = next + uint32_t(p.piece[v]);
+    next += uint32_t(p.count - 1);
+    ++res.split;
+    res.pieces_added += p.count - 1;
+  }
+  *count = next;
+  return res;
 }
 
 }  // namespace tg

@@ -73,6 +73,7 @@
 // max_box_vox (2^28: a grain of radius ~300 voxels) are not tested and
 // counted.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -105,6 +106,65 @@ SplitResult split_by_grey(Volume<uint32_t>& labels, uint32_t* count, const Volum
                           const SplitOptions& opt);
 SplitResult split_by_grey(Volume<uint32_t>& labels, uint32_t* count, const Volume<uint8_t>& grey,
                           const SplitOptions& opt);
+
+// Face caps: a grain cut by a face of the scan can show only a cap a few
+// voxels deep. Its distance map peaks at its depth (2-4 voxels), on the
+// slope of the grain it touches, so it seeds no marker and the watershed
+// gives it to that neighbour (blind_scene.py windows: 5 of the 8 particles
+// missed in a 160 x 187 x 120 crop, 4 of the 22 in three whole 192^3
+// scenes; bench/segmentation/RESULTS.md "Face caps"). On the face itself the
+// cap is a disc beside the neighbour's section, and a convex grain's
+// section by a plane is convex, so its in-plane distance map has one
+// maximum (the distance to the boundary of a convex set is concave).
+// Method, per label touching a scan face:
+//  1. Its footprint on the face (its voxels in the face slice, enclosed
+//     holes filled: pores cut by the face), the 2-D distance map of it,
+//     its h-maxima (markers.hpp) of dynamic >= h; a footprint with two or
+//     more maxima at least min_peak deep is a candidate.
+//  2. The footprint is parted among those maxima (a watershed of its
+//     distance map); the core of each part (its pixels at least half as
+//     deep as its maximum) seeds a marker-controlled watershed of the
+//     label's own 3-D distance map in its box (watershed.hpp, no lines):
+//     the pieces meet at the neck between the cap and its neighbour.
+//     (Flooding the grey instead lets the bright neighbour take most of a
+//     thin, partial-volume-dim cap, or the cap's seed a part of the
+//     neighbour; on the dev scenes the caps came out with IoU 0.56-0.88
+//     against 0.69-0.91 but one of seven on the wrong grain; seeded at the
+//     maxima alone, 0.35-0.74.)
+//  3. A piece other than the largest leaves the label when it has at least
+//     min_piece_vox voxels and the raw grey on the sheet between it and the
+//     largest (its voxels touching the other's, both sides) is darker than
+//     the solid by at least min_dip of the solid's height above the
+//     threshold: a contact between two grains is partial-volume dim, a cut
+//     through one grain (a footprint notched by a pore, say) is as bright
+//     as solid. Measured on the dev scenes (blind_scene.py R 20, seeds
+//     1-3 and a window of seed 1): contacts 0.35-0.50, cuts through one
+//     grain 0.10-0.19. A cap cut by the circular field of view instead of
+//     a face is not looked for.
+// Each label's outcome depends only on its box: the same in a slab of a
+// chunked run (whose cut faces are not scan faces) as in the whole scan.
+struct FaceCapOptions {
+  // Which faces of the volume are the scan's: z lo, z hi, y lo, y hi, x lo,
+  // x hi (a slab's cut faces are not).
+  std::array<bool, 6> faces{true, true, true, true, true, true};
+  std::array<double, 3> spacing{1.0, 1.0, 1.0};  // voxel edges (z, y, x) over the finest
+  double h = 1.0;                    // dynamic of a footprint's distance maximum, voxels
+  double min_peak = 2.0;             // its depth (inscribed radius), voxels
+  int64_t min_piece_vox = 27;
+  double solid = 0, floor = 0;       // the solid's grey peak and the threshold, in the grey's units
+  double min_dip = 0.25;             // (solid - sheet) / (solid - floor)
+};
+
+struct FaceCapResult {
+  int64_t candidates = 0;    // labels whose footprint on a face has two maxima
+  int64_t split = 0;         // labels a cap left
+  int64_t pieces_added = 0;  // new labels
+};
+
+// labels 1..count; new pieces get count+1.. in label order; *count updated.
+// grey: the split repair's one-byte code of the scan, same shape.
+FaceCapResult split_face_caps(Volume<uint32_t>& labels, uint32_t* count, const Volume<uint8_t>& grey,
+                              const FaceCapOptions& opt);
 
 // The grey the split repair keeps beside the markers, one byte a voxel:
 // code c stands for grey lo + c step (rounded, clipped to 0..255). segment()

@@ -75,6 +75,20 @@ std::vector<LineageRow> particles_of(const Volume<uint32_t>& labels, int stage, 
     r.box_hi = s.box_hi;
     rows.push_back(r);
   }
+  // Voxels on the faces (step 7): the six face slices, once each.
+  const Shape sh = labels.shape();
+  const LabelIndex index(rows);
+  auto add = [&](int64_t k, int64_t j, int64_t i) {
+    const uint32_t l = labels.data()[sh.index(k, j, i)];
+    const int32_t n = l ? index(l) : -1;
+    if (n >= 0) ++rows[static_cast<size_t>(n)].face_vox;
+  };
+  for (int64_t j = 0; j < sh.ny; ++j)
+    for (int64_t i = 0; i < sh.nx; ++i) add(0, j, i), add(sh.nz - 1, j, i);
+  for (int64_t k = 0; k < sh.nz; ++k) {
+    for (int64_t i = 0; i < sh.nx; ++i) add(k, 0, i), add(k, sh.ny - 1, i);
+    for (int64_t j = 0; j < sh.ny; ++j) add(k, j, 0), add(k, j, sh.nx - 1);
+  }
   return rows;
 }
 
@@ -567,16 +581,27 @@ std::vector<EventRow> derive_events(const std::vector<LineageRow>& lineage, int 
   return out;
 }
 
+bool cut_by_faces(const LineageRow& r) {
+  if (r.face_vox <= 0 || r.volume_vox <= 0) return false;
+  const double r_eq = std::cbrt(3.0 * static_cast<double>(r.volume_vox) / (4.0 * M_PI));
+  return static_cast<double>(r.face_vox) >= kCutFootprintShare * M_PI * r_eq * r_eq;
+}
+
 std::vector<SummaryRow> summarise(const std::vector<LineageRow>& lineage, const std::vector<EventRow>& events,
                                   int stages) {
   const auto st = by_stage(lineage, stages);
   std::vector<SummaryRow> out(static_cast<size_t>(stages));
   if (stages == 0) return out;
-  // Stage-0 grains and their height fifth.
+  // Stage-0 grains and their height fifth; those the faces cut (step 7).
   std::map<uint32_t, int> grain_band;
+  std::map<uint32_t, bool> cut;
   {
     const auto [lo, hi] = z_range(st[0]);
-    for (const auto* r : st[0]) grain_band[r->label] = band_of(r->centroid_vox[0], lo, hi);
+    for (const auto* r : st[0]) {
+      grain_band[r->label] = band_of(r->centroid_vox[0], lo, hi);
+      if (cut_by_faces(*r)) cut[r->label] = true;
+    }
+    if (static_cast<int64_t>(grain_band.size() - cut.size()) < kMinUncutGrains) cut.clear();
   }
   std::map<uint32_t, bool> pristine;  // label at the current stage -> still an intact grain
   std::map<uint32_t, bool> broken;    // grain -> broke at or before the current stage
@@ -612,11 +637,18 @@ std::vector<SummaryRow> summarise(const std::vector<LineageRow>& lineage, const 
     row.grains_intact = static_cast<int64_t>(intact_grains.size());
     row.grains_broken = static_cast<int64_t>(broken.size());
     row.grains_lost = static_cast<int64_t>(grain_band.size()) - row.grains_intact - row.grains_broken;
-    const int64_t known = row.grains_intact + row.grains_broken;
-    row.pct_intact_broken = known ? 100.0 * static_cast<double>(row.grains_broken) / static_cast<double>(known) : 0.0;
+    row.grains_cut = static_cast<int64_t>(cut.size());
+    auto pct = [](int64_t b, int64_t i) { return b + i ? 100.0 * static_cast<double>(b) / static_cast<double>(b + i) : 0.0; };
+    row.pct_intact_broken_all = pct(row.grains_broken, row.grains_intact);
+    int64_t nb_uncut = 0, ni_uncut = 0;
+    for (const auto& [g, b] : broken) nb_uncut += !cut.count(g);
+    for (const auto& [g, b] : intact_grains) ni_uncut += !cut.count(g);
+    row.pct_intact_broken = pct(nb_uncut, ni_uncut);
     std::array<int64_t, 5> nb{}, ni{};
-    for (const auto& [g, b] : broken) ++nb[grain_band[g] - 1];
-    for (const auto& [g, b] : intact_grains) ++ni[grain_band[g] - 1];
+    for (const auto& [g, b] : broken)
+      if (!cut.count(g)) ++nb[grain_band[g] - 1];
+    for (const auto& [g, b] : intact_grains)
+      if (!cut.count(g)) ++ni[grain_band[g] - 1];
     for (int q = 0; q < 5; ++q)
       row.pct_broken_band[q] = nb[q] + ni[q] ? 100.0 * static_cast<double>(nb[q]) / static_cast<double>(nb[q] + ni[q]) : 0.0;
   }
@@ -660,12 +692,12 @@ TrackResult track_files(const std::vector<std::string>& paths, const TrackOption
 
 Table lineage_table(const TrackResult& r) {
   RowTable t({"stage", "label", "parent_label", "grain", "event", "volume_vox", "cz_vox", "cy_vox", "cx_vox", "dz_vox",
-              "dy_vox", "dx_vox", "quality", "border", "absorbed_vox"});
+              "dy_vox", "dx_vox", "quality", "border", "absorbed_vox", "face_vox"});
   for (const LineageRow& x : r.lineage)
     t.row({x.stage, static_cast<int64_t>(x.label), static_cast<int64_t>(x.parent_label), static_cast<int64_t>(x.grain),
            event_name(x.event), x.volume_vox, x.centroid_vox[0], x.centroid_vox[1], x.centroid_vox[2],
            x.displacement_vox[0], x.displacement_vox[1], x.displacement_vox[2], x.quality,
-           static_cast<int>(x.touches_border), x.absorbed_vox});
+           static_cast<int>(x.touches_border), x.absorbed_vox, x.face_vox});
   return t.table();
 }
 
@@ -700,6 +732,8 @@ Table summary_table(const TrackResult& r) {
   col("grains_broken", [](const SummaryRow& s) { return s.grains_broken; });
   col("grains_lost", [](const SummaryRow& s) { return s.grains_lost; });
   col("pct_intact_broken", [](const SummaryRow& s) { return s.pct_intact_broken; });
+  col("pct_intact_broken_all", [](const SummaryRow& s) { return s.pct_intact_broken_all; });
+  col("grains_cut", [](const SummaryRow& s) { return s.grains_cut; });
   col("split", [](const SummaryRow& s) { return s.split; });
   col("fragmentation", [](const SummaryRow& s) { return s.fragmentation; });
   col("chipping", [](const SummaryRow& s) { return s.chipping; });
@@ -742,6 +776,7 @@ std::vector<LineageRow> read_lineage(const Table& t) {
     if (t.has("cz_vox")) r.centroid_vox = {t.num("cz_vox")[i], t.num("cy_vox")[i], t.num("cx_vox")[i]};
     if (t.has("absorbed_vox")) r.absorbed_vox = static_cast<int64_t>(t.num("absorbed_vox")[i]);
     if (t.has("border")) r.touches_border = t.num("border")[i] != 0;
+    if (t.has("face_vox")) r.face_vox = static_cast<int64_t>(t.num("face_vox")[i]);
   }
   return out;
 }

@@ -8,6 +8,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <functional>
@@ -263,6 +264,72 @@ TEST(Track, GrainsCutByTheBorderStayIntact) {
   EXPECT_EQ(row(r, 1, 501).parent_label, 500u);
   EXPECT_EQ(row(r, 1, 501).event, Event::intact);
   EXPECT_TRUE(row(r, 1, 501).touches_border);
+}
+
+// Step 7: the % of intact grains broken leaves out the grains the faces cut
+// (their breaks hide beyond the face). Hand-made lineage: 30 grains clear of
+// the faces (15 split at stage 1), 20 cut by a face (2 split), 5 resting on a
+// face (a few voxels on it: not cut; 1 split): 16 / 35 over the uncut
+// grains, 18 / 55 over all.
+TEST(Track, PercentBrokenLeavesOutGrainsCutByTheFaces) {
+  // Grains g0 + 1 .. g0 + n, the first `broken` of them split at stage 1; r_eq 10 voxels (pi r_eq^2 = 314).
+  auto add = [](std::vector<LineageRow>& lin, uint32_t g0, int n, int broken, int64_t face_vox) {
+    for (uint32_t g = g0 + 1; g <= g0 + uint32_t(n); ++g) {
+      LineageRow r;
+      r.stage = 0, r.label = g, r.grain = g, r.volume_vox = 4189, r.face_vox = face_vox, r.touches_border = face_vox > 0;
+      lin.push_back(r);
+      const bool splits = g <= g0 + uint32_t(broken);
+      for (int c = 0; c < (splits ? 2 : 1); ++c) {
+        LineageRow k = r;
+        k.stage = 1, k.label = 10000 + 2 * g + uint32_t(c), k.parent_label = g, k.face_vox = 0;
+        k.event = splits ? Event::split : Event::intact, k.volume_vox = splits ? 2090 : 4189;
+        lin.push_back(k);
+      }
+    }
+  };
+  std::vector<LineageRow> lin;
+  add(lin, 0, 30, 15, 0);     // clear of the faces
+  add(lin, 100, 20, 2, 200);  // cut: 200 >= 0.2 x 314 voxels on a face
+  add(lin, 200, 5, 1, 20);    // resting on a face: 20 < 63
+  auto at0 = [&](uint32_t g) { return *std::find_if(lin.begin(), lin.end(), [&](const LineageRow& r) { return r.stage == 0 && r.label == g; }); };
+  EXPECT_TRUE(cut_by_faces(at0(101)));
+  EXPECT_FALSE(cut_by_faces(at0(201)));
+  EXPECT_FALSE(cut_by_faces(at0(1)));
+  const auto sum = summarise(lin, derive_events(lin, 2), 2);
+  EXPECT_EQ(sum[1].grains_cut, 20);
+  EXPECT_EQ(sum[1].grains_broken, 18);
+  EXPECT_EQ(sum[1].grains_intact, 37);
+  EXPECT_NEAR(sum[1].pct_intact_broken, 100.0 * 16 / 35, 1e-9);
+  EXPECT_NEAR(sum[1].pct_intact_broken_all, 100.0 * 18 / 55, 1e-9);
+  // Fewer than kMinUncutGrains grains clear of the faces: every grain counts.
+  std::vector<LineageRow> few;
+  add(few, 0, 10, 5, 0);
+  add(few, 100, 20, 2, 200);
+  const auto sf = summarise(few, derive_events(few, 2), 2);
+  EXPECT_EQ(sf[1].grains_cut, 0);
+  EXPECT_NEAR(sf[1].pct_intact_broken, 100.0 * 7 / 30, 1e-9);
+}
+
+// The tracker counts each particle's voxels on the volume's faces: a sphere
+// of radius 6 whose centre lies 1 voxel above the top face shows a disc of
+// radius sqrt(35) there; one resting on no face has none.
+TEST(Track, FaceVoxelsOfEachParticle) {
+  Volume<uint32_t> s0 = empty_stage();
+  paint(s0, 7, {49, 30, 30}, 6);
+  paint(s0, 8, {20, 30, 30}, 6);
+  Tracker tr;
+  tr.add_stage(std::move(s0), "s0");
+  const auto r = tr.result();
+  int64_t disc = 0;  // voxel centres of slice 47 (z = 47.5) within the sphere
+  for (int64_t j = 0; j < 60; ++j)
+    for (int64_t i = 0; i < 60; ++i) {
+      const double z = 47.5 - 49, y = j + 0.5 - 30, x = i + 0.5 - 30;
+      disc += z * z + y * y + x * x <= 36;
+    }
+  EXPECT_EQ(row(r, 0, 7).face_vox, disc);
+  EXPECT_TRUE(cut_by_faces(row(r, 0, 7)));
+  EXPECT_EQ(row(r, 0, 8).face_vox, 0);
+  EXPECT_FALSE(cut_by_faces(row(r, 0, 8)));
 }
 
 // A scan of a window inside a taller specimen: a grain above the window shows

@@ -97,6 +97,10 @@ void print_plan(const SegmentJob& o, const tg::SegmentOptions& s) {
                                                              : std::string("0.7 or 1 (from the noise)"),
                                    s.split_depth_sigmas)
                      : std::string("off"));
+  fmt::print("  face caps: {}\n", s.split && s.face_caps
+                                     ? "a label whose footprint on a scan face holds two distance maxima parted by a "
+                                       "dim contact gives up the cap of the grain cut by the face"
+                                     : "off");
   fmt::print("  noise specks: {}\n", s.noise_specks ? fmt::format("labels whose mean grey is void noise over the "
                                                                  "threshold (z < {:.3g}) and that have no core are "
                                                                  "cleared", s.speck_z)
@@ -275,6 +279,12 @@ static tg::app::Registrar reg{{"segment", 30,
     "surfaces and in the blurred gap between two fragments a voxel apart. The distance map\n"
     "stops at dim voxels, so fragments keep one marker each even where noise bridges their gap,\n"
     "and a merge needs a mostly bright interface. Off on very noisy scans (CNR below ~6).\n"
+    "Repairs after the watershed (the plan printed at the start says which run, the summary what\n"
+    "each changed): noise specks cleared; split repair: a label whose smoothed grey holds two bright\n"
+    "cores parted by a darker sheet (fragments a voxel apart) is cut along it (--no-split); face\n"
+    "caps: a grain cut by a face of the scan that shows only a thin cap, given by the watershed to\n"
+    "the grain it touches, gets its own label when its section on the face is a second disc and\n"
+    "the contact between them is dim (--no-face-caps).\n"
     "Defaults derive from the expected grain radius R in voxels: pores up to 2 % of a grain's\n"
     "volume are filled; marker depth h = max(0.7, 0.035 R) voxels (bumps grow with the grain).\n"
     "Distances are in voxels of the finest axis.\n"

@@ -6,6 +6,7 @@
 #include <map>
 #include <omp.h>
 #include <stdexcept>
+#include <string>
 
 #include "core/errors.hpp"
 #include "segmentation/distance_transform.hpp"
@@ -317,6 +318,17 @@ Pieces split_one(const Volume<uint32_t>& labels, const Volume<T>& grey, uint32_t
   return out;
 }
 
+// Gives the voxels of every piece but the largest (which keeps the label)
+// their new numbers, next + 1 on; false when there is one piece only.
+bool renumber_pieces(uint32_t* L, const Pieces& p, uint32_t& next, const char* repair) {
+  if (p.count < 2) return false;
+  if (uint64_t(next) + uint64_t(p.count) > uint64_t(UINT32_MAX))
+    throw ResourceError(std::string("segment: more than 2^32 - 1 labels after the ") + repair);
+  for (size_t v = 0; v < p.voxel.size(); ++v) L[p.voxel[v]] = next + uint32_t(p.piece[v]);
+  next += uint32_t(p.count - 1);
+  return true;
+}
+
 template <class T>
 SplitResult split_impl(Volume<uint32_t>& labels, uint32_t* count, const Volume<T>& grey, const SplitOptions& opt) {
   if (!(labels.shape() == grey.shape())) throw std::logic_error("split_by_grey: labels and grey differ in shape");
@@ -352,11 +364,7 @@ SplitResult split_impl(Volume<uint32_t>& labels, uint32_t* count, const Volume<T
   uint32_t* L = labels.data();
   for (uint32_t l = 1; l <= n; ++l) {
     const Pieces& p = pieces[l];
-    if (p.count < 2) continue;
-    if (uint64_t(next) + uint64_t(p.count) > uint64_t(UINT32_MAX))
-      throw ResourceError("segment: more than 2^32 - 1 labels after the split repair");
-    for (size_t v = 0; v < p.voxel.size(); ++v) L[p.voxel[v]] = next + uint32_t(p.piece[v]);
-    next += uint32_t(p.count - 1);
+    if (!renumber_pieces(L, p, next, "split repair")) continue;
     ++res.split;
     res.pieces_added += p.count - 1;
   }
@@ -697,11 +705,7 @@ FaceCapResult split_face_caps(Volume<uint32_t>& labels, uint32_t* count, const V
     const int64_t bv = (b.z1 - b.z0 + 1) * (b.y1 - b.y0 + 1) * (b.x1 - b.x0 + 1);
     if (bv > int64_t(1) << 28) continue;
     const Pieces p = split_cap(labels, grey, l, b, seeds, opt);
-    if (p.count < 2) continue;
-    if (uint64_t(next) + uint64_t(p.count) > uint64_t(UINT32_MAX))
-      throw ResourceError("segment: more than 2^32 - 1 labels after the face-cap repair");
-    for (size_t v = 0; v < p.voxel.size(); ++v) Lw[p.voxel[v]] = next + uint32_t(p.piece[v]);
-    next += uint32_t(p.count - 1);
+    if (!renumber_pieces(Lw, p, next, "face-cap repair")) continue;
     ++res.split;
     res.pieces_added += p.count - 1;
   }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "data_synth/imaging.hpp"
+#include "scan_scenes.hpp"
 #include "segmentation/segment.hpp"
 #include "segmentation/segment_chunked.hpp"
 
@@ -151,7 +152,6 @@ TEST(FaceCaps, SameLabelsSlabBySlab) {
   // the slabs that read slice 0 only, the slabs' cut faces are not. Labels
   // the same voxel for voxel, for every noise seed, split or not.
   const Shape s{192, 48, 48};
-  const int64_t sl = s.slice_voxels();
   setenv("TOMOGRAIN_QUIET", "1", 0);
   int split = 0;
   for (uint64_t seed : {21u, 22u, 23u, 24u}) {
@@ -160,20 +160,8 @@ TEST(FaceCaps, SameLabelsSlabBySlab) {
     const Scene sc = render(s, balls, no_slot, seed);
     const SegmentResult whole = segment(sc.grey, options());
     split += whole.face_caps.split;
-    auto labels = Volume<uint32_t>::filled(s, 0xffffffffu);
-    auto read = [&](int64_t z0, int64_t nz) {
-      Volume<uint16_t> v(Shape{nz, s.ny, s.nx}, sc.grey.geometry());
-      std::copy(sc.grey.data() + z0 * sl, sc.grey.data() + (z0 + nz) * sl, v.data());
-      return v;
-    };
-    auto write = [&](int64_t z0, const Volume<uint32_t>& l, int64_t vz0, int64_t nz) {
-      std::copy(l.data() + vz0 * sl, l.data() + (vz0 + nz) * sl, labels.data() + z0 * sl);
-    };
-    ChunkPlan plan;
-    plan.in_memory = false;
-    plan.core = 16;
-    plan.margin = 80;  // 5 R + 4 = 74
-    const ChunkedResult cr = segment_chunked(s, sc.grey.geometry(), read, write, options(), plan);
+    ChunkedResult cr;
+    const auto labels = test::segment_slab_by_slab(sc.grey, options(), 16, 80, &cr);  // margin 5 R + 4 = 74
     EXPECT_EQ(cr.plan.slabs, 12);
     EXPECT_EQ(cr.result.count, whole.count) << "seed " << seed;
     int64_t differ = 0;

@@ -16,6 +16,7 @@
 
 #include "core/volume.hpp"
 #include "data_synth/imaging.hpp"
+#include "segmentation/segment_chunked.hpp"
 
 namespace tg::test {
 
@@ -128,5 +129,29 @@ inline Volume<uint16_t> split_ball_scan(int64_t n, double R, double gap, int por
   return synth::to_u16(phi).volume;
 }
 
+
+// `grey` segmented slab by slab (segment_chunked.hpp, through readers and
+// writers over the volume in memory): cores of `core` slices, `margin`
+// slices read below and above; the labels, and the result in *out.
+inline Volume<uint32_t> segment_slab_by_slab(const Volume<uint16_t>& grey, const SegmentOptions& o, int64_t core,
+                                             int64_t margin, ChunkedResult* out) {
+  const Shape s = grey.shape();
+  const int64_t sl = s.slice_voxels();
+  auto labels = Volume<uint32_t>::filled(s, 0xffffffffu);
+  auto read = [&](int64_t z0, int64_t nz) {
+    Volume<uint16_t> v(Shape{nz, s.ny, s.nx}, grey.geometry());
+    std::copy(grey.data() + z0 * sl, grey.data() + (z0 + nz) * sl, v.data());
+    return v;
+  };
+  auto write = [&](int64_t z0, const Volume<uint32_t>& l, int64_t vz0, int64_t nz) {
+    std::copy(l.data() + vz0 * sl, l.data() + (vz0 + nz) * sl, labels.data() + z0 * sl);
+  };
+  ChunkPlan plan;
+  plan.in_memory = false;
+  plan.core = core;
+  plan.margin = margin;
+  *out = segment_chunked(s, grey.geometry(), read, write, o, plan);
+  return labels;
+}
 
 }  // namespace tg::test

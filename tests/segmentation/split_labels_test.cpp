@@ -210,21 +210,8 @@ TEST(SplitLabels, SameLabelsSlabBySlab) {
   EXPECT_EQ(whole.split.split, 4);
   EXPECT_EQ(whole.count, 8u);
   setenv("TOMOGRAIN_QUIET", "1", 0);
-  auto labels = Volume<uint32_t>::filled(s, 0xffffffffu);
-  const int64_t sl = s.slice_voxels();
-  auto read = [&](int64_t z0, int64_t nz) {
-    Volume<uint16_t> v(Shape{nz, s.ny, s.nx}, g.geometry());
-    std::copy(g.data() + z0 * sl, g.data() + (z0 + nz) * sl, v.data());
-    return v;
-  };
-  auto write = [&](int64_t z0, const Volume<uint32_t>& l, int64_t vz0, int64_t nz) {
-    std::copy(l.data() + vz0 * sl, l.data() + (vz0 + nz) * sl, labels.data() + z0 * sl);
-  };
-  ChunkPlan plan;
-  plan.in_memory = false;
-  plan.core = 16;
-  plan.margin = 32;
-  const ChunkedResult cr = segment_chunked(s, g.geometry(), read, write, o, plan);
+  ChunkedResult cr;
+  const auto labels = test::segment_slab_by_slab(g, o, 16, 32, &cr);
   EXPECT_EQ(cr.result.count, whole.count);
   EXPECT_DOUBLE_EQ(cr.result.split_depth, whole.split_depth);
   int64_t differ = 0;

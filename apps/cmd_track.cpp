@@ -122,12 +122,16 @@ static tg::app::Registrar reg{{"track", 47,
     tg::track::write_outputs(r, o->out);
     write_costs(r, o->out);
     for (const auto& s : r.summary)
-      fmt::print("stage {}: {} particles, axial scale {:.4f} ({} {}), intact grains {}, broken {:.1f} %, "
+      fmt::print("stage {}: {} particles, axial scale {:.4f} ({} {}), intact grains {}, broken {:.1f} %{}, "
                  "split {}, fragmentation {}, chipping {} ({} chips absorbed by a neighbour), lost {}, new {}, "
                  "{:.2f} s\n",
                  s.stage, s.particles, s.axial_scale, s.map_method, s.map_matches, s.grains_intact,
-                 s.pct_intact_broken, s.split, s.fragmentation, s.chipping, s.chips_absorbed, s.lost,
-                 s.new_particles,
+                 s.pct_intact_broken,
+                 s.grains_cut ? fmt::format(" (of the grains the faces do not cut; {:.1f} % of all {} with the "
+                                            "{} cut)",
+                                            s.pct_intact_broken_all, s.grains_intact + s.grains_broken, s.grains_cut)
+                              : std::string(),
+                 s.split, s.fragmentation, s.chipping, s.chips_absorbed, s.lost, s.new_particles,
                  r.seconds[static_cast<size_t>(s.stage)]);
     const int64_t peak = r.peak_rss_bytes.empty() ? 0 : *std::max_element(r.peak_rss_bytes.begin(), r.peak_rss_bytes.end());
     fmt::print("peak memory {} ({:.2f} B/voxel of one stage)\n", tg::human_bytes(static_cast<double>(peak)),

@@ -606,11 +606,16 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                 {"pieces_added", r.split.pieces_added},
                 {"labels_too_large_to_test", r.split.skipped_large}};
   j["face_caps"] = {{"enabled", r.face_caps_used},
-                    {"rule", "a label touching a scan face whose footprint there holds two or more distance maxima "
-                             "(dynamic >= 1 voxel, >= 2 voxels deep) is parted among them, the footprint's parts seeding "
-                             "a watershed of the label's own distance map; a piece of >= 27 voxels leaves it when the raw grey on the sheet between it and the "
-                             "largest piece lies >= 0.25 of (solid peak - threshold) below the solid peak "
-                             "(split_labels.hpp split_face_caps)"},
+                    {"rule", [] {
+                       const FaceCapOptions d;  // the values segment() runs with
+                       return fmt::format(
+                           "a label touching a scan face whose footprint there holds two or more distance maxima "
+                           "(dynamic >= {} voxel, >= {} voxels deep) is parted among them, the parts' cores seeding a "
+                           "watershed of the label's own distance map; a piece of >= {} voxels leaves it when the raw "
+                           "grey on the sheet between it and the largest piece lies >= {} of (solid peak - threshold) "
+                           "below the solid peak (split_labels.hpp split_face_caps)",
+                           d.h, d.min_peak, d.min_piece_vox, d.min_dip);
+                     }()},
                     {"candidates", r.face_caps.candidates},
                     {"labels_split", r.face_caps.split},
                     {"pieces_added", r.face_caps.pieces_added}};

@@ -126,11 +126,11 @@ SplitResult split_by_grey(Volume<uint32_t>& labels, uint32_t* count, const Volum
 //     deep as its maximum) seeds a marker-controlled watershed of the
 //     label's own 3-D distance map in its box (watershed.hpp, no lines):
 //     the pieces meet at the neck between the cap and its neighbour.
-//     (Flooding the grey instead lets the bright neighbour take most of a
-//     thin, partial-volume-dim cap, or the cap's seed a part of the
-//     neighbour; on the dev scenes the caps came out with IoU 0.56-0.88
-//     against 0.69-0.91 but one of seven on the wrong grain; seeded at the
-//     maxima alone, 0.35-0.74.)
+//     (On the dev scenes the caps came out with IoU 0.56-0.88 so. Flooding
+//     the grey instead gave 0.69-0.91 but put one of seven pieces on the
+//     wrong grain: the bright neighbour's front takes a thin, partial-volume-
+//     dim cap, or the cap's seed a part of the neighbour. Seeded at the
+//     maxima alone: 0.35-0.74.)
 //  3. A piece other than the largest leaves the label when it has at least
 //     min_piece_vox voxels and the raw grey on the sheet between it and the
 //     largest (its voxels touching the other's, both sides) is darker than

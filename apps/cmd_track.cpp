@@ -20,7 +20,7 @@ namespace cmd_track {
 struct Opts {
   std::vector<std::string> in;
   std::string out;
-  bool any_order = false, no_refine = false, no_absorbed = false;
+  bool any_order = false, no_refine = false, no_absorbed = false, no_glued = false;
   double min_overlap = 0.2, chip_body = 0.7, surface_tol = 1.0, fallback_strain = 0;
   int threads = 0;
 };
@@ -93,6 +93,9 @@ static tg::app::Registrar reg{{"track", 47,
   sub->add_flag("--any-order", o->any_order, "Accept stages whose map lengthens the specimen");
   sub->add_flag("--no-refine", o->no_refine, "One overlap pass (no per-particle residual shift)");
   sub->add_flag("--no-absorbed-chips", o->no_absorbed, "Never call chipping from voxels found in a neighbour's label");
+  sub->add_flag("--no-glued-pieces", o->no_glued,
+                "Call chipping even where the pieces are what the particle gained at the stage before (a fragment "
+                "the segmentation had glued to it, coming apart)");
   sub->add_option("--min-overlap", o->min_overlap, "Fraction of a child covered by its moved parent, at least")
       ->check(CLI::Range(0.0, 1.0))
       ->default_str("0.2");
@@ -112,6 +115,7 @@ static tg::app::Registrar reg{{"track", 47,
     to.allow_extension = o->any_order;
     to.refine = !o->no_refine;
     to.absorbed_chips = !o->no_absorbed;
+    to.glued_pieces = !o->no_glued;
     to.min_overlap_fraction = o->min_overlap;
     to.chip_body_fraction = o->chip_body;
     to.surface_tolerance_vox = o->surface_tol;

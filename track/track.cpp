@@ -273,7 +273,8 @@ Event event_from_name(const std::string& name) {
 }
 
 void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& rows, const std::vector<int32_t>& parent,
-                const TrackOptions& o, const std::vector<NeighbourTransfer>& transfer) {
+                const TrackOptions& o, const std::vector<NeighbourTransfer>& transfer,
+                const std::vector<int64_t>& gain) {
   // Children's volume of every A particle (n's gain in the absorbed-chip rule).
   std::vector<int64_t> kids_volume(prev.size(), 0);
   for (size_t q = 0; q < rows.size(); ++q)
@@ -319,10 +320,19 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
       }
     } else if (f1 >= o.chip_body_fraction) {
       first = Event::chipping, rest = Event::chip;
+      // A piece glued on at the stage before coming apart (track.hpp step 5): the body
+      // continues a alone and the pieces keep no parent (rows start as `new`).
+      const int64_t g = o.glued_pieces && a < gain.size() ? gain[a] : 0;
+      const double v0 = static_cast<double>(pr.volume_vox - g), e = o.glued_volume_tolerance * v0;
+      const auto body = static_cast<double>(rows[k[0]].volume_vox);
+      if (static_cast<double>(g) > e && static_cast<double>(after) - body <= static_cast<double>(g) + e &&
+          body >= v0 - e)
+        first = Event::intact, rest = Event::new_particle;
     } else {
       first = rest = k.size() == 2 ? Event::split : Event::fragmentation;
     }
-    for (size_t n = 0; n < k.size(); ++n) {
+    const size_t linked = rest == Event::new_particle ? 1 : k.size();
+    for (size_t n = 0; n < linked; ++n) {
       LineageRow& r = rows[k[n]];
       r.parent_label = pr.label;
       r.grain = pr.grain;
@@ -467,26 +477,38 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
           hi{pa.box_hi[0] + 1, pa.box_hi[1] + 1, pa.box_hi[2] + 1};
       x.contact_faces = shared_faces(prev_, pa.label, prev_rows_[n].label, lo, hi);
     }
-    link_stage(prev_rows_, rows, parent, o_, absorbed);
+    link_stage(prev_rows_, rows, parent, o_, absorbed, prev_gain_);
     // Displacements in the frame of the files' origins: a stage cropped differently, with the
     // crop recorded in origin_m, has not moved by the crop's offset.
     const auto& g = labels.geometry();
     for (auto& r : rows)
       for (int ax = 0; ax < 3; ++ax) r.displacement_vox[ax] += (g.origin_m[ax] - prev_origin_m_[ax]) / g.voxel_size_m[ax];
     for (size_t q = 0; q < rows.size(); ++q)
-      rows[q].quality = parent[q] < 0 ? 0.0 : static_cast<double>(covered[q]) / static_cast<double>(rows[q].volume_vox);
+      rows[q].quality = parent[q] < 0 || rows[q].parent_label == 0
+                            ? 0.0
+                            : static_cast<double>(covered[q]) / static_cast<double>(rows[q].volume_vox);
   }
   std::vector<char> whole(rows.size(), s == 0);
+  std::vector<int64_t> gain(rows.size(), 0);
   if (s > 0) {
     const LabelIndex ip(prev_rows_);
+    std::vector<int> linked(prev_rows_.size(), 0);
+    for (const auto& r : rows)
+      if (r.parent_label) ++linked[static_cast<size_t>(ip(r.parent_label))];
     for (size_t q = 0; q < rows.size(); ++q) {
       const int32_t a = rows[q].parent_label ? ip(rows[q].parent_label) : -1;
       whole[q] = a >= 0 && prev_whole_[static_cast<size_t>(a)] && rows[q].event == Event::intact;
+      // Not where a face cut the parent: a grain entering the field of view grows by what
+      // comes in (one clear of the faces before cannot; what it gains there was glued on).
+      if (a >= 0 && linked[static_cast<size_t>(a)] == 1 && rows[q].event == Event::intact &&
+          !prev_rows_[static_cast<size_t>(a)].touches_border)
+        gain[q] = rows[q].volume_vox - prev_rows_[static_cast<size_t>(a)].volume_vox;
     }
   }
   lineage_.insert(lineage_.end(), rows.begin(), rows.end());
   prev_rows_ = std::move(rows);
   prev_whole_ = std::move(whole);
+  prev_gain_ = std::move(gain);
   prev_origin_m_ = labels.geometry().origin_m;
   Volume<uint32_t> spent = std::move(prev_);
   prev_ = std::move(labels);

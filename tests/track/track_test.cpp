@@ -558,3 +558,60 @@ TEST(Track, AbsorbedChipThresholdFollowsTheBoundaryShift) {
   EXPECT_EQ(classify(1.0), std::make_pair(Event::chipping, int64_t{100}));
   EXPECT_EQ(classify(1.5), std::make_pair(Event::intact, int64_t{0}));
 }
+
+// A small fragment F beside grain a (1 voxel apart) that the segmentation glues into a's label at
+// stage 1 (F is lost there, a grows by F's ~4 %) and parts again at stage 2: F is not a chip of a
+// (a stays intact, F comes back without a parent). A grain that loses a cap of its own at the same
+// time (its body under its volume before the gain) is still chipping.
+TEST(Track, FragmentGluedOnAndComingApartIsNotChipping) {
+  const Shape sh{24, 24, 48};
+  const std::array<double, 3> ca{12, 12, 13}, cf{12, 12, 27.5};  // a: radius 10; F: radius 3.5
+  auto stages = [&](bool cap) {
+    Volume<uint32_t> s0 = Volume<uint32_t>::filled(sh, 0, kGeom), s1 = Volume<uint32_t>::filled(sh, 0, kGeom),
+                     s2 = Volume<uint32_t>::filled(sh, 0, kGeom);
+    paint(s0, 1, ca, 10);
+    paint(s0, 2, cf, 3.5);
+    paint(s1, 7, ca, 10);
+    paint(s1, 7, cf, 3.5);  // glued: one label
+    paint(s2, 11, ca, 10, [&](double z, double, double) { return !cap || z < 7; });
+    if (cap) paint(s2, 13, ca, 10, [](double z, double, double) { return z > 8; });  // a cap of a's own
+    paint(s2, 12, cf, 3.5);
+    return std::array<Volume<uint32_t>, 3>{std::move(s0), std::move(s1), std::move(s2)};
+  };
+  auto run = [&](bool cap, TrackOptions o) {
+    Tracker tr(o);
+    auto s = stages(cap);
+    for (int k = 0; k < 3; ++k) tr.add_stage(std::move(s[k]), std::to_string(k));
+    return tr.result();
+  };
+  const auto r = run(false, {});
+  EXPECT_EQ(row(r, 1, 7).parent_label, 1u);
+  EXPECT_EQ(row(r, 1, 7).event, Event::intact);  // a grew by F: within the volume tolerance
+  EXPECT_EQ(row(r, 2, 11).parent_label, 7u);
+  EXPECT_EQ(row(r, 2, 11).event, Event::intact);
+  EXPECT_EQ(row(r, 2, 11).grain, 1u);
+  EXPECT_EQ(row(r, 2, 12).parent_label, 0u);
+  EXPECT_EQ(row(r, 2, 12).event, Event::new_particle);
+  EXPECT_EQ(row(r, 2, 12).quality, 0.0);
+  EXPECT_EQ(r.summary[2].chipping, 0);
+  EXPECT_EQ(r.summary[2].grains_broken, 0);
+  EXPECT_EQ(r.summary[2].new_particles, 1);
+  // With the rule off, F is a chip of a.
+  TrackOptions off;
+  off.glued_pieces = false;
+  const auto r_off = run(false, off);
+  EXPECT_EQ(row(r_off, 2, 11).event, Event::chipping);
+  EXPECT_EQ(row(r_off, 2, 12).parent_label, 7u);
+  // a chips for real beside F parting: its pieces (cap + F) are within the gain and the tolerance,
+  // but its body lost the cap and the slice beside it (more than the tolerance).
+  const auto r_cap = run(true, {});
+  int64_t body = 0, pieces = 0;
+  for (const auto& x : r_cap.lineage)
+    if (x.stage == 2) (x.label == 11 ? body : pieces) += x.volume_vox;
+  const double v0 = static_cast<double>(row(r_cap, 0, 1).volume_vox), gain = static_cast<double>(row(r_cap, 0, 2).volume_vox);
+  EXPECT_LE(static_cast<double>(pieces), gain + 0.03 * v0);
+  EXPECT_LT(static_cast<double>(body), 0.97 * v0);
+  EXPECT_EQ(row(r_cap, 2, 11).event, Event::chipping);
+  EXPECT_EQ(row(r_cap, 2, 13).event, Event::chip);
+  EXPECT_EQ(r_cap.summary[2].grains_broken, 1);
+}

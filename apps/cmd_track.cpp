@@ -92,7 +92,8 @@ static tg::app::Registrar reg{{"track", 47,
   sub->add_option("-o,--output", o->out, "Output folder (lineage.csv, events.csv, summary.csv)")->required();
   sub->add_flag("--any-order", o->any_order, "Accept stages whose map lengthens the specimen");
   sub->add_flag("--no-refine", o->no_refine, "One overlap pass (no per-particle residual shift)");
-  sub->add_flag("--no-absorbed-chips", o->no_absorbed, "Never call chipping from voxels found in a neighbour's label");
+  sub->add_flag("--no-absorbed-chips", o->no_absorbed,
+                "Never count a chip or a piece of a break from voxels found in a neighbour's label");
   sub->add_flag("--no-glued-pieces", o->no_glued,
                 "Call chipping even where the pieces are what the particle gained at the stage before (a fragment "
                 "the segmentation had glued to it, coming apart)");
@@ -114,7 +115,7 @@ static tg::app::Registrar reg{{"track", 47,
     tg::track::TrackOptions to;
     to.allow_extension = o->any_order;
     to.refine = !o->no_refine;
-    to.absorbed_chips = !o->no_absorbed;
+    to.absorbed_chips = to.absorbed_pieces = !o->no_absorbed;
     to.glued_pieces = !o->no_glued;
     to.min_overlap_fraction = o->min_overlap;
     to.chip_body_fraction = o->chip_body;

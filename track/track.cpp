@@ -272,9 +272,29 @@ Event event_from_name(const std::string& name) {
   throw InputError("unknown event '" + name + "' (intact, split, fragmentation, chipping, chip, new, lost)");
 }
 
+namespace {
+// The voxels of a break's piece that a neighbour's label absorbed (track.hpp step 5), 0 if none:
+// a has two or more children, T (the most of its moved voxels in one B label of another parent n)
+// is at least absorbed_piece_fraction of a, and both a's loss and n's gain are at least half T.
+int64_t absorbed_piece(size_t a, const LineageRow& pr, int64_t after, const std::vector<int32_t>& k,
+                       const std::vector<int32_t>& parent,
+                       const std::vector<LineageRow>& prev, const std::vector<int64_t>& kids_volume,
+                       const std::vector<NeighbourTransfer>& piece, const TrackOptions& o) {
+  if (k.size() < 2 || a >= piece.size() || piece[a].into < 0) return 0;
+  const NeighbourTransfer& x = piece[a];
+  const int32_t n = parent[x.into];
+  const auto t = static_cast<double>(x.voxels);
+  const auto loss = static_cast<double>(pr.volume_vox - after);
+  const auto gain = static_cast<double>(kids_volume[n] - prev[n].volume_vox);
+  const bool found = t >= o.absorbed_piece_fraction * static_cast<double>(pr.volume_vox) &&
+                     loss >= o.absorbed_confirm_fraction * t && gain >= o.absorbed_confirm_fraction * t;
+  return found ? x.voxels : 0;
+}
+}  // namespace
+
 void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& rows, const std::vector<int32_t>& parent,
                 const TrackOptions& o, const std::vector<NeighbourTransfer>& transfer,
-                const std::vector<int64_t>& gain) {
+                const std::vector<int64_t>& gain, const std::vector<NeighbourTransfer>& piece) {
   // Children's volume of every A particle (n's gain in the absorbed-chip rule).
   std::vector<int64_t> kids_volume(prev.size(), 0);
   for (size_t q = 0; q < rows.size(); ++q)
@@ -318,6 +338,14 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
             std::max(loss, gain) >= o.absorbed_confirm_fraction * t)
           first = Event::chipping, absorbed = x.voxels;
       }
+    } else if (const int64_t t = absorbed_piece(a, pr, after, k, parent, prev, kids_volume, piece, o); t > 0) {
+      // A piece of a break in a neighbour's label (track.hpp step 5): one more child.
+      const double f = static_cast<double>(std::max(rows[k[0]].volume_vox, t)) / static_cast<double>(after + t);
+      absorbed = t;
+      if (f >= o.chip_body_fraction)
+        first = Event::chipping, rest = Event::chip;
+      else
+        first = rest = Event::fragmentation;  // at least three pieces
     } else if (f1 >= o.chip_body_fraction) {
       first = Event::chipping, rest = Event::chip;
       // A piece glued on at the stage before coming apart (track.hpp step 5): the body
@@ -477,7 +505,10 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
           hi{pa.box_hi[0] + 1, pa.box_hi[1] + 1, pa.box_hi[2] + 1};
       x.contact_faces = shared_faces(prev_, pa.label, prev_rows_[n].label, lo, hi);
     }
-    link_stage(prev_rows_, rows, parent, o_, absorbed, prev_gain_);
+    const auto pieces = o_.absorbed_pieces
+                            ? transfers_to_neighbours({&ov, &ov1}, ib, parent, std::vector<char>(prev_rows_.size(), 1))
+                            : std::vector<NeighbourTransfer>{};
+    link_stage(prev_rows_, rows, parent, o_, absorbed, prev_gain_, pieces);
     // Displacements in the frame of the files' origins: a stage cropped differently, with the
     // crop recorded in origin_m, has not moved by the crop's offset.
     const auto& g = labels.geometry();

@@ -123,6 +123,23 @@
 //                          gain had lost 8.5 % from its body; an intact
 //                          label's volume changes by a median 0.8 % from
 //                          stage to stage, hence e = 3 %.
+//                          ... and a piece of the break that a NEIGHBOUR's
+//                          label absorbed (a fragment pressed on the next
+//                          grain, which the segmentation joined to it)
+//                          counts as one more child: T, the most of a's
+//                          moved voxels landing in one B label whose parent
+//                          n is another A particle, is at least
+//                          absorbed_piece_fraction (15 %) of a, and a's loss
+//                          and n's gain are both at least T / 2; the event
+//                          is then decided on the children plus a piece of T
+//                          (two seen + one absorbed: fragmentation). 15 %:
+//                          above the 8 % a fragment's boundary moves between
+//                          stages when pressed on a neighbour (above); a
+//                          data_synth fragment of four is 17-29 %. Measured
+//                          (bench/track/RESULTS.md, segmented): the 8
+//                          fragmentation events data_synth 256^3 seed 11
+//                          read as splits had every fragment segmented, one
+//                          or two of them inside a neighbour's label.
 //     Children of B without a parent are `new`. Fragments are particles like
 //     any other at the next stage, so they are tracked and can break again.
 //  6. The stage-0 ancestor (`grain`) is carried down the lineage; a grain is
@@ -184,6 +201,8 @@ struct TrackOptions {
   bool absorbed_chips = true;          // step 5: chips absorbed by a neighbour's label
   bool glued_pieces = true;            // step 5: pieces glued on at the stage before are not chips
   double glued_volume_tolerance = 0.03;  // e of that rule, a share of the volume before the gain
+  bool absorbed_pieces = true;         // step 5: a break's piece in a neighbour's label counts as a child
+  double absorbed_piece_fraction = 0.15;  // T of that rule, a share of the parent's volume, at least
   double absorbed_confirm_fraction = 0.5;  // a's loss or n's gain, at least this share of T
   bool refine = true;                 // step 4
   bool allow_extension = false;       // accept stages whose map lengthens the specimen
@@ -204,8 +223,9 @@ struct LineageRow {
   double quality = 1;  // fraction of the particle's voxels covered by its moved parent (1 at stage 0, 0 if new)
   bool touches_border = false;
   int64_t face_vox = 0;  // voxels on the volume's faces (one per face an edge voxel lies on; 0 when unknown)
-  // Event chipping whose chip a neighbour's label absorbed (step 5): the voxels of the
-  // parent found in that label (T); 0 otherwise.
+  // A break one of whose pieces a neighbour's label absorbed (step 5: the chip of a one-child
+  // grain, or a piece of a break with two or more children): the voxels of the parent found in
+  // that label (T), on the first (largest) child's row; 0 otherwise.
   int64_t absorbed_vox = 0;
 };
 
@@ -216,7 +236,7 @@ struct EventRow {
   Event type = Event::intact;
   std::vector<uint32_t> children;
   int64_t volume_before_vox = 0, volume_after_vox = 0;
-  int64_t absorbed_vox = 0;  // chipping: voxels of the chip a neighbour's label absorbed (0: none, or seen)
+  int64_t absorbed_vox = 0;  // voxels of a chip or piece a neighbour's label absorbed (0: none, or seen)
   double parent_z_vox = 0;
   int band = 0;  // height fifth of the parent in its stage (1 = bottom .. 5 = top)
 };
@@ -276,7 +296,7 @@ struct NeighbourTransfer {
 double new_contact_voxels(double volume_vox, double d_vox);
 void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& rows, const std::vector<int32_t>& parent,
                 const TrackOptions& o, const std::vector<NeighbourTransfer>& transfer = {},
-                const std::vector<int64_t>& gain = {});
+                const std::vector<int64_t>& gain = {}, const std::vector<NeighbourTransfer>& piece = {});
 
 // Step 7: a stage-0 grain cut by the volume's faces, not merely resting on one.
 inline constexpr double kCutFootprintShare = 0.2;

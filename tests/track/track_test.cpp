@@ -615,3 +615,48 @@ TEST(Track, FragmentGluedOnAndComingApartIsNotChipping) {
   EXPECT_EQ(row(r_cap, 2, 13).event, Event::chip);
   EXPECT_EQ(r_cap.summary[2].grains_broken, 1);
 }
+
+// Grain a breaks into three slabs; the segmentation joins the third to its neighbour n's label
+// (a fragment pressed on the next grain). Two children are seen, the third piece is in n's label:
+// fragmentation, with the piece's voxels as absorbed_vox. A cap of a's under 15 % of it in n's
+// label (a boundary moved, not a fragment) leaves the break one of two seen pieces.
+TEST(Track, PieceOfABreakInANeighboursLabelCountsAsAChild) {
+  const Shape sh{24, 24, 48};
+  const std::array<double, 3> ca{12, 12, 13}, cn{12, 12, 33};  // radius 10: touching at x = 23
+  auto run = [&](double cut, TrackOptions o) {
+    Volume<uint32_t> s0 = Volume<uint32_t>::filled(sh, 0, kGeom), s1 = Volume<uint32_t>::filled(sh, 0, kGeom);
+    paint(s0, 1, ca, 10);
+    paint(s0, 2, cn, 10);
+    paint(s1, 7, ca, 10, [](double, double, double x) { return x < -3.5; });
+    paint(s1, 8, ca, 10, [&](double, double, double x) { return x > -2.5 && x < cut - 1; });
+    paint(s1, 9, cn, 10);
+    paint(s1, 9, ca, 10, [&](double, double, double x) { return x > cut; });  // the third piece, in n's label
+    int64_t piece = 0;
+    for (int64_t q = 0; q < sh.voxels(); ++q) piece += s0.data()[q] == 1 && s1.data()[q] == 9;
+    Tracker tr(o);
+    tr.add_stage(std::move(s0), "s0");
+    tr.add_stage(std::move(s1), "s1");
+    return std::make_pair(tr.result(), piece);
+  };
+  const auto [r, piece] = run(4.5, {});
+  EXPECT_GT(piece, 0.15 * static_cast<double>(row(r, 0, 1).volume_vox));
+  EXPECT_EQ(row(r, 1, 7).parent_label, 1u);
+  EXPECT_EQ(row(r, 1, 8).parent_label, 1u);
+  EXPECT_EQ(row(r, 1, 9).parent_label, 2u);
+  EXPECT_EQ(row(r, 1, 7).event, Event::fragmentation);
+  EXPECT_EQ(row(r, 1, 8).event, Event::fragmentation);
+  EXPECT_EQ(row(r, 1, 8).absorbed_vox + row(r, 1, 7).absorbed_vox, piece);
+  EXPECT_EQ(row(r, 1, 9).event, Event::intact);
+  EXPECT_EQ(r.summary[1].fragmentation, 1);
+  EXPECT_EQ(r.summary[1].split, 0);
+  // The rule off: a split.
+  TrackOptions off;
+  off.absorbed_pieces = false;
+  EXPECT_EQ(row(run(4.5, off).first, 1, 7).event, Event::split);
+  // A thin cap (x > 7.5: 6 % of a) in n's label: two pieces seen (the larger over 70 %: chipping).
+  const auto [thin, cap] = run(7.5, {});
+  EXPECT_LT(cap, 0.15 * static_cast<double>(row(thin, 0, 1).volume_vox));
+  EXPECT_EQ(row(thin, 1, 8).event, Event::chipping);
+  EXPECT_EQ(row(thin, 1, 8).absorbed_vox, 0);
+  EXPECT_EQ(thin.summary[1].fragmentation, 0);
+}

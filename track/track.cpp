@@ -293,8 +293,9 @@ int64_t absorbed_piece(size_t a, const LineageRow& pr, int64_t after, const std:
 }  // namespace
 
 void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& rows, const std::vector<int32_t>& parent,
-                const TrackOptions& o, const std::vector<NeighbourTransfer>& transfer,
-                const std::vector<int64_t>& gain, const std::vector<NeighbourTransfer>& piece) {
+                const TrackOptions& o, const LinkEvidence& ev) {
+  const auto &transfer = ev.chip, &piece = ev.piece;
+  const auto &gain = ev.gain, &foreign = ev.foreign;
   // Children's volume of every A particle (n's gain in the absorbed-chip rule).
   std::vector<int64_t> kids_volume(prev.size(), 0);
   for (size_t q = 0; q < rows.size(); ++q)
@@ -316,7 +317,17 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
     const LineageRow& pr = prev[a];
     int64_t after = 0;
     for (int32_t q : k) after += rows[q].volume_vox;
-    const double f1 = static_cast<double>(rows[k[0]].volume_vox) / static_cast<double>(after);
+    // The children's volumes that came from a: a child whose label also holds a piece of
+    // another parent's (foreign >= absorbed_piece_fraction of it) is counted without it.
+    auto own = [&](int32_t q) {
+      const int64_t f = static_cast<size_t>(q) < foreign.size() ? foreign[q] : 0;
+      return static_cast<double>(f) >= o.absorbed_piece_fraction * static_cast<double>(rows[q].volume_vox)
+                 ? static_cast<double>(rows[q].volume_vox - f)
+                 : static_cast<double>(rows[q].volume_vox);
+    };
+    double own_sum = 0, own_max = 0;
+    for (int32_t q : k) own_sum += own(q), own_max = std::max(own_max, own(q));
+    const double f1 = own_max / own_sum;
     const double tol = std::max(o.min_volume_tolerance,
                                 3 * o.surface_tolerance_vox / std::max(1.0, r_eq(static_cast<double>(pr.volume_vox))));
     Event first = Event::intact, rest = Event::intact;
@@ -485,16 +496,16 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
       }
     }
 
-    auto absorbed = o_.absorbed_chips ? transfers_to_neighbours({&ov, &ov1}, ib, parent, prev_whole_)
-                                      : std::vector<NeighbourTransfer>{};
+    LinkEvidence ev;
+    if (o_.absorbed_chips) ev.chip = transfers_to_neighbours({&ov, &ov1}, ib, parent, prev_whole_);
     // The boundary shift d of the rule (track.hpp step 5): the segmentation's surface
     // uncertainty and how far the stage's axial strain increment can press a contact of a
     // grain of radius r_eq (its two neighbours along the axis come closer by 2 strain r_eq),
     // in quadrature: the caps 2 pi r_eq d^2 that the two independent shifts move add.
     const double strain = std::max(0.0, 1.0 - m.axial_scale());
     // S_an, only where T could pass the threshold at all (a few dozen particles per stage).
-    for (size_t a = 0; a < absorbed.size(); ++a) {
-      NeighbourTransfer& x = absorbed[a];
+    for (size_t a = 0; a < ev.chip.size(); ++a) {
+      NeighbourTransfer& x = ev.chip[a];
       const auto& pa = prev_rows_[a];
       if (x.into < 0 || parent[x.into] < 0) continue;
       const int32_t n = parent[x.into];
@@ -505,10 +516,16 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
           hi{pa.box_hi[0] + 1, pa.box_hi[1] + 1, pa.box_hi[2] + 1};
       x.contact_faces = shared_faces(prev_, pa.label, prev_rows_[n].label, lo, hi);
     }
-    const auto pieces = o_.absorbed_pieces
-                            ? transfers_to_neighbours({&ov, &ov1}, ib, parent, std::vector<char>(prev_rows_.size(), 1))
-                            : std::vector<NeighbourTransfer>{};
-    link_stage(prev_rows_, rows, parent, o_, absorbed, prev_gain_, pieces);
+    if (o_.absorbed_pieces) {
+      ev.piece = transfers_to_neighbours({&ov, &ov1}, ib, parent, std::vector<char>(prev_rows_.size(), 1));
+      ev.foreign.assign(rows.size(), 0);
+      for (const Overlap& x : ov) {
+        const int32_t bi = ib(x.b);
+        if (bi >= 0 && parent[bi] >= 0 && parent[bi] != x.a) ev.foreign[bi] += x.n;
+      }
+    }
+    ev.gain = prev_gain_;
+    link_stage(prev_rows_, rows, parent, o_, ev);
     // Displacements in the frame of the files' origins: a stage cropped differently, with the
     // crop recorded in origin_m, has not moved by the crop's offset.
     const auto& g = labels.geometry();

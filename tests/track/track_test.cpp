@@ -549,7 +549,9 @@ TEST(Track, AbsorbedChipThresholdFollowsTheBoundaryShift) {
     rows[1].label = 9, rows[1].volume_vox = 4100;
     std::vector<NeighbourTransfer> tr(2);
     tr[0].into = 1, tr[0].voxels = 100, tr[0].contact_faces = 0, tr[0].shift_vox = shift_vox;
-    link_stage(prev, rows, {0, 1}, TrackOptions{}, tr);
+    LinkEvidence ev;
+    ev.chip = tr;
+    link_stage(prev, rows, {0, 1}, TrackOptions{}, ev);
     return std::make_pair(rows[0].event, rows[0].absorbed_vox);
   };
   EXPECT_NEAR(new_contact_voxels(4000, 1.0), 61.9, 0.1);
@@ -659,4 +661,26 @@ TEST(Track, PieceOfABreakInANeighboursLabelCountsAsAChild) {
   EXPECT_EQ(row(thin, 1, 8).event, Event::chipping);
   EXPECT_EQ(row(thin, 1, 8).absorbed_vox, 0);
   EXPECT_EQ(thin.summary[1].fragmentation, 0);
+}
+
+// A break's largest child whose label also holds a piece of another parent's (a fragment of a
+// neighbour the segmentation joined to it) is weighed without that piece: a body of 5 000 voxels,
+// 2 000 of them the neighbour's, beside a 1 400-voxel piece is a split (3 000 / 4 400 < 0.7), not
+// chipping (5 000 / 6 400); a foreign share under absorbed_piece_fraction changes nothing.
+TEST(Track, ChildHoldingAnotherGrainsPieceIsWeighedWithoutIt) {
+  auto classify = [](int64_t foreign) {
+    std::vector<LineageRow> prev(2), rows(3);
+    prev[0].label = 1, prev[0].grain = 1, prev[0].volume_vox = 4500;
+    prev[1].label = 2, prev[1].grain = 2, prev[1].volume_vox = 6000;
+    rows[0].label = 7, rows[0].volume_vox = 5000;
+    rows[1].label = 8, rows[1].volume_vox = 1400;
+    rows[2].label = 9, rows[2].volume_vox = 4000;
+    LinkEvidence ev;
+    ev.foreign = {foreign, 0, 0};
+    link_stage(prev, rows, {0, 0, 1}, TrackOptions{}, ev);
+    return rows[0].event;
+  };
+  EXPECT_EQ(classify(0), Event::chipping);
+  EXPECT_EQ(classify(2000), Event::split);
+  EXPECT_EQ(classify(500), Event::chipping);  // 10 % of the child: under 15 %
 }

@@ -300,12 +300,19 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
   std::vector<int64_t> kids_volume(prev.size(), 0);
   for (size_t q = 0; q < rows.size(); ++q)
     if (parent[q] >= 0) kids_volume[parent[q]] += rows[q].volume_vox;
-  // Children of every A particle, largest first.
+  // The children's volumes that came from their parent: a child whose label also holds a piece
+  // of another parent's (foreign >= absorbed_piece_fraction of it) is counted without it.
+  std::vector<double> own(rows.size());
+  for (size_t q = 0; q < rows.size(); ++q) {
+    const int64_t f = q < foreign.size() ? foreign[q] : 0;
+    const auto v = static_cast<double>(rows[q].volume_vox);
+    own[q] = static_cast<double>(f) >= o.absorbed_piece_fraction * v ? v - static_cast<double>(f) : v;
+  }
+  // Children of every A particle, largest (own volume) first.
   std::vector<std::vector<int32_t>> kids(prev.size());
   for (size_t q = 0; q < rows.size(); ++q)
     if (parent[q] >= 0) kids[parent[q]].push_back(static_cast<int32_t>(q));
-  for (auto& k : kids)
-    std::stable_sort(k.begin(), k.end(), [&](int32_t x, int32_t y) { return rows[x].volume_vox > rows[y].volume_vox; });
+  for (auto& k : kids) std::stable_sort(k.begin(), k.end(), [&](int32_t x, int32_t y) { return own[x] > own[y]; });
   for (auto& r : rows) {
     r.event = Event::new_particle;
     r.displacement_vox = {kNaN, kNaN, kNaN};
@@ -316,18 +323,9 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
     if (k.empty()) continue;
     const LineageRow& pr = prev[a];
     int64_t after = 0;
-    for (int32_t q : k) after += rows[q].volume_vox;
-    // The children's volumes that came from a: a child whose label also holds a piece of
-    // another parent's (foreign >= absorbed_piece_fraction of it) is counted without it.
-    auto own = [&](int32_t q) {
-      const int64_t f = static_cast<size_t>(q) < foreign.size() ? foreign[q] : 0;
-      return static_cast<double>(f) >= o.absorbed_piece_fraction * static_cast<double>(rows[q].volume_vox)
-                 ? static_cast<double>(rows[q].volume_vox - f)
-                 : static_cast<double>(rows[q].volume_vox);
-    };
-    double own_sum = 0, own_max = 0;
-    for (int32_t q : k) own_sum += own(q), own_max = std::max(own_max, own(q));
-    const double f1 = own_max / own_sum;
+    double own_sum = 0;
+    for (int32_t q : k) after += rows[q].volume_vox, own_sum += own[q];
+    const double f1 = own[k[0]] / own_sum;
     const double tol = std::max(o.min_volume_tolerance,
                                 3 * o.surface_tolerance_vox / std::max(1.0, r_eq(static_cast<double>(pr.volume_vox))));
     Event first = Event::intact, rest = Event::intact;
@@ -351,7 +349,7 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
       }
     } else if (const int64_t t = absorbed_piece(a, pr, after, k, parent, prev, kids_volume, piece, o); t > 0) {
       // A piece of a break in a neighbour's label (track.hpp step 5): one more child.
-      const double f = static_cast<double>(std::max(rows[k[0]].volume_vox, t)) / static_cast<double>(after + t);
+      const double f = std::max(own[k[0]], static_cast<double>(t)) / (own_sum + static_cast<double>(t));
       absorbed = t;
       if (f >= o.chip_body_fraction)
         first = Event::chipping, rest = Event::chip;

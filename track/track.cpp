@@ -522,7 +522,7 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
         if (bi >= 0 && parent[bi] >= 0 && parent[bi] != x.a) ev.foreign[bi] += x.n;
       }
     }
-    ev.gain = prev_gain_;
+    ev.gain = std::move(prev_gain_);  // replaced by this stage's gains below
     link_stage(prev_rows_, rows, parent, o_, ev);
     // Displacements in the frame of the files' origins: a stage cropped differently, with the
     // crop recorded in origin_m, has not moved by the crop's offset.

@@ -21,7 +21,7 @@ struct Opts {
   std::vector<std::string> in;
   std::string out;
   bool any_order = false, no_refine = false, no_absorbed = false, no_glued = false;
-  double min_overlap = 0.2, chip_body = 0.7, surface_tol = 1.0, fallback_strain = 0;
+  double min_overlap = 0.2, chip_body = 0.7, surface_tol = 1.0, fallback_strain = 0, loss_sigmas = 4.0;
   int threads = 0;
 };
 
@@ -74,7 +74,11 @@ static tg::app::Registrar reg{{"track", 47,
       "                 (summary: chips_absorbed; events/lineage: absorbed_vox). Not chipping: a grain\n"
       "                 that grew > 3 % at the stage before (a fragment glued to it by the segmentation)\n"
       "                 and now sheds no more than that gain while its body keeps the volume before it:\n"
-      "                 intact, the pieces `new` (--no-glued-pieces)\n"
+      "                 intact, the pieces `new` (--no-glued-pieces). Also chipping, its chips unseen: a\n"
+      "                 whole grain whose one child lost more volume than the stage's whole grains do\n"
+      "                 (median + 4 x 1.4826 MAD of their relative loss: the segmentation's own\n"
+      "                 stage-to-stage spread, measured on the data; off below 30 such grains;\n"
+      "                 --loss-sigmas 0 turns it off)\n"
       "  new            no parent (entered the field, or came up from below the detection limit)\n"
       "  lost           a particle with no child (left the field, merged, or fell below the limit)\n"
       "Fragments are tracked like grains and can break again. Stages given out of order are refused\n"
@@ -111,6 +115,11 @@ static tg::app::Registrar reg{{"track", 47,
   sub->add_option("--surface-tol-vox", o->surface_tol, "Segmentation surface uncertainty (voxels) behind the intact volume tolerance")
       ->check(CLI::NonNegativeNumber)
       ->default_str("1");
+  sub->add_option("--loss-sigmas", o->loss_sigmas,
+                  "Robust standard deviations above the median loss of the stage's whole grains at which a whole "
+                  "grain with one child counts as chipping (0: never)")
+      ->check(CLI::NonNegativeNumber)
+      ->default_str("4");
   sub->add_option("--fallback-strain", o->fallback_strain,
                   "Strain increment of the map used when too few grains match (identity + axial compression)")
       ->check(CLI::Range(0.0, 0.99))
@@ -125,6 +134,7 @@ static tg::app::Registrar reg{{"track", 47,
     to.min_overlap_fraction = o->min_overlap;
     to.chip_body_fraction = o->chip_body;
     to.surface_tolerance_vox = o->surface_tol;
+    to.loss_outlier_sigmas = o->loss_sigmas;
     to.map.fallback_strain = o->fallback_strain;
     to.threads = o->threads;
     to.progress = true;

@@ -290,6 +290,35 @@ int64_t absorbed_piece(size_t a, const LineageRow& pr, int64_t after, const std:
                      loss >= o.absorbed_confirm_fraction * t && gain >= o.absorbed_confirm_fraction * t;
   return found ? x.voxels : 0;
 }
+
+// The volume-loss rule's limit (track.hpp step 5): median + loss_outlier_sigmas x 1.4826 MAD of
+// the relative loss 1 - V(child) / V(a) over the whole grains clear of the faces with one child,
+// at least loss_floor_fraction; infinite (the rule off) with fewer than kMinLossSample of them or
+// loss_outlier_sigmas = 0.
+double whole_grain_loss_limit(const std::vector<LineageRow>& prev, const std::vector<LineageRow>& rows,
+                              const std::vector<std::vector<int32_t>>& kids, const std::vector<char>& whole,
+                              const TrackOptions& o) {
+  constexpr size_t kMinLossSample = 30;
+  std::vector<double> loss;
+  for (size_t a = 0; a < prev.size() && a < whole.size(); ++a) {
+    if (!whole[a] || kids[a].size() != 1) continue;
+    const LineageRow& c = rows[static_cast<size_t>(kids[a][0])];
+    if (prev[a].touches_border || c.touches_border || prev[a].volume_vox <= 0) continue;
+    loss.push_back(1 - static_cast<double>(c.volume_vox) / static_cast<double>(prev[a].volume_vox));
+  }
+  if (!(o.loss_outlier_sigmas > 0) || loss.size() < kMinLossSample) return std::numeric_limits<double>::infinity();
+  auto median = [](std::vector<double> v) {
+    const size_t h = v.size() / 2;
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(h), v.end());
+    const double hi = v[h];
+    if (v.size() % 2) return hi;
+    return 0.5 * (hi + *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(h)));
+  };
+  const double m = median(loss);
+  std::vector<double> dev(loss.size());
+  for (size_t i = 0; i < loss.size(); ++i) dev[i] = std::abs(loss[i] - m);
+  return std::max(o.loss_floor_fraction, m + o.loss_outlier_sigmas * 1.4826 * median(dev));
+}
 }  // namespace
 
 void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& rows, const std::vector<int32_t>& parent,
@@ -318,6 +347,7 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
     r.displacement_vox = {kNaN, kNaN, kNaN};
     r.quality = 0;
   }
+  const double loss_limit = whole_grain_loss_limit(prev, rows, kids, ev.whole, o);
   for (size_t a = 0; a < prev.size(); ++a) {
     const auto& k = kids[a];
     if (k.empty()) continue;
@@ -347,6 +377,9 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
             std::max(loss, gain) >= o.absorbed_confirm_fraction * t)
           first = Event::chipping, absorbed = x.voxels;
       }
+      // A whole grain that lost more than the stage's whole grains do, its chips unseen (track.hpp step 5).
+      if (first == Event::intact && !cut && a < ev.whole.size() && ev.whole[a] && 1 - kept > loss_limit)
+        first = Event::chipping;
     } else if (const int64_t t = absorbed_piece(a, pr, after, k, parent, prev, kids_volume, piece, o); t > 0) {
       // A piece of a break in a neighbour's label (track.hpp step 5): one more child.
       const double f = std::max(own[k[0]], static_cast<double>(t)) / (own_sum + static_cast<double>(t));
@@ -523,6 +556,7 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
       }
     }
     ev.gain = std::move(prev_gain_);  // replaced by this stage's gains below
+    ev.whole = prev_whole_;
     link_stage(prev_rows_, rows, parent, o_, ev);
     // Displacements in the frame of the files' origins: a stage cropped differently, with the
     // crop recorded in origin_m, has not moved by the crop's offset.

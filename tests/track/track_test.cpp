@@ -684,3 +684,49 @@ TEST(Track, ChildHoldingAnotherGrainsPieceIsWeighedWithoutIt) {
   EXPECT_EQ(classify(2000), Event::split);
   EXPECT_EQ(classify(500), Event::chipping);  // 10 % of the child: under 15 %
 }
+
+// The volume-loss rule (track.hpp step 5): whole grains of 5 000 voxels with one child each; 21
+// keep their volume, 19 lose 0.8 % (40 voxels), grain A loses 3 % and grain B 2.6 %. By hand:
+// median loss 0.4 %, absolute deviations 0.4 % for all but A and B, so 1.4826 MAD = 0.59304 %
+// and the limit 0.4 % + 4 x 0.59304 % = 2.772 %: A is chipping, B intact. Off with the option at
+// 0, for fragments (not whole), and with fewer than 30 such grains; with every grain keeping its
+// volume the limit is the 1.5 % floor.
+TEST(Track, WholeGrainLosingMoreThanTheStagesGrainsDoIsChipping) {
+  auto classify = [](std::vector<int64_t> after, bool whole, TrackOptions o) {
+    const size_t n = after.size();
+    std::vector<LineageRow> prev(n), rows(n);
+    std::vector<int32_t> parent(n);
+    for (size_t i = 0; i < n; ++i) {
+      prev[i].label = uint32_t(i + 1), prev[i].grain = uint32_t(i + 1), prev[i].volume_vox = 5000;
+      rows[i].label = uint32_t(i + 101), rows[i].volume_vox = after[i];
+      parent[i] = int32_t(i);
+    }
+    LinkEvidence ev;
+    ev.whole.assign(n, whole ? 1 : 0);
+    link_stage(prev, rows, parent, o, ev);
+    std::vector<Event> e;
+    for (const auto& r : rows) e.push_back(r.event);
+    return e;
+  };
+  EXPECT_EQ(TrackOptions{}.loss_outlier_sigmas, 4.0);
+  std::vector<int64_t> after(21, 5000);
+  after.insert(after.end(), 19, 4960);
+  after.push_back(4850);  // A: 3 %
+  after.push_back(4870);  // B: 2.6 %
+  const auto e = classify(after, true, {});
+  EXPECT_EQ(e[40], Event::chipping);
+  EXPECT_EQ(e[41], Event::intact);
+  for (size_t i = 0; i < 40; ++i) EXPECT_EQ(e[i], Event::intact) << i;
+  TrackOptions off;
+  off.loss_outlier_sigmas = 0;
+  EXPECT_EQ(classify(after, true, off)[40], Event::intact);
+  EXPECT_EQ(classify(after, false, {})[40], Event::intact);
+  std::vector<int64_t> few(after.end() - 29, after.end());  // 29 grains, A among them
+  EXPECT_EQ(classify(few, true, {})[28 - 1], Event::intact);
+  std::vector<int64_t> steady(40, 5000);
+  steady.push_back(4950);  // 1 %: under the floor
+  steady.push_back(4900);  // 2 %
+  const auto f = classify(steady, true, {});
+  EXPECT_EQ(f[40], Event::intact);
+  EXPECT_EQ(f[41], Event::chipping);
+}

@@ -398,6 +398,12 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
       if (static_cast<double>(g) > e && static_cast<double>(after) - body <= static_cast<double>(g) + e &&
           body >= v0 - e)
         first = Event::intact, rest = Event::new_particle;
+      // Pieces that the parent covers less than half of, beside a body that kept its volume
+      // within the stage's limit (track.hpp step 5): not chips, but particles first seen now.
+      bool weak = std::isfinite(loss_limit) && !ev.coverage.empty() && !pr.touches_border &&
+                  1 - body / static_cast<double>(pr.volume_vox) <= loss_limit;
+      for (size_t n = 1; n < k.size() && weak; ++n) weak = ev.coverage[k[n]] < o.weak_piece_coverage;
+      if (weak) first = Event::intact, rest = Event::new_particle;
     } else {
       first = rest = k.size() == 2 ? Event::split : Event::fragmentation;
     }
@@ -557,6 +563,11 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
     }
     ev.gain = std::move(prev_gain_);  // replaced by this stage's gains below
     ev.whole = prev_whole_;
+    // Of the voxels the earlier stage could see (as min_overlap_fraction is judged).
+    ev.coverage.resize(rows.size());
+    for (size_t q = 0; q < rows.size(); ++q)
+      ev.coverage[q] = static_cast<double>(covered[q]) /
+                       static_cast<double>(std::max<int64_t>(1, rows[q].volume_vox - unseen[q]));
     link_stage(prev_rows_, rows, parent, o_, ev);
     // Displacements in the frame of the files' origins: a stage cropped differently, with the
     // crop recorded in origin_m, has not moved by the crop's offset.

@@ -14,6 +14,8 @@
 #include <functional>
 #include <map>
 #include <stdexcept>
+#include <tuple>
+#include <vector>
 
 #include "core/errors.hpp"
 
@@ -729,4 +731,33 @@ TEST(Track, WholeGrainLosingMoreThanTheStagesGrainsDoIsChipping) {
   const auto f = classify(steady, true, {});
   EXPECT_EQ(f[40], Event::intact);
   EXPECT_EQ(f[41], Event::chipping);
+}
+
+// The weak-piece rule (track.hpp step 5): beside 40 whole grains keeping their volume (the limit
+// is then the 1.5 % floor), grain a (5 000 voxels) has a body and one small piece of 20 voxels.
+// A piece its moved parent covers less than half of (coverage 0.3) beside a body that lost 1 %
+// is a particle first seen now: a intact, the piece `new` without a parent. The same piece with
+// a body that lost 3 % (above the limit), or covered at 0.6, is a chip of a.
+TEST(Track, PieceItsParentHardlyCoversIsNoChipWhileTheBodyKeepsItsVolume) {
+  auto classify = [](int64_t body, double coverage) {
+    const size_t n = 41;
+    std::vector<LineageRow> prev(n), rows(n + 1);
+    std::vector<int32_t> parent(n + 1);
+    for (size_t i = 0; i < n; ++i) {
+      prev[i].label = uint32_t(i + 1), prev[i].grain = uint32_t(i + 1), prev[i].volume_vox = 5000;
+      rows[i].label = uint32_t(i + 101), rows[i].volume_vox = 5000;
+      parent[i] = int32_t(i);
+    }
+    rows[n - 1].volume_vox = body;                                   // a's body
+    rows[n].label = 999, rows[n].volume_vox = 20, parent[n] = int32_t(n - 1);  // its piece
+    LinkEvidence ev;
+    ev.whole.assign(n, 1);
+    ev.coverage.assign(n + 1, 1.0);
+    ev.coverage[n] = coverage;
+    link_stage(prev, rows, parent, TrackOptions{}, ev);
+    return std::make_tuple(rows[n - 1].event, rows[n].event, rows[n].parent_label);
+  };
+  EXPECT_EQ(classify(4950, 0.3), std::make_tuple(Event::intact, Event::new_particle, 0u));
+  EXPECT_EQ(classify(4850, 0.3), std::make_tuple(Event::chipping, Event::chip, 41u));
+  EXPECT_EQ(classify(4950, 0.6), std::make_tuple(Event::chipping, Event::chip, 41u));
 }

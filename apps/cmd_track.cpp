@@ -20,7 +20,7 @@ namespace cmd_track {
 struct Opts {
   std::vector<std::string> in;
   std::string out;
-  bool any_order = false, no_refine = false, no_absorbed = false, no_glued = false;
+  bool any_order = false, no_refine = false, no_absorbed = false, no_glued = false, no_cut_by_count = false;
   double min_overlap = 0.2, chip_body = 0.7, surface_tol = 1.0, fallback_strain = 0, loss_sigmas = 4.0;
   int threads = 0;
 };
@@ -108,6 +108,10 @@ static tg::app::Registrar reg{{"track", 47,
   sub->add_flag("--no-glued-pieces", o->no_glued,
                 "Call chipping even where the pieces are what the particle gained at the stage before (a fragment "
                 "the segmentation had glued to it, coming apart)");
+  sub->add_flag("--no-cut-pieces-by-count", o->no_cut_by_count,
+                "Judge a break of a particle the scan's faces cut by its pieces' visible shares even where the faces "
+                "cut its smaller pieces too (by default such a break is split or fragmentation by its count of "
+                "pieces: the faces hide an unknown part of each)");
   sub->add_option("--min-overlap", o->min_overlap, "Fraction of a child covered by its moved parent, at least")
       ->check(CLI::Range(0.0, 1.0))
       ->default_str("0.2");
@@ -133,6 +137,7 @@ static tg::app::Registrar reg{{"track", 47,
     to.refine = !o->no_refine;
     to.absorbed_chips = to.absorbed_pieces = !o->no_absorbed;
     to.glued_pieces = !o->no_glued;
+    to.cut_pieces_by_count = !o->no_cut_by_count;
     to.min_overlap_fraction = o->min_overlap;
     to.chip_body_fraction = o->chip_body;
     to.surface_tolerance_vox = o->surface_tol;

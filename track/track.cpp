@@ -273,6 +273,15 @@ Event event_from_name(const std::string& name) {
 }
 
 namespace {
+// A parent cut by the faces, one of whose smaller pieces the faces cut too (track.hpp step 5):
+// the faces hide an unknown part of each, so their visible shares cannot tell a chip from a half.
+bool cut_pieces(const LineageRow& pr, const std::vector<LineageRow>& rows, const std::vector<int32_t>& k) {
+  if (!cut_by_faces(pr)) return false;
+  for (size_t n = 1; n < k.size(); ++n)
+    if (cut_by_faces(rows[static_cast<size_t>(k[n])])) return true;
+  return false;
+}
+
 // The voxels of a break's piece that a neighbour's label absorbed (track.hpp step 5), 0 if none:
 // a has two or more children, T (the most of its moved voxels in one B label of another parent n)
 // is at least absorbed_piece_fraction of a, and both a's loss and n's gain are at least half T.
@@ -404,6 +413,9 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
                   1 - body / static_cast<double>(pr.volume_vox) <= loss_limit;
       for (size_t n = 1; n < k.size() && weak; ++n) weak = ev.coverage[k[n]] < o.weak_piece_coverage;
       if (weak) first = Event::intact, rest = Event::new_particle;
+      // A parent cut by the faces whose smaller pieces they cut too (track.hpp step 5): by count.
+      if (first == Event::chipping && o.cut_pieces_by_count && cut_pieces(pr, rows, k))
+        first = rest = k.size() == 2 ? Event::split : Event::fragmentation;
     } else {
       first = rest = k.size() == 2 ? Event::split : Event::fragmentation;
     }

@@ -193,6 +193,26 @@
 //                          f1 (measured: chipping precision +0.007 to +0.035
 //                          at every point of data_synth's 256^3 blind range,
 //                          split recall +0.001 to +0.003; see RESULTS).
+//                          ... and a parent that the scan's faces cut
+//                          (cut_by_faces, step 7) one of whose smaller pieces
+//                          they cut too is split (2 children) or
+//                          fragmentation (>= 3) whatever f1 says: the faces
+//                          hide an unknown part of each piece, so their
+//                          visible shares cannot tell a chip from a half (a
+//                          grain seen as a cap a few voxels deep, split
+//                          across it, shows a large and a small piece).
+//                          Splitting is the main mode (the study), so the
+//                          count decides; a piece wholly inside the scan is
+//                          still weighed by f1 (cut_pieces_by_count). Measured
+//                          (bench/track/RESULTS.md, blind_series windows, R 8
+//                          to 30, every parent): on the truth labels 72 of
+//                          the 114 splits missed at R 12 were such chippings,
+//                          chipping precision 0.40-0.52; with the rule split
+//                          F1 +0.04 to +0.08, chipping F1 +0.07 to +0.24 but
+//                          at R 30 (-0.07: its chips are cut by the faces
+//                          too); segmented alike (split +0.03 to +0.08,
+//                          chipping +0.10 to +0.20, R 30 -0.10). Not on
+//                          data_synth's specimens (no grain cut by a face).
 //     Children of B without a parent are `new`. Fragments are particles like
 //     any other at the next stage, so they are tracked and can break again.
 //  6. The stage-0 ancestor (`grain`) is carried down the lineage; a grain is
@@ -264,6 +284,9 @@ struct TrackOptions {
   // step 5: a chipping whose every piece its parent covers less than this share of (match
   // quality) needs its body to lose more than the same limit, else the pieces are `new`
   double weak_piece_coverage = 0.5;
+  // step 5: a parent cut by the faces whose smaller pieces the faces cut too is split or
+  // fragmented by its count of pieces (their visible shares say nothing about chipping)
+  bool cut_pieces_by_count = true;
   bool refine = true;                 // step 4
   bool allow_extension = false;       // accept stages whose map lengthens the specimen
   double extension_tolerance = 0.002;

@@ -761,3 +761,36 @@ TEST(Track, PieceItsParentHardlyCoversIsNoChipWhileTheBodyKeepsItsVolume) {
   EXPECT_EQ(classify(4850, 0.3), std::make_tuple(Event::chipping, Event::chip, 41u));
   EXPECT_EQ(classify(4950, 0.6), std::make_tuple(Event::chipping, Event::chip, 41u));
 }
+
+// Step 5: a parent the faces cut, whose smaller piece they cut too, is split
+// or fragmented by its count of pieces: its pieces' visible shares (here a
+// body of 2 500 and a piece of 400 voxels, f1 0.86, chipping by shares) say
+// nothing, as the faces hide an unknown part of each. A piece wholly inside
+// the scan, or a parent clear of the faces, keeps the shares' verdict.
+TEST(Track, PiecesOfAParentTheFacesCutAreJudgedByTheirCount) {
+  // parent face_vox, pieces' volumes and face voxels -> the body's event
+  auto classify = [](int64_t parent_face, std::vector<std::pair<int64_t, int64_t>> pieces, bool by_count = true) {
+    std::vector<LineageRow> prev(1), rows(pieces.size());
+    prev[0].label = 1, prev[0].grain = 1, prev[0].volume_vox = 3000;
+    prev[0].face_vox = parent_face, prev[0].touches_border = parent_face > 0;
+    std::vector<int32_t> parent(pieces.size(), 0);
+    for (size_t n = 0; n < pieces.size(); ++n) {
+      rows[n].label = uint32_t(101 + n), rows[n].volume_vox = pieces[n].first;
+      rows[n].face_vox = pieces[n].second, rows[n].touches_border = pieces[n].second > 0;
+    }
+    TrackOptions o;
+    o.cut_pieces_by_count = by_count;
+    link_stage(prev, rows, parent, o, LinkEvidence{});
+    return std::make_pair(rows[0].event, rows[1].event);
+  };
+  // r_eq of 3 000 voxels 8.95: cut from 0.2 pi r_eq^2 = 50 face voxels; of 400 voxels 4.57: from 13.
+  const std::pair<int64_t, int64_t> body{2500, 250}, piece_cut{400, 60}, piece_inside{400, 0}, piece_resting{400, 5};
+  EXPECT_EQ(classify(300, {body, piece_cut}), std::make_pair(Event::split, Event::split));
+  EXPECT_EQ(classify(300, {body, piece_cut, {100, 20}}), std::make_pair(Event::fragmentation, Event::fragmentation));
+  EXPECT_EQ(classify(300, {body, piece_inside}), std::make_pair(Event::chipping, Event::chip));
+  EXPECT_EQ(classify(300, {body, piece_resting}), std::make_pair(Event::chipping, Event::chip));
+  EXPECT_EQ(classify(30, {body, piece_cut}), std::make_pair(Event::chipping, Event::chip));  // parent resting on a face
+  EXPECT_EQ(classify(300, {body, piece_cut}, false), std::make_pair(Event::chipping, Event::chip));
+  // Shares below chip_body_fraction are split by count either way.
+  EXPECT_EQ(classify(300, {{1600, 200}, {1300, 150}}), std::make_pair(Event::split, Event::split));
+}

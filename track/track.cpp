@@ -369,6 +369,7 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
                                 3 * o.surface_tolerance_vox / std::max(1.0, r_eq(static_cast<double>(pr.volume_vox))));
     Event first = Event::intact, rest = Event::intact;
     int64_t absorbed = 0;
+    size_t glued = k.size();  // a child glued on at the stage before, coming apart: not linked
     if (k.size() == 1) {
       const bool cut = pr.touches_border || rows[k[0]].touches_border;
       const double kept = static_cast<double>(after) / static_cast<double>(pr.volume_vox);
@@ -418,14 +419,37 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
         first = rest = k.size() == 2 ? Event::split : Event::fragmentation;
     } else {
       first = rest = k.size() == 2 ? Event::split : Event::fragmentation;
+      // A piece glued on at the stage before coming apart beside the pieces of a's own break, or
+      // beside a whole a (track.hpp step 5): the child whose volume is the gain keeps no parent,
+      // and the rest are judged without it.
+      const int64_t g = o.glued_pieces && a < gain.size() ? gain[a] : 0;
+      const double v0 = static_cast<double>(pr.volume_vox - g), e = o.glued_volume_tolerance * v0;
+      if (static_cast<double>(g) > e) {
+        // One child only within e of G: where two are, the glue is no surer than a fragment of a.
+        int matches = 0;
+        for (size_t n = 0; n < k.size(); ++n)
+          if (std::abs(own[k[n]] - static_cast<double>(g)) <= e) glued = n, ++matches;
+        if (matches != 1) glued = k.size();
+      }
+      const size_t body = glued == 0 ? 1 : 0;  // the largest child but the glue
+      if (glued < k.size() && k.size() == 2) {
+        if (own[k[body]] >= v0 - e) first = Event::intact;
+        else glued = k.size();  // the body lost more than the glue: judged as it was
+      } else if (glued < k.size()) {
+        const double f = own[k[body]] / (own_sum - own[k[glued]]);
+        if (f >= o.chip_body_fraction) first = Event::chipping, rest = Event::chip;
+        else first = rest = k.size() == 3 ? Event::split : Event::fragmentation;
+      }
     }
     const size_t linked = rest == Event::new_particle ? 1 : k.size();
+    const size_t lead = glued == 0 ? 1 : 0;  // the row that says `first`
     for (size_t n = 0; n < linked; ++n) {
+      if (n == glued) continue;  // keeps no parent (rows start as `new`)
       LineageRow& r = rows[k[n]];
       r.parent_label = pr.label;
       r.grain = pr.grain;
-      r.event = n == 0 ? first : rest;
-      r.absorbed_vox = n == 0 ? absorbed : 0;
+      r.event = n == lead ? first : rest;
+      r.absorbed_vox = n == lead ? absorbed : 0;
       for (int ax = 0; ax < 3; ++ax) r.displacement_vox[ax] = r.centroid_vox[ax] - pr.centroid_vox[ax];
     }
   }

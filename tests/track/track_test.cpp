@@ -794,3 +794,34 @@ TEST(Track, PiecesOfAParentTheFacesCutAreJudgedByTheirCount) {
   // Shares below chip_body_fraction are split by count either way.
   EXPECT_EQ(classify(300, {{1600, 200}, {1300, 150}}), std::make_pair(Event::split, Event::split));
 }
+
+// Step 5: a piece glued on at the stage before (a grew by G = 1 000 voxels in
+// a 1:1 step, V0 5 000) coming apart beside a's own halves is no third piece
+// of a's break: the child of G's volume (within 3 % of V0) keeps no parent
+// and the halves make a split. A whole neighbour glued on (G 2 900, V0 3 000)
+// parting again leaves a intact. Two children within the tolerance of G: the
+// glue is no surer than a fragment, and the break stays a fragmentation.
+TEST(Track, GluedPieceComingApartBesideABreakIsNoPieceOfIt) {
+  auto classify = [](int64_t before, int64_t gain, std::vector<int64_t> kids) {
+    std::vector<LineageRow> prev(1), rows(kids.size());
+    prev[0].label = 1, prev[0].grain = 1, prev[0].volume_vox = before;
+    std::vector<int32_t> parent(kids.size(), 0);
+    for (size_t n = 0; n < kids.size(); ++n) rows[n].label = uint32_t(101 + n), rows[n].volume_vox = kids[n];
+    LinkEvidence ev;
+    ev.gain = {gain};
+    link_stage(prev, rows, parent, TrackOptions{}, ev);
+    std::vector<std::pair<Event, uint32_t>> out;
+    for (const auto& r : rows) out.emplace_back(r.event, r.parent_label);
+    return out;
+  };
+  using V = std::vector<std::pair<Event, uint32_t>>;
+  EXPECT_EQ(classify(6000, 1000, {2500, 2450, 1010}),
+            (V{{Event::split, 1u}, {Event::split, 1u}, {Event::new_particle, 0u}}));
+  EXPECT_EQ(classify(6000, 0, {2500, 2450, 1010}),
+            (V{{Event::fragmentation, 1u}, {Event::fragmentation, 1u}, {Event::fragmentation, 1u}}));
+  EXPECT_EQ(classify(5900, 2900, {3000, 2890}), (V{{Event::intact, 1u}, {Event::new_particle, 0u}}));
+  EXPECT_EQ(classify(6100, 3100, {2990, 3110}), (V{{Event::intact, 1u}, {Event::new_particle, 0u}}));  // the glue the larger
+  EXPECT_EQ(classify(5900, 2900, {2800, 2890}), (V{{Event::split, 1u}, {Event::split, 1u}}));  // a lost 200 too
+  EXPECT_EQ(classify(6000, 1000, {2500, 1020, 990}),
+            (V{{Event::fragmentation, 1u}, {Event::fragmentation, 1u}, {Event::fragmentation, 1u}}));
+}

@@ -286,7 +286,8 @@ static tg::app::Registrar reg{{"segment", 30,
     "the grain it touches, gets its own label when its section on the face is a second disc and\n"
     "the contact between them is dim (--no-face-caps).\n"
     "Defaults derive from the expected grain radius R in voxels: pores up to 2 % of a grain's\n"
-    "volume are filled; marker depth h = max(0.7, 0.035 R) voxels (bumps grow with the grain).\n"
+    "volume are filled; marker depth h = max(0.5, 0.035 R) voxels (bumps grow with the grain;\n"
+    "fragments smaller than the grains keep their markers).\n"
     "Distances are in voxels of the finest axis.\n"
     "Writes labels (uint32, 0 = void) to /labels of the HDF5 output and a JSON summary\n"
     "(threshold, pore criteria and pores filled, markers, merges, labels, seconds per stage,\n"
@@ -359,7 +360,7 @@ static tg::app::Registrar reg{{"segment", 30,
                   "Least sphericity 36 pi V^2/A^3 of a filled pore, 0..1")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
-  sub->add_option("--h", o->seg.h, "Marker depth (h-maxima dynamic) in voxels (default: max(0.7, 0.035 R))");
+  sub->add_option("--h", o->seg.h, "Marker depth (h-maxima dynamic) in voxels (default: max(0.5, 0.035 R))");
   sub->add_option("--connectivity", o->seg.connectivity, "Markers and watershed neighbourhood: 6, 18 or 26")
       ->capture_default_str();
   sub->add_flag("--no-lines", o->no_lines, "Touching grains touch in the labels (no void line between them)");

@@ -299,7 +299,7 @@ SegmentOptions SegmentOptions::resolved() const {
   validate(o);
   if (o.pore_max_volume_vox < 0) o.pore_max_volume_vox = PoreFilterOptions::from_grain_radius(grain_radius_vox).max_volume_vox;
   if (std::isnan(o.h)) throw UsageError("segment: the marker depth h must be a number");
-  if (o.h < 0) o.h = std::max(0.7, 0.035 * o.grain_radius_vox);
+  if (o.h < 0) o.h = std::max(0.5, 0.035 * o.grain_radius_vox);
   if (!(o.bright_fraction >= 0 && o.bright_fraction <= 1))
     throw UsageError("segment: the bright fraction must be in [0, 1]");
   if (!(o.bright_sigmas >= 0) || !std::isfinite(o.bright_sigmas))

@@ -126,9 +126,15 @@ struct SegmentOptions {
   double pore_min_sphericity = 0.5;
 
   // Marker depth (h-maxima dynamic), distance units; < 0: from the grain
-  // radius, h = max(0.7, 0.035 R). 0.7 voxels: above the staircase ripples
-  // of a digital distance map (< 0.5), below the dynamic of thin fragments
-  // (chips of 3-8 voxels) joined to their parent by blur bridges. Bumps and
+  // radius, h = max(0.5, 0.035 R). 0.5 voxels: the staircase ripples of a
+  // digital distance map stay below it, and fragments pressed on their
+  // neighbours keep a marker: a half or a quarter of a grain has half its
+  // grain's depth, and the neck of a contact rises within a voxel of it
+  // (session 35, bench/segmentation/RESULTS.md "Marker depth for scans full
+  // of fragments": at the last stage of stage series, 70 % of the grains
+  // broken, floor 0.7 -> 0.5 gave F1 0.927 -> 0.944 on data_synth 256^3
+  // [R 11.6], 0.900 -> 0.918 and 0.817 -> 0.855 on another generator's
+  // R 12 and R 8 windows; its intact R 8 scenes -0.002 to -0.006). Bumps and
   // concavities of a grain's outline grow with the grain, and so do the
   // spurious maxima they leave, hence the share of R above R = 20. Measured
   // on blind_scene.py scans (dev seeds 1, 3, 4): R 40: h 0.7 -> F1 0.982,

@@ -225,7 +225,7 @@ TEST(Segment, AnisotropicVoxelsAndSummary) {
 TEST(Segment, ResolvedDefaultsFollowTheGrainRadius) {
   const auto o = opts(30).resolved();
   EXPECT_DOUBLE_EQ(o.h, 0.035 * 30);
-  EXPECT_DOUBLE_EQ(opts(12).resolved().h, 0.7);  // the floor: above the staircase ripples
+  EXPECT_DOUBLE_EQ(opts(12).resolved().h, 0.5);  // the floor: above the staircase ripples
   auto given = opts(60);
   given.h = 0.5;
   EXPECT_DOUBLE_EQ(given.resolved().h, 0.5);

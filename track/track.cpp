@@ -370,6 +370,10 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
     Event first = Event::intact, rest = Event::intact;
     int64_t absorbed = 0;
     size_t glued = k.size();  // a child glued on at the stage before, coming apart: not linked
+    // The glue of a's own 1:1 step before (track.hpp step 5): G voxels gained on a volume V0, and
+    // the tolerance e V0 both glued-piece rules judge it with.
+    const int64_t g = o.glued_pieces && a < gain.size() ? gain[a] : 0;
+    const double v0 = static_cast<double>(pr.volume_vox - g), e = o.glued_volume_tolerance * v0;
     if (k.size() == 1) {
       const bool cut = pr.touches_border || rows[k[0]].touches_border;
       const double kept = static_cast<double>(after) / static_cast<double>(pr.volume_vox);
@@ -402,8 +406,6 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
       first = Event::chipping, rest = Event::chip;
       // A piece glued on at the stage before coming apart (track.hpp step 5): the body
       // continues a alone and the pieces keep no parent (rows start as `new`).
-      const int64_t g = o.glued_pieces && a < gain.size() ? gain[a] : 0;
-      const double v0 = static_cast<double>(pr.volume_vox - g), e = o.glued_volume_tolerance * v0;
       const auto body = static_cast<double>(rows[k[0]].volume_vox);
       if (static_cast<double>(g) > e && static_cast<double>(after) - body <= static_cast<double>(g) + e &&
           body >= v0 - e)
@@ -422,8 +424,6 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
       // A piece glued on at the stage before coming apart beside the pieces of a's own break, or
       // beside a whole a (track.hpp step 5): the child whose volume is the gain keeps no parent,
       // and the rest are judged without it.
-      const int64_t g = o.glued_pieces && a < gain.size() ? gain[a] : 0;
-      const double v0 = static_cast<double>(pr.volume_vox - g), e = o.glued_volume_tolerance * v0;
       if (static_cast<double>(g) > e) {
         // One child only within e of G: where two are, the glue is no surer than a fragment of a.
         int matches = 0;

@@ -82,14 +82,18 @@ static tg::app::Registrar reg{{"track", 47,
       "                 less than half of are no chips while the body loses no more than that limit:\n"
       "                 they are `new`\n"
       "  new            no parent (entered the field, or came up from below the detection limit)\n"
-      "  lost           a particle with no child (left the field, merged, or fell below the limit)\n"
+      "  lost           a particle with no child; events.csv's lost_as says where its voxels, moved by\n"
+      "                 the map, mostly went: left_field (outside the next scan), merged (into the next\n"
+      "                 stage's labels; into_label the one holding most: the segmentation joined it to a\n"
+      "                 neighbour, it is still there), vanished (the void: below the detection limit)\n"
       "Fragments are tracked like grains and can break again. Stages given out of order are refused\n"
       "(the map would lengthen the specimen) unless --any-order.\n\n"
       "Writes DIR/lineage.csv (stage,label,parent_label,grain,event, volume, centroid and displacement\n"
       "in voxels, match quality = fraction of the particle covered by its moved parent), DIR/events.csv\n"
-      "(stage, parent label, grain, type, children, volume before/after, height fifth) and\n"
-      "DIR/summary.csv (per stage: grains still intact, % of intact grains broken, events by type,\n"
-      "breakage by height fifth, lost and new, the map's axial scale = 1 - strain increment) and\n"
+      "(stage, parent label, grain, type, children, volume before/after, height fifth, lost_as,\n"
+      "into_label) and DIR/summary.csv (per stage: grains still intact, % of intact grains broken,\n"
+      "events by type, breakage by height fifth, lost (and lost_left_field, lost_merged,\n"
+      "lost_vanished) and new, the map's axial scale = 1 - strain increment) and\n"
       "DIR/track.json (per stage: wall time reading and tracking it, peak memory in bytes and per voxel).\n\n"
       "Example (a synthetic oedometer series with its truth lineage, segmented, then tracked):\n"
       "  printf '[stages]\\nmotion = \"oedometer\"\\n' > motion.toml\n"
@@ -150,7 +154,8 @@ static tg::app::Registrar reg{{"track", 47,
     write_costs(r, o->out);
     for (const auto& s : r.summary)
       fmt::print("stage {}: {} particles, axial scale {:.4f} ({} {}), intact grains {}, broken {:.1f} %{}, "
-                 "split {}, fragmentation {}, chipping {} ({} chips absorbed by a neighbour), lost {}, new {}, "
+                 "split {}, fragmentation {}, chipping {} ({} chips absorbed by a neighbour), lost {} (left the field {}, merged into a neighbour's label {}, "
+                 "vanished {}), new {}, "
                  "{:.2f} s\n",
                  s.stage, s.particles, s.axial_scale, s.map_method, s.map_matches, s.grains_intact,
                  s.pct_intact_broken,
@@ -158,7 +163,8 @@ static tg::app::Registrar reg{{"track", 47,
                                             "{} cut)",
                                             s.pct_intact_broken_all, s.grains_intact + s.grains_broken, s.grains_cut)
                               : std::string(),
-                 s.split, s.fragmentation, s.chipping, s.chips_absorbed, s.lost, s.new_particles,
+                 s.split, s.fragmentation, s.chipping, s.chips_absorbed, s.lost, s.lost_left_field, s.lost_merged,
+                 s.lost_vanished, s.new_particles,
                  r.seconds[static_cast<size_t>(s.stage)]);
     const int64_t peak = r.peak_rss_bytes.empty() ? 0 : *std::max_element(r.peak_rss_bytes.begin(), r.peak_rss_bytes.end());
     fmt::print("peak memory {} ({:.2f} B/voxel of one stage)\n", tg::human_bytes(static_cast<double>(peak)),

@@ -112,6 +112,11 @@ Accuracy evaluate(const TrackResult& tracked, const std::vector<LineageRow>& tru
     const uint32_t tp = map_label(maps, e.stage - 1, e.parent_label);
     const bool right = truth_keys.count({e.stage, tp, e.type}) > 0;
     sc.confirmed += right;
+    if (e.type == Event::lost) {
+      auto& l = a.lost_as[lost_as_name(e.lost_as)];
+      ++l.first;
+      l.second += right;
+    }
     if (!at_border(e.stage - 1, tp)) {
       auto& si = a.events_interior[event_name(e.type)];
       ++si.tracked;

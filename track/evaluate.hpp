@@ -12,7 +12,9 @@
 // of the parent): recall = truth events of a type found with that type at
 // the same key / truth events of the type; precision = tracked events of a
 // type whose key holds a truth event of that type / tracked events of it.
-// The % of intact grains broken comes from summarise() on both lineages.
+// The % of intact grains broken comes from summarise() on both lineages (over
+// the grains the faces do not cut, step 7: where the truth lineage has no
+// face_vox column, its every grain counts).
 // events_interior: the same scores over the events whose truth parent does
 // not touch the volume's faces, and right_parent_interior over the particles
 // whose truth particle does not (the truth lineage's `border` column, when
@@ -49,6 +51,9 @@ struct Accuracy {
   std::map<std::string, EventScore> events;  // "split", "fragmentation", "chipping", "lost"
   std::map<std::string, EventScore> events_interior;  // the same, parents clear of the faces
   std::vector<double> pct_broken, pct_broken_truth;  // per stage
+  // Tracked `lost` events by where they went (track.hpp step 8; "-" when unknown): how many,
+  // and of those how many the truth also loses (a `merged` one should not be).
+  std::map<std::string, std::pair<int64_t, int64_t>> lost_as;
   std::vector<std::string> mistakes;       // the first 50 wrong parents, for diagnosis
   std::vector<std::string> missed_events;  // the first 50 truth events not found
   double parent_fraction() const { return particles ? static_cast<double>(right_parent) / static_cast<double>(particles) : 1.0; }

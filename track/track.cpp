@@ -194,6 +194,55 @@ void assign_parents(const std::vector<Overlap>& ov, const LabelIndex& ib, const 
   }
 }
 
+// Step 8: where each particle of A with no child went. Its voxels (within its box) moved by the
+// global map y = M x + t are counted outside B's volume, in B's labels, and in B's void; the
+// largest of the three names it (`merged`: into the label that holds most of them).
+std::vector<LostRow> where_lost(const Volume<uint32_t>& A, const std::vector<LineageRow>& rows,
+                                const std::vector<int32_t>& lost, const Volume<uint32_t>& B, const Eigen::Matrix3d& M,
+                                const Eigen::Vector3d& t, int stage, int threads) {
+  const Shape sa = A.shape(), sb = B.shape();
+  const double n[3] = {static_cast<double>(sb.nz), static_cast<double>(sb.ny), static_cast<double>(sb.nx)};
+  std::vector<LostRow> out(lost.size());
+#pragma omp parallel for schedule(dynamic) num_threads(threads > 0 ? threads : omp_get_max_threads())
+  for (int64_t q = 0; q < static_cast<int64_t>(lost.size()); ++q) {
+    const LineageRow& r = rows[static_cast<size_t>(lost[static_cast<size_t>(q)])];
+    std::map<uint32_t, int64_t> in;  // label of B -> voxels (a lost particle is small or rare)
+    int64_t outside = 0, all = 0;
+    for (int64_t k = r.box_lo[0]; k < r.box_hi[0]; ++k)
+      for (int64_t j = r.box_lo[1]; j < r.box_hi[1]; ++j)
+        for (int64_t i = r.box_lo[2]; i < r.box_hi[2]; ++i) {
+          if (A.data()[(k * sa.ny + j) * sa.nx + i] != r.label) continue;
+          ++all;
+          const Eigen::Vector3d y = M * Eigen::Vector3d(k + 0.5, j + 0.5, i + 0.5) + t;
+          if (!(y[0] >= 0 && y[1] >= 0 && y[2] >= 0 && y[0] < n[0] && y[1] < n[1] && y[2] < n[2])) {
+            ++outside;
+            continue;
+          }
+          const uint32_t b = B.data()[(static_cast<int64_t>(y[0]) * sb.ny + static_cast<int64_t>(y[1])) * sb.nx +
+                                      static_cast<int64_t>(y[2])];
+          if (b) ++in[b];
+        }
+    LostRow& l = out[static_cast<size_t>(q)];
+    l.stage = stage;
+    l.label = r.label;
+    int64_t most = 0;
+    for (const auto& [b, c] : in) {  // ascending labels: ties keep the smaller
+      l.in_labels_vox += c;
+      if (c > most) most = c, l.into_label = b;
+    }
+    l.outside_vox = outside;
+    l.void_vox = all - outside - l.in_labels_vox;
+    if (l.outside_vox > 0 && l.outside_vox >= l.in_labels_vox && l.outside_vox >= l.void_vox)
+      l.as = LostAs::left_field;
+    else if (l.in_labels_vox > 0 && l.in_labels_vox >= l.void_vox)
+      l.as = LostAs::merged;
+    else
+      l.as = LostAs::vanished;
+    if (l.as != LostAs::merged) l.into_label = 0;
+  }
+  return out;
+}
+
 // Voxels of every particle of V cut by the faces that the affine map y = M x + t sends outside
 // `target` (a volume's shape); with the inverse of the stage map and A's shape, the parts of B
 // particles that entered the field since A (track.hpp step 3). Only the boxes of border
@@ -265,6 +314,11 @@ double new_contact_voxels(double volume_vox, double d_vox) {
 }
 
 const char* event_name(Event e) { return kEventNames[static_cast<int>(e)]; }
+
+const char* lost_as_name(LostAs l) {
+  static const char* const names[] = {"-", "left_field", "merged", "vanished"};
+  return names[static_cast<int>(l)];
+}
 
 Event event_from_name(const std::string& name) {
   for (int e = 0; e < 7; ++e)
@@ -605,6 +659,16 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
       ev.coverage[q] = static_cast<double>(covered[q]) /
                        static_cast<double>(std::max<int64_t>(1, rows[q].volume_vox - unseen[q]));
     link_stage(prev_rows_, rows, parent, o_, ev);
+    {  // Step 8: where the A particles with no child went.
+      std::vector<char> has_child(prev_rows_.size(), 0);
+      for (const auto& r : rows)
+        if (r.parent_label) has_child[static_cast<size_t>(ia(r.parent_label))] = 1;
+      std::vector<int32_t> none;
+      for (size_t a = 0; a < prev_rows_.size(); ++a)
+        if (!has_child[a]) none.push_back(static_cast<int32_t>(a));
+      const auto l = where_lost(prev_, prev_rows_, none, labels, m.M, m.t, s, o_.threads);
+      lost_.insert(lost_.end(), l.begin(), l.end());
+    }
     // Displacements in the frame of the files' origins: a stage cropped differently, with the
     // crop recorded in origin_m, has not moved by the crop's offset.
     const auto& g = labels.geometry();
@@ -650,7 +714,8 @@ TrackResult Tracker::result() const {
   r.maps = maps_;
   r.lineage = lineage_;
   r.seconds = seconds_;
-  r.events = derive_events(r.lineage, stages());
+  r.lost = lost_;
+  r.events = derive_events(r.lineage, stages(), lost_);
   r.summary = summarise(r.lineage, r.events, stages());
   for (int s = 0; s < stages() && s < static_cast<int>(r.summary.size()); ++s) {
     r.summary[s].axial_scale = s == 0 ? 1.0 : maps_[s].axial_scale();
@@ -684,8 +749,11 @@ std::pair<double, double> z_range(const std::vector<const LineageRow*>& rows) {
 
 }  // namespace
 
-std::vector<EventRow> derive_events(const std::vector<LineageRow>& lineage, int stages) {
+std::vector<EventRow> derive_events(const std::vector<LineageRow>& lineage, int stages,
+                                    const std::vector<LostRow>& lost) {
   const auto st = by_stage(lineage, stages);
+  std::map<std::pair<int, uint32_t>, const LostRow*> fate;
+  for (const auto& l : lost) fate[{l.stage, l.label}] = &l;
   std::vector<EventRow> out;
   for (int s = 1; s < stages; ++s) {
     std::map<uint32_t, std::vector<const LineageRow*>> kids;
@@ -703,6 +771,7 @@ std::vector<EventRow> derive_events(const std::vector<LineageRow>& lineage, int 
       auto it = kids.find(p->label);
       if (it == kids.end()) {
         e.type = Event::lost;
+        if (auto f = fate.find({s, p->label}); f != fate.end()) e.lost_as = f->second->as, e.into_label = f->second->into_label;
       } else {
         e.type = Event::intact;
         for (const auto* c : it->second) {
@@ -774,7 +843,12 @@ std::vector<SummaryRow> summarise(const std::vector<LineageRow>& lineage, const 
       if (e.type == Event::fragmentation) ++row.fragmentation;
       if (e.type == Event::chipping) ++row.chipping;
       if (e.type == Event::chipping && e.absorbed_vox > 0) ++row.chips_absorbed;
-      if (e.type == Event::lost) ++row.lost;
+      if (e.type == Event::lost) {
+        ++row.lost;
+        row.lost_left_field += e.lost_as == LostAs::left_field;
+        row.lost_merged += e.lost_as == LostAs::merged;
+        row.lost_vanished += e.lost_as == LostAs::vanished;
+      }
       if (is_break(e.type)) {
         ++row.breaks_band[e.band - 1];
         if (e.grain && grain_band.count(e.grain)) broken[e.grain] = true;
@@ -852,7 +926,7 @@ Table lineage_table(const TrackResult& r) {
 
 Table events_table(const TrackResult& r) {
   RowTable t({"stage", "parent_label", "grain", "type", "children", "child_labels", "volume_before_vox",
-              "volume_after_vox", "absorbed_vox", "cz_vox", "band"});
+              "volume_after_vox", "absorbed_vox", "cz_vox", "band", "lost_as", "into_label"});
   for (const EventRow& e : r.events) {
     std::string kids;
     for (size_t c = 0; c < e.children.size(); ++c) {
@@ -861,8 +935,7 @@ Table events_table(const TrackResult& r) {
     }
     t.row({e.stage, static_cast<int64_t>(e.parent_label), static_cast<int64_t>(e.grain), event_name(e.type),
            e.children.size(), kids.empty() ? "-" : kids, e.volume_before_vox, e.volume_after_vox, e.absorbed_vox,
-           e.parent_z_vox,
-           e.band});
+           e.parent_z_vox, e.band, lost_as_name(e.lost_as), static_cast<int64_t>(e.into_label)});
   }
   return t.table();
 }
@@ -889,6 +962,9 @@ Table summary_table(const TrackResult& r) {
   col("chips", [](const SummaryRow& s) { return s.chips; });
   col("chips_absorbed", [](const SummaryRow& s) { return s.chips_absorbed; });
   col("lost", [](const SummaryRow& s) { return s.lost; });
+  col("lost_left_field", [](const SummaryRow& s) { return s.lost_left_field; });
+  col("lost_merged", [](const SummaryRow& s) { return s.lost_merged; });
+  col("lost_vanished", [](const SummaryRow& s) { return s.lost_vanished; });
   col("new", [](const SummaryRow& s) { return s.new_particles; });
   for (int b = 0; b < 5; ++b)
     col("breaks_band" + std::to_string(b + 1), [b](const SummaryRow& s) { return s.breaks_band[b]; });

@@ -34,7 +34,7 @@
 //  5. Events, from each A particle's children (ordered by volume, largest
 //     first; f1 = largest child / all children):
 //       no child           lost (left the field, merged, or fell below the
-//                          detection limit)
+//                          detection limit: step 8 says which)
 //       one child          intact, unless the particle lost more than the
 //                          volume tolerance tol = max(min_volume_tolerance,
 //                          3 d / r_eq) (d = surface_tolerance_vox, the
@@ -245,6 +245,16 @@
 //     face (data_synth's specimen: 0.2-11 % of pi r_eq^2 there) is not cut.
 //     With fewer than kMinUncutGrains such grains every grain counts;
 //     pct_intact_broken_all is the % over every grain.
+//  8. Where a particle with no child went (events.csv `lost_as`, summary.csv
+//     lost_*): its voxels, moved by the global map, are counted where they
+//     land in the next stage, and the largest of three shares names it:
+//     `left_field` (outside the next stage's volume: a window the specimen
+//     moves through), `merged` (inside the next stage's labels; `into_label`
+//     the one holding most: the segmentation joined it to a neighbour, as it
+//     does a fragment pressed flat on the next grain; it is still there,
+//     unseen), `vanished` (in the void: it fell below the detection limit).
+//     No parameter. Measured (bench/track/RESULTS.md "Where lost particles
+//     went").
 //
 // Stages out of order: the axial scale M_zz of the map is 1 - (strain
 // increment); M_zz > 1 + extension_tolerance means the specimen got longer,
@@ -276,6 +286,10 @@ namespace tg::track {
 
 // Events, as written in lineage.csv / events.csv.
 enum class Event { intact, split, fragmentation, chipping, chip, new_particle, lost };
+// Where a `lost` particle went (step 8); unknown for lineages read back or built outside the tracker.
+enum class LostAs { unknown, left_field, merged, vanished };
+const char* lost_as_name(LostAs l);  // "-", "left_field", "merged", "vanished"
+
 const char* event_name(Event e);      // "intact", "split", "fragmentation", "chipping", "chip", "new", "lost"
 Event event_from_name(const std::string& name);  // InputError on an unknown name
 
@@ -338,6 +352,17 @@ struct EventRow {
   int64_t absorbed_vox = 0;  // voxels of a chip or piece a neighbour's label absorbed (0: none, or seen)
   double parent_z_vox = 0;
   int band = 0;  // height fifth of the parent in its stage (1 = bottom .. 5 = top)
+  LostAs lost_as = LostAs::unknown;  // a `lost` event's fate (step 8)
+  uint32_t into_label = 0;           // `merged`: the label of the event's stage that holds it
+};
+
+// A particle of stage s - 1 with no child at stage s, and where it went (step 8).
+struct LostRow {
+  int stage = 0;  // the stage where it is missing
+  uint32_t label = 0;  // its label at stage - 1
+  LostAs as = LostAs::unknown;
+  uint32_t into_label = 0;
+  int64_t outside_vox = 0, in_labels_vox = 0, void_vox = 0;  // the three shares of its moved voxels
 };
 
 // Per stage (summary.csv).
@@ -349,6 +374,7 @@ struct SummaryRow {
   int64_t grains_cut = 0;            // stage-0 grains cut by the faces, left out of pct_intact_broken
   int64_t split = 0, fragmentation = 0, chipping = 0, chips = 0, lost = 0, new_particles = 0;
   int64_t chips_absorbed = 0;  // chipping events whose chip a neighbour's label absorbed (not in `chips`)
+  int64_t lost_left_field = 0, lost_merged = 0, lost_vanished = 0;  // `lost` by where it went (step 8)
   std::array<int64_t, 5> breaks_band{0, 0, 0, 0, 0};     // breakage events of this stage by parent height fifth
   std::array<double, 5> pct_broken_band{0, 0, 0, 0, 0};  // stage-0 grains of each fifth broken by now, % (not cut by the faces)
   double axial_scale = 1;  // map from the previous stage (1 at stage 0)
@@ -362,6 +388,7 @@ struct TrackResult {
   std::vector<LineageRow> lineage;
   std::vector<EventRow> events;
   std::vector<SummaryRow> summary;
+  std::vector<LostRow> lost;  // step 8, every stage
   std::vector<double> seconds;  // per stage: tracking only (track_files adds the reading below)
   // Set by track_files, per stage: wall time reading the file and tracking it, and the
   // peak resident memory of that (tg::reset_peak_rss; own_peak false: the process's peak).
@@ -420,8 +447,9 @@ bool cut_by_faces(const LineageRow& r);
 
 // Events and summary from a lineage (the tracker's or a truth lineage in the
 // same columns): events group each stage's rows by parent; a parent of the
-// previous stage without children is lost.
-std::vector<EventRow> derive_events(const std::vector<LineageRow>& lineage, int stages);
+// previous stage without children is lost (where it went from `lost`, step 8, when given).
+std::vector<EventRow> derive_events(const std::vector<LineageRow>& lineage, int stages,
+                                    const std::vector<LostRow>& lost = {});
 std::vector<SummaryRow> summarise(const std::vector<LineageRow>& lineage, const std::vector<EventRow>& events,
                                   int stages);
 
@@ -467,6 +495,7 @@ class Tracker {
   std::vector<char> prev_whole_;  // per prev_rows_: a stage-0 grain with no break in its chain
   std::vector<int64_t> prev_gain_;  // per prev_rows_: voxels gained in a 1:1 step from its parent (link_stage's gain)
   std::vector<LineageRow> lineage_;
+  std::vector<LostRow> lost_;
   std::vector<StageMap> maps_;
   std::vector<double> seconds_;
   std::array<double, 3> prev_origin_m_{0, 0, 0};  // the last stage's origin_m (its labels may be spilled)

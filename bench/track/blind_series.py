@@ -46,8 +46,10 @@ Outputs
   PREFIX_stage{s}.h5  /scan (uint16), /labels (uint32 truth, permuted per
                       stage); voxel_size_m attribute (1e-5, nominal)
   PREFIX_lineage.csv  stage,label,parent_label,grain,event,volume_vox,
-                      border (1: touches a face of the volume), cz_vox,
-                      cy_vox,cx_vox (tomograin track's columns)
+                      border (1: touches a face of the volume), face_vox
+                      (its voxels on the faces: the truth side of track's
+                      % broken leaves out the grains they cut, as track's
+                      own does), cz_vox,cy_vox,cx_vox (track's columns)
   PREFIX.json         parameters, counts per stage and event
 
 usage: blind_series.py -o PREFIX [--size 192] [--radius 16] [--seed 1] ...
@@ -250,8 +252,10 @@ def main(argv=None):
         com = ndimage.center_of_mass(truth > 0, truth, np.arange(1, j + 1)) if j else []
         vol = np.bincount(truth.ravel(), minlength=j + 1)
         border = set()
+        face_vox = np.zeros(j + 1, np.int64)  # one per face an edge voxel lies on, as tomograin track counts
         for face in (truth[0], truth[-1], truth[:, 0], truth[:, -1], truth[:, :, 0], truth[:, :, -1]):
             border.update(np.unique(face).tolist())
+            face_vox += np.bincount(face.ravel(), minlength=j + 1)
         labels_now = {}
         grain_now = {}
         ev_count = {}
@@ -273,7 +277,8 @@ def main(argv=None):
                     event, grain = "new", 0
             grain_now[L] = grain
             cz, cy, cx = com[L - 1]
-            lineage.append((s, L, parent, grain, event, int(vol[L]), int(L in border), cz + 0.5, cy + 0.5, cx + 0.5))
+            lineage.append((s, L, parent, grain, event, int(vol[L]), int(L in border), int(face_vox[L]), cz + 0.5, cy + 0.5,
+                            cx + 0.5))
             ev_count[event] = ev_count.get(event, 0) + 1
         prev_label, prev_grain = labels_now, grain_now
         # imaging (blind_scene's)
@@ -293,10 +298,10 @@ def main(argv=None):
         print(f"stage {s}: strain {a.strains[s]:.4f}, {j} particles, events {ev_count}", flush=True)
     with open(f"{a.output}_lineage.csv", "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["stage", "label", "parent_label", "grain", "event", "volume_vox", "border", "cz_vox", "cy_vox",
-                    "cx_vox"])
+        w.writerow(["stage", "label", "parent_label", "grain", "event", "volume_vox", "border", "face_vox", "cz_vox",
+                    "cy_vox", "cx_vox"])
         for row in lineage:
-            w.writerow(list(row[:7]) + [f"{v:.3f}" for v in row[7:]])
+            w.writerow(list(row[:8]) + [f"{v:.3f}" for v in row[8:]])
     info = {"generator": "bench/track/blind_series.py (on blind_scene.py; independent of data_synth)",
             "params": {k: (v.tolist() if isinstance(v, np.ndarray) else list(v) if isinstance(v, tuple) else v)
                        for k, v in vars(a).items()},

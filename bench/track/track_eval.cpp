@@ -7,6 +7,7 @@
 // with them, each stage's labels are mapped to the truth particle covering
 // most of their voxels (track/evaluate.hpp). Prints one CSV row per figure.
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -40,7 +41,25 @@ int main(int argc, char** argv) try {
   r.lineage = read_lineage(read_csv(argv[2]));
   int stages = 0;
   for (const auto& x : r.lineage) stages = std::max(stages, x.stage + 1);
-  r.events = derive_events(r.lineage, stages);
+  // Where the lost went (track.hpp step 8): events.csv beside the lineage, when it says.
+  std::vector<LostRow> lost;
+  const auto events_csv = std::filesystem::path(argv[2]).parent_path() / "events.csv";
+  if (std::filesystem::exists(events_csv)) {
+    const Table ev = read_csv(events_csv.string());
+    if (ev.has("lost_as")) {
+      const auto &type = ev.text("type"), &as = ev.text("lost_as");
+      for (int64_t i = 0; i < ev.rows(); ++i) {
+        if (type[i] != "lost") continue;
+        LostRow l;
+        l.stage = static_cast<int>(ev.num("stage")[i]);
+        l.label = static_cast<uint32_t>(ev.num("parent_label")[i]);
+        for (LostAs x : {LostAs::left_field, LostAs::merged, LostAs::vanished})
+          if (as[i] == lost_as_name(x)) l.as = x;
+        lost.push_back(l);
+      }
+    }
+  }
+  r.events = derive_events(r.lineage, stages, lost);
   r.summary = summarise(r.lineage, r.events, stages);
   std::vector<LabelMap> maps;
   if (!seg.empty()) {
@@ -65,6 +84,9 @@ int main(int argc, char** argv) try {
   for (size_t s = 0; s < a.pct_broken.size(); ++s)
     std::printf("pct_intact_broken_stage%zu,%.2f\npct_intact_broken_truth_stage%zu,%.2f\n", s, a.pct_broken[s], s,
                 a.pct_broken_truth[s]);
+  for (const auto& [as, n] : a.lost_as)
+    std::printf("lost_as_%s_tracked,%lld\nlost_as_%s_truth_lost,%lld\n", as.c_str(), static_cast<long long>(n.first),
+                as.c_str(), static_cast<long long>(n.second));
   for (const auto& m : a.mistakes) std::fprintf(stderr, "wrong: %s\n", m.c_str());
   return 0;
 } catch (const std::exception& e) {

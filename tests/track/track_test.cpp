@@ -268,6 +268,52 @@ TEST(Track, GrainsCutByTheBorderStayIntact) {
   EXPECT_TRUE(row(r, 1, 501).touches_border);
 }
 
+// Step 8: where a particle with no child went. The window moves down by 5 voxels (the specimen
+// passes through it): L, a cap at the bottom face, goes out of the field; F, a small fragment
+// 1.4 voxels off grain 5, is glued into grain 5's label; V, alone in the void, is gone.
+TEST(Track, LostParticlesSayWhereTheyWent) {
+  Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage();
+  const auto c0 = centres(0);
+  for (size_t q = 0; q < c0.size(); ++q) {
+    paint(s0, label_at(0, q), c0[q], 6);
+    paint(s1, label_at(1, q), {c0[q][0] - 5, c0[q][1], c0[q][2]}, 6);
+  }
+  paint(s0, 600, {1, 16, 44}, 3.5);   // L
+  paint(s0, 601, {9, 30, 30}, 2.5);   // F, between grains 5, 6, 9, 10 of the bottom row
+  paint(s0, 602, {16, 30, 16}, 2.5);  // V
+  paint(s1, label_at(1, 5), {9 - 5, 30, 30}, 2.5);
+  Tracker tr;
+  tr.add_stage(std::move(s0), "s0");
+  tr.add_stage(std::move(s1), "s1");
+  const auto r = tr.result();
+  EXPECT_NEAR(r.maps[1].M(0, 0), 1.0, 0.02);  // the bottom row, cut by the face, pulls it a little
+  std::map<uint32_t, const EventRow*> lost;
+  for (const auto& e : r.events)
+    if (e.type == Event::lost) lost[e.parent_label] = &e;
+  ASSERT_EQ(lost.size(), 3u);
+  EXPECT_EQ(lost.at(600)->lost_as, LostAs::left_field);
+  EXPECT_EQ(lost.at(601)->lost_as, LostAs::merged);
+  EXPECT_EQ(lost.at(601)->into_label, label_at(1, 5));
+  EXPECT_EQ(lost.at(602)->lost_as, LostAs::vanished);
+  EXPECT_EQ(lost.at(600)->into_label, 0u);
+  EXPECT_EQ(r.summary[1].lost, 3);
+  EXPECT_EQ(r.summary[1].lost_left_field, 1);
+  EXPECT_EQ(r.summary[1].lost_merged, 1);
+  EXPECT_EQ(r.summary[1].lost_vanished, 1);
+  EXPECT_EQ(row(r, 1, label_at(1, 5)).event, Event::intact);
+  // events.csv names it; a lineage read back without the tracker's step 8 says "-".
+  const Table t = events_table(r);
+  int merged = 0;
+  for (int64_t i = 0; i < t.rows(); ++i)
+    merged += t.text("lost_as")[i] == "merged" && t.num("into_label")[i] == label_at(1, 5);
+  EXPECT_EQ(merged, 1);
+  for (const auto& e : derive_events(r.lineage, 2)) {
+    if (e.type == Event::lost) {
+      EXPECT_EQ(e.lost_as, LostAs::unknown);
+    }
+  }
+}
+
 // Step 7: the % of intact grains broken leaves out the grains the faces cut
 // (their breaks hide beyond the face). Hand-made lineage: 30 grains clear of
 // the faces (15 split at stage 1), 20 cut by a face (2 split), 5 resting on a

@@ -18,7 +18,7 @@
 
 namespace cmd_track {
 struct Opts {
-  std::vector<std::string> in;
+  std::vector<std::string> in, scans;
   std::string out;
   bool any_order = false, no_refine = false, no_absorbed = false, no_glued = false, no_cut_by_count = false;
   double min_overlap = 0.2, chip_body = 0.7, surface_tol = 1.0, fallback_strain = 0, loss_sigmas = 4.0;
@@ -88,6 +88,12 @@ static tg::app::Registrar reg{{"track", 47,
       "                 neighbour, it is still there), vanished (the void: below the detection limit)\n"
       "Fragments are tracked like grains and can break again. Stages given out of order are refused\n"
       "(the map would lengthen the specimen) unless --any-order.\n\n"
+      "With --scans (the stages' grey scans, each its labels' shape) every particle with a parent\n"
+      "gets its rotation since the previous stage: a rigid registration of its grey levels (Gauss-\n"
+      "Newton, as SPAM's discrete DIC), from where its parent's motion puts it; lineage.csv's\n"
+      "rz_deg,ry_deg,rx_deg (rotation vector: axis times angle, degrees, (z, y, x) voxel axes) and\n"
+      "rotation_se_deg (its standard error: large where the grey holds too little to turn on, a\n"
+      "featureless sphere). Without scans they are nan.\n\n"
       "Writes DIR/lineage.csv (stage,label,parent_label,grain,event, volume, centroid and displacement\n"
       "in voxels, match quality = fraction of the particle covered by its moved parent), DIR/events.csv\n"
       "(stage, parent label, grain, type, children, volume before/after, height fifth, lost_as,\n"
@@ -105,6 +111,10 @@ static tg::app::Registrar reg{{"track", 47,
   auto o = std::make_shared<Opts>();
   sub->add_option("labels", o->in, "Label volumes of the stages, in loading order")->required()->expected(1, -1);
   sub->add_option("-o,--output", o->out, "Output folder (lineage.csv, events.csv, summary.csv)")->required();
+  sub->add_option("--scans", o->scans,
+                  "Grey scans of the stages, same order and shapes as the labels (e.g. run_stage0.h5:/volume): "
+                  "the particles' rotations")
+      ->expected(1, -1);
   sub->add_flag("--any-order", o->any_order, "Accept stages whose map lengthens the specimen");
   sub->add_flag("--no-refine", o->no_refine, "One overlap pass (no per-particle residual shift)");
   sub->add_flag("--no-absorbed-chips", o->no_absorbed,
@@ -149,7 +159,7 @@ static tg::app::Registrar reg{{"track", 47,
     to.map.fallback_strain = o->fallback_strain;
     to.threads = o->threads;
     to.progress = true;
-    const auto r = tg::track::track_files(o->in, to);  // throws before anything is written
+    const auto r = tg::track::track_files(o->in, to, o->scans);  // throws before anything is written
     tg::track::write_outputs(r, o->out);
     write_costs(r, o->out);
     for (const auto& s : r.summary)

@@ -20,6 +20,7 @@
 #include "core/memory.hpp"
 #include "core/progress.hpp"
 #include "measure/label_stats.hpp"
+#include "track/rigid_fit.hpp"
 
 namespace tg::track {
 namespace {
@@ -533,7 +534,13 @@ void Tracker::finish() {
   finished_ = true;
 }
 
-Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& name) {
+namespace {
+bool has_voxels(const AnyVolume& v) {
+  return std::visit([](const auto& x) { return x.size() > 0; }, v);
+}
+}  // namespace
+
+Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& name, AnyVolume grey) {
   const auto t0 = std::chrono::steady_clock::now();
   if (finished_) throw std::logic_error("Tracker::add_stage after finish()");
   if (!spilled_.empty()) {
@@ -544,6 +551,8 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
     spilled_.clear();
   }
   const int s = stages();
+  if (has_voxels(grey) && !(shape_of(grey) == labels.shape()))
+    throw InputError(name + ": its scan's shape differs from its labels'");
   if (s > 0) {
     const auto &g0 = prev_.geometry().voxel_size_m, &g1 = labels.geometry().voxel_size_m;
     for (int a = 0; a < 3; ++a)
@@ -678,6 +687,21 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
       rows[q].quality = parent[q] < 0 || rows[q].parent_label == 0
                             ? 0.0
                             : static_cast<double>(covered[q]) / static_cast<double>(rows[q].volume_vox);
+    // Rotations from the grey levels (rigid_fit.hpp), from where the parent's motion puts the child.
+    if (has_voxels(grey) && has_voxels(prev_grey_)) {
+#pragma omp parallel for schedule(dynamic) num_threads(o_.threads > 0 ? o_.threads : omp_get_max_threads())
+      for (int64_t q = 0; q < static_cast<int64_t>(rows.size()); ++q) {
+        LineageRow& r = rows[static_cast<size_t>(q)];
+        if (!r.parent_label) continue;
+        const auto a = static_cast<size_t>(ia(r.parent_label));
+        const Eigen::Vector3d cb(r.centroid_vox[0], r.centroid_vox[1], r.centroid_vox[2]);
+        const RigidFit f = fit_rigid(prev_grey_, grey, labels, r.label, r.box_lo, r.box_hi, Mi * (cb - shift[a]) - cb,
+                                     {}, &prev_, r.parent_label);
+        if (!f.ok) continue;
+        for (int ax = 0; ax < 3; ++ax) r.rotation_deg[ax] = f.rotation_deg[ax];
+        r.rotation_se_deg = f.rotation_se_deg;
+      }
+    }
   }
   std::vector<char> whole(rows.size(), s == 0);
   std::vector<int64_t> gain(rows.size(), 0);
@@ -701,6 +725,7 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
   prev_whole_ = std::move(whole);
   prev_gain_ = std::move(gain);
   prev_origin_m_ = labels.geometry().origin_m;
+  prev_grey_ = std::move(grey);
   Volume<uint32_t> spent = std::move(prev_);
   prev_ = std::move(labels);
   names_.push_back(name);
@@ -878,8 +903,12 @@ std::vector<SummaryRow> summarise(const std::vector<LineageRow>& lineage, const 
   return out;
 }
 
-TrackResult track_files(const std::vector<std::string>& paths, const TrackOptions& o) {
+TrackResult track_files(const std::vector<std::string>& paths, const TrackOptions& o,
+                        const std::vector<std::string>& scans) {
   if (paths.empty()) throw UsageError("track: no stages given");
+  if (!scans.empty() && scans.size() != paths.size())
+    throw UsageError("track: " + std::to_string(scans.size()) + " scans for " + std::to_string(paths.size()) +
+                     " stages (give one scan per stage, or none)");
   Tracker tr(o);
   Progress bar("track", static_cast<double>(paths.size()), "stages");
   if (!o.progress) bar.finish();
@@ -899,7 +928,15 @@ TrackResult track_files(const std::vector<std::string>& paths, const TrackOption
     ro.reuse = &spare;
     Volume<uint32_t> labels = read_label_volume(spec, ro);
     voxels = std::max(voxels, labels.size());  // stages cropped differently: the largest
-    spare = tr.add_stage(std::move(labels), paths[s]);
+    AnyVolume grey;
+    if (!scans.empty()) {
+      ReadOptions rg;
+      rg.progress = false;
+      grey = read_volume(scans[s], rg);
+      if (!(shape_of(grey) == labels.shape()))
+        throw InputError(scans[s] + ": its shape differs from the labels of " + paths[s]);
+    }
+    spare = tr.add_stage(std::move(labels), paths[s], std::move(grey));
     sec.push_back(seconds_since(t0));
     peak.push_back(peak_rss_bytes());
     if (o.progress) bar.update(static_cast<double>(s + 1));
@@ -915,12 +952,14 @@ TrackResult track_files(const std::vector<std::string>& paths, const TrackOption
 
 Table lineage_table(const TrackResult& r) {
   RowTable t({"stage", "label", "parent_label", "grain", "event", "volume_vox", "cz_vox", "cy_vox", "cx_vox", "dz_vox",
-              "dy_vox", "dx_vox", "quality", "border", "absorbed_vox", "face_vox"});
+              "dy_vox", "dx_vox", "quality", "border", "absorbed_vox", "face_vox", "rz_deg", "ry_deg", "rx_deg",
+              "rotation_se_deg"});
   for (const LineageRow& x : r.lineage)
     t.row({x.stage, static_cast<int64_t>(x.label), static_cast<int64_t>(x.parent_label), static_cast<int64_t>(x.grain),
            event_name(x.event), x.volume_vox, x.centroid_vox[0], x.centroid_vox[1], x.centroid_vox[2],
            x.displacement_vox[0], x.displacement_vox[1], x.displacement_vox[2], x.quality,
-           static_cast<int>(x.touches_border), x.absorbed_vox, x.face_vox});
+           static_cast<int>(x.touches_border), x.absorbed_vox, x.face_vox, x.rotation_deg[0], x.rotation_deg[1],
+           x.rotation_deg[2], x.rotation_se_deg});
   return t.table();
 }
 
@@ -1002,6 +1041,7 @@ std::vector<LineageRow> read_lineage(const Table& t) {
     if (t.has("absorbed_vox")) r.absorbed_vox = static_cast<int64_t>(t.num("absorbed_vox")[i]);
     if (t.has("border")) r.touches_border = t.num("border")[i] != 0;
     if (t.has("face_vox")) r.face_vox = static_cast<int64_t>(t.num("face_vox")[i]);
+    if (t.has("rz_deg")) r.rotation_deg = {t.num("rz_deg")[i], t.num("ry_deg")[i], t.num("rx_deg")[i]};
   }
   return out;
 }

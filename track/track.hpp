@@ -261,9 +261,12 @@
 // which an oedometer never does: InputError naming both files, unless
 // allow_extension is set (the map's scale is then reported as is).
 //
-// Rotation is not estimated (grains are near-spherical: their principal axes
-// are ill-defined; the global map's rotation is in StageMap::M). Displacement
-// is the centroid's, child minus parent.
+// Rotation: with the stages' grey scans (Tracker::add_stage's `grey`, track
+// --scans) each particle with a parent is registered rigidly on the earlier
+// scan from where its parent's motion puts it (rigid_fit.hpp): its rotation
+// vector and standard error. Without them it is NaN: near-spherical grains
+// have no stable principal axes to read it from the labels. Displacement is
+// the centroid's, child minus parent.
 //
 // Measured (bench/track/RESULTS.md, 789-grain zeolite series, shared 2-core
 // VM): 0.2-0.3 s per stage at 256^3, 2.1-2.7 s at 512^3, file reading apart.
@@ -275,9 +278,11 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
+#include "core/dtype.hpp"
 #include "core/table.hpp"
 #include "core/volume.hpp"
 #include "track/registration.hpp"
@@ -324,6 +329,8 @@ struct TrackOptions {
   bool progress = false;
 };
 
+inline constexpr double kNoValue = std::numeric_limits<double>::quiet_NaN();
+
 // One particle at one stage (lineage.csv).
 struct LineageRow {
   int stage = 0;
@@ -336,6 +343,10 @@ struct LineageRow {
   double quality = 1;  // fraction of the particle's voxels covered by its moved parent (1 at stage 0, 0 if new)
   bool touches_border = false;
   int64_t face_vox = 0;  // voxels on the volume's faces (one per face an edge voxel lies on; 0 when unknown)
+  // Rotation since the previous stage (rigid_fit.hpp, with the stages' grey scans): rotation vector,
+  // axis times angle, degrees, (z, y, x); and its standard error. NaN where not fitted.
+  std::array<double, 3> rotation_deg{kNoValue, kNoValue, kNoValue};
+  double rotation_se_deg = kNoValue;
   // A break one of whose pieces a neighbour's label absorbed (step 5: the chip of a one-child
   // grain, or a piece of a break with two or more children): the voxels of the parent found in
   // that label (T), on the first (largest) child's row; 0 otherwise.
@@ -463,7 +474,9 @@ class Tracker {
   // offset, and displacements are in the frame of the files' origin_m.
   // Returns the stage before's labels, no longer needed (their storage can
   // hold the next stage: ReadOptions::reuse).
-  Volume<uint32_t> add_stage(Volume<uint32_t> labels, const std::string& name);
+  // `grey`: the stage's scan, the labels' shape (empty: none). With the scans of two consecutive
+  // stages each particle with a parent gets its rotation (rigid_fit.hpp); 2-4 B/voxel more.
+  Volume<uint32_t> add_stage(Volume<uint32_t> labels, const std::string& name, AnyVolume grey = {});
   TrackResult result() const;  // derives events and summary
   int stages() const { return static_cast<int>(names_.size()); }
   // Moves the last stage's labels (4 B/voxel, kept for the next add_stage)
@@ -489,6 +502,7 @@ class Tracker {
   TrackOptions o_;
   std::vector<std::string> names_;
   Volume<uint32_t> prev_;
+  AnyVolume prev_grey_;  // the last stage's scan (empty: none given)
   std::string spilled_;  // the file holding prev_ while it is out of memory
   bool finished_ = false;
   std::vector<LineageRow> prev_rows_;
@@ -504,7 +518,10 @@ class Tracker {
 // Reads label volumes (an .h5 file's /labels by default) in the order given
 // and tracks them. InputError names the file whose voxel size differs from
 // the first, or the pair given out of order.
-TrackResult track_files(const std::vector<std::string>& paths, const TrackOptions& options = {});
+// `scans`: the stages' grey scans (empty, or one per stage, each its labels' shape: InputError
+// naming the file otherwise), for the particles' rotations.
+TrackResult track_files(const std::vector<std::string>& paths, const TrackOptions& options = {},
+                        const std::vector<std::string>& scans = {});
 
 // The three tables and their writer (DIR/lineage.csv, events.csv, summary.csv,
 // each atomic; DIR is created).

@@ -49,7 +49,9 @@ Outputs
                       border (1: touches a face of the volume), face_vox
                       (its voxels on the faces: the truth side of track's
                       % broken leaves out the grains they cut, as track's
-                      own does), cz_vox,cy_vox,cx_vox (track's columns)
+                      own does), cz_vox,cy_vox,cx_vox, rz_deg,ry_deg,rx_deg
+                      (the turn since the previous stage, a rotation
+                      vector in degrees) (track's columns)
   PREFIX.json         parameters, counts per stage and event
 
 usage: blind_series.py -o PREFIX [--size 192] [--radius 16] [--seed 1] ...
@@ -205,6 +207,7 @@ def main(argv=None):
         grains.append({"g": g, "pieces": pieces, "axis": axis, "walk": walk})
 
     lineage = []
+    G_axis = [np.asarray(G["axis"], float) for G in grains]
     prev_label = {}   # (grain index, piece index) -> label at the previous stage
     prev_grain = {}   # label at the previous stage -> its grain
     counts = []
@@ -277,8 +280,11 @@ def main(argv=None):
                     event, grain = "new", 0
             grain_now[L] = grain
             cz, cy, cx = com[L - 1]
+            # the turn since the previous stage (its grain's, about the grain's fixed axis): a rotation
+            # vector in degrees, (z, y, x) array axes as tomograin track writes it
+            turn = G_axis[gi] * (a.rotation_deg * (a.strains[s] - a.strains[s - 1]) / emax if s else 0.0)
             lineage.append((s, L, parent, grain, event, int(vol[L]), int(L in border), int(face_vox[L]), cz + 0.5, cy + 0.5,
-                            cx + 0.5))
+                            cx + 0.5, turn[0], turn[1], turn[2]))
             ev_count[event] = ev_count.get(event, 0) + 1
         prev_label, prev_grain = labels_now, grain_now
         # imaging (blind_scene's)
@@ -299,7 +305,7 @@ def main(argv=None):
     with open(f"{a.output}_lineage.csv", "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["stage", "label", "parent_label", "grain", "event", "volume_vox", "border", "face_vox", "cz_vox",
-                    "cy_vox", "cx_vox"])
+                    "cy_vox", "cx_vox", "rz_deg", "ry_deg", "rx_deg"])
         for row in lineage:
             w.writerow(list(row[:8]) + [f"{v:.3f}" for v in row[8:]])
     info = {"generator": "bench/track/blind_series.py (on blind_scene.py; independent of data_synth)",

@@ -83,6 +83,21 @@ else
 fi
 expect_bad other_voxel "fine_stage1.h5: voxel size" -- "$TG" track run_stage0.h5 fine_stage1.h5 -o bad
 expect_bad missing "nothere.h5" -- "$TG" track run_stage0.h5 nothere.h5 -o bad
+# With the grey scans: rotations in lineage.csv, finite for most particles with a parent; a count of
+# scans that is not the stages', or a scan of another shape: exit 2, nothing written.
+if "$TG" track run_stage0.h5 run_stage1.h5 --scans run_stage0.h5:/volume run_stage1.h5:/volume -o rot > rot.log 2>&1; then
+  /usr/bin/python3 - <<'PY' || fail "rotations"
+import csv, math
+rows = [r for r in csv.DictReader(open("rot/lineage.csv")) if r["stage"] == "1" and r["parent_label"] != "0"]
+fit = [r for r in rows if math.isfinite(float(r["rz_deg"]))]
+assert len(rows) > 20 and len(fit) >= 0.8 * len(rows), (len(rows), len(fit))
+assert all(math.isnan(float(r["rz_deg"])) for r in csv.DictReader(open("rot/lineage.csv")) if r["stage"] == "0")
+PY
+else
+  fail "track --scans rc=$?: $(cat rot.log)"
+fi
+expect_bad scans_count "2 scans for 3 stages" -- "$TG" track run_stage0.h5 run_stage1.h5 run_stage2.h5 --scans run_stage0.h5:/volume run_stage1.h5:/volume -o bad
+expect_bad scans_shape "crop_stage1.h5" -- "$TG" track run_stage0.h5 run_stage1.h5 --scans run_stage0.h5:/volume crop_stage1.h5 -o bad
 printf '[stages]\nmotion = "fast"\n' > badmotion.toml
 expect_bad bad_motion "stages.motion" -- "$TG" synth --preset zeolite-stages --scene badmotion.toml --size 16 -o bad
 "$TG" track --help | grep -q "tomograin track seg0.h5" || fail "--help has no example"

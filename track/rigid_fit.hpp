@@ -4,8 +4,10 @@
 // SPAM's discrete DIC does"; the lineage's rotation columns).
 //
 // Method: the particle's region at the later stage B (its label's voxels and
-// their one-voxel rim in the void, so the surface's gradient counts; other
-// particles' voxels are left out, they move differently) is mapped into the
+// their one-voxel rim in the void, so the surface's gradient counts; not
+// within two voxels of another particle: a contact does not turn with it,
+// and the PSF carries the neighbour's grey there; other particles are
+// blanked to the void's grey in both scans) is mapped into the
 // earlier stage A by x_A = R (x_B - c) + c + t (c: the region's centroid)
 // and the grey sum of squares sum_x (A(x_A) - B(x))^2 is minimised over the
 // six parameters by Gauss-Newton, as in SPAM's `register` (Tudisco et al.
@@ -36,9 +38,10 @@
 // scanner, one calibration).
 //
 // Cost: per iteration one 64-sample interpolation and a 6 x 6 accumulation
-// per region voxel, converging in 3-6 iterations; plus the two smoothed
-// boxes. Measured in bench/track/RESULTS.md ("Rotation from the grey
-// levels").
+// per region voxel (every second voxel per axis in boxes over
+// dense_box_voxels: the smoothed grey is correlated over ~45 voxels),
+// converging in 3-6 iterations; plus the two smoothed boxes. Measured in
+// bench/track/RESULTS.md ("Rotation from the grey levels").
 #pragma once
 #include <array>
 #include <cstdint>

@@ -120,6 +120,16 @@ bool sample(const Box& b, const Eigen::Vector3d& y, double& value) {
   return true;
 }
 
+// Offsets within two voxels (|d|^2 <= 4, the centre left out): the reach of a contact's grey.
+const std::vector<std::array<int64_t, 3>> kNear = [] {
+  std::vector<std::array<int64_t, 3>> v;
+  for (int64_t a = -2; a <= 2; ++a)
+    for (int64_t b = -2; b <= 2; ++b)
+      for (int64_t c = -2; c <= 2; ++c)
+        if (a * a + b * b + c * c <= 4 && (a || b || c)) v.push_back({a, b, c});
+  return v;
+}();
+
 template <class TA, class TB>
 RigidFit fit(const Volume<TA>& A, const Volume<TB>& B, const Volume<uint32_t>& L, uint32_t label,
              const Volume<uint32_t>* LA, uint32_t label_a, const std::array<int64_t, 3>& lo,
@@ -177,18 +187,17 @@ RigidFit fit(const Volume<TA>& A, const Volume<TB>& B, const Volume<uint32_t>& L
       for (int64_t i = std::max<int64_t>(lo[2] - 1, 0); i < std::min(hi[2] + 1, s.nx); ++i) {
         if (stride > 1 && ((k | j | i) & 1)) continue;
         if (L.data()[at(k, j, i)] != label && !on_rim(k, j, i)) continue;
-        // Not where another particle lies within two voxels along an axis: the PSF carries its grey
+        // Not where another particle lies within two voxels: the PSF carries its grey
         // there, and it does not turn with this one (a contact holds the region still).
         bool near_other = false;
-        for (int64_t d = -2; d <= 2 && !near_other; ++d) {
-          if (!d) continue;
-          const int64_t kk = k + d, jj = j + d, ii = i + d;
-          auto other = [&](int64_t a, int64_t b, int64_t c) {
-            if (a < 0 || b < 0 || c < 0 || a >= s.nz || b >= s.ny || c >= s.nx) return false;
-            const uint32_t l = L.data()[at(a, b, c)];
-            return l != 0 && l != label;
-          };
-          near_other = other(kk, j, i) || other(k, jj, i) || other(k, j, ii);
+        for (const auto& d : kNear) {
+          const int64_t a = k + d[0], b = j + d[1], c = i + d[2];
+          if (a < 0 || b < 0 || c < 0 || a >= s.nz || b >= s.ny || c >= s.nx) continue;
+          const uint32_t l = L.data()[at(a, b, c)];
+          if (l != 0 && l != label) {
+            near_other = true;
+            break;
+          }
         }
         if (near_other) continue;
         const int64_t bk = k - bb.lo[0], bj = j - bb.lo[1], bi = i - bb.lo[2];

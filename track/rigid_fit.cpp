@@ -137,6 +137,7 @@ RigidFit fit(const Volume<TA>& A, const Volume<TB>& B, const Volume<uint32_t>& L
   RigidFit f;
   const Shape s = L.shape();
   auto at = [&](int64_t k, int64_t j, int64_t i) { return (k * s.ny + j) * s.nx + i; };
+  if ((hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]) > o.max_box_voxels) return f;
   // B's box: the region (the label and its rim) and the smoothing's reach; A's: that box moved by
   // t0, grown by what the fit may move a voxel (its correction, a turn of up to ~0.1 rad).
   const int64_t pad = 2 + static_cast<int64_t>(std::ceil(3 * o.smoothing_vox));

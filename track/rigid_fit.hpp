@@ -61,6 +61,9 @@ struct RigidFitOptions {
   int64_t min_voxels = 27;
   double smoothing_vox = 1.0;  // Gaussian sigma (voxels) of both scans about the particle
   int64_t dense_box_voxels = 8000;  // particles whose box holds more are sampled on every 2nd voxel per axis
+  // Larger boxes are not fitted (NaN): a label spanning the scan (a matrix, a mislabelled
+  // background) would copy it twice as floats per thread. 2^24 voxels: a grain of radius ~120.
+  int64_t max_box_voxels = int64_t{1} << 24;
 };
 
 struct RigidFit {

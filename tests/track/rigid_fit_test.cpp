@@ -106,6 +106,10 @@ TEST(RigidFit, RecoversATurnAndAShiftFromTheGreyLevels) {
   // grain's centre, which c is close to).
   EXPECT_LT((g.t + shift).norm(), 0.1);
   EXPECT_LT(g.rms, 100);  // of a 20000 contrast
+  // A particle whose box holds more than max_box_voxels is not fitted (a label spanning the scan).
+  RigidFitOptions small;
+  small.max_box_voxels = 1000;
+  EXPECT_FALSE(fit_rigid(a, b, s.lb, 2, lo_of(s.lb, 2, false), lo_of(s.lb, 2, true), -shift, small).ok);
 }
 
 // With the scanner's noise (CNR 13: sigma 1500 on a contrast of 20000): the textured grain's turn

@@ -296,6 +296,17 @@ TEST(Track, LostParticlesSayWhereTheyWent) {
   EXPECT_EQ(lost.at(601)->into_label, label_at(1, 5));
   EXPECT_EQ(lost.at(602)->lost_as, LostAs::vanished);
   EXPECT_EQ(lost.at(600)->into_label, 0u);
+  // The three shares behind each verdict, exactly: the stage map (near a 5-voxel shift) sends every
+  // voxel of L below the volume, of F into grain 5's label (painted there moved), of V into the void.
+  std::map<uint32_t, LostRow> shares;
+  for (const auto& l : r.lost) shares[l.label] = l;
+  auto volume = [&](uint32_t label) { return row(r, 0, label).volume_vox; };
+  EXPECT_EQ(shares.at(600).outside_vox, volume(600));
+  EXPECT_EQ(shares.at(600).in_labels_vox + shares.at(600).void_vox, 0);
+  EXPECT_EQ(shares.at(601).in_labels_vox, volume(601));
+  EXPECT_EQ(shares.at(601).outside_vox + shares.at(601).void_vox, 0);
+  EXPECT_EQ(shares.at(602).void_vox, volume(602));
+  EXPECT_EQ(shares.at(602).outside_vox + shares.at(602).in_labels_vox, 0);
   EXPECT_EQ(r.summary[1].lost, 3);
   EXPECT_EQ(r.summary[1].lost_left_field, 1);
   EXPECT_EQ(r.summary[1].lost_merged, 1);

@@ -87,7 +87,8 @@ struct CmpOpts {
   std::vector<double> xct_strains, dem_strains;
   std::string dem, out, curve, title = "tomograin: experiment vs DEM", notes, cluster_body = "hull";
   double voxel_um = 0, grain_radius_vox = 0;
-  bool no_like = false, no_imaged = false, synthetic = false, no_plots = false, no_track = false;
+  bool no_like = false, no_imaged = false, synthetic = false, no_plots = false, no_track = false,
+       track_rotations = false;
   std::string feret = "60";
 };
 
@@ -111,6 +112,7 @@ int run_compare(const CmpOpts& o) {
   opt.synthetic_xct = o.synthetic;
   opt.plots = !o.no_plots;
   opt.track = !o.no_track;
+  opt.track_rotations = o.track_rotations;
   opt.voxelise.cluster_body = compare::cluster_body_from_name(o.cluster_body);
   tg::app::parse_feret_option(o.feret, opt.measure.feret_exact, opt.measure.feret_directions);
   const compare::Report r = compare::run_comparison(in, opt);
@@ -222,6 +224,10 @@ static tg::app::Registrar reg_cmp{{"compare", 80,
   sub->add_flag("--no-track", o->no_track,
                 "Do not track the experiment's grains through the stages (REPORT/tracking/; by default the "
                 "experiment's broken fraction comes from that lineage when the scans carry no truth)");
+  sub->add_flag("--track-rotations", o->track_rotations,
+                "Give the tracker the grey scans: each particle's rotation since the stage before "
+                "(REPORT/tracking/lineage.csv rz_deg,ry_deg,rx_deg; about 2 s more per 256^3 stage, and the "
+                "stage before's scan held, 2 B/voxel)");
   return [o] { return run_compare(*o); };
 }}};
 }  // namespace cmd_compare

@@ -81,7 +81,11 @@ Prepared prepare(const Study& s, const Plan& p, const Step& st) {
       std::vector<std::string> a;
       for (const auto& g : s.stages) a.push_back((p.dir / "stages" / g.name / "labels.h5").string());
       a.insert(a.end(), {"-o", st.output.string()});
-      r.commands.emplace_back("track", command_args(s, "track", s.track, a, {"labels", "output"}));
+      if (s.track_scans) {
+        a.push_back("--scans");
+        for (const auto& g : s.stages) a.push_back(g.scan);
+      }
+      r.commands.emplace_back("track", command_args(s, "track", s.track, a, {"labels", "output", "scans"}));
       break;
     }
     case StepKind::dem: {

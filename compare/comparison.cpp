@@ -105,13 +105,14 @@ Report run_comparison(const CompareInputs& in, const CompareOptions& opt) {
     }
     if (tracker) {
       try {
-        tracker->add_stage(std::move(x.labels), in.xct[n]);
+        tracker->add_stage(std::move(x.labels), in.xct[n], std::move(x.scan));
       } catch (const InputError& e) {  // the report goes on without a lineage, and says why
         tracker.reset();
         rep.tracking_note = std::string("tracking stopped: ") + e.what();
       }
     }
-    x.labels = Volume<uint32_t>{};  // only the tracker keeps a stage's labels (the previous one)
+    x.labels = Volume<uint32_t>{};  // only the tracker keeps a stage's labels (the previous one), and its scan
+    x.scan = Volume<uint16_t>{};
     const bool last = n + 1 == in.xct.size();
     if (tracker) last ? tracker->finish() : spill_if_large(*tracker, out / ".tracker_xct.h5");
     const size_t m = match_snapshot(dem.strains, x.strain, n);

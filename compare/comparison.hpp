@@ -112,6 +112,8 @@ struct CompareOptions {
   measure::ParticleOptions measure = default_measure();  // shared by all three series
   VoxeliseOptions voxelise;   // voxel_m and imaging are filled per stage
   bool track = true;          // track grains through the XCT stages (track/) when they are volumes
+  bool track_rotations = false;  // give the tracker the grey scans: each particle's rotation (track/rigid_fit.hpp;
+                                 // the previous stage's scan held, 2 B/voxel)
   track::TrackOptions tracking;
   bool plots = true;          // run the plotting script (index.html + PNGs)
   std::string python = "/usr/bin/python3";  // Debian's, with python3-matplotlib

@@ -87,6 +87,7 @@ XctStage load_xct_stage(const std::string& path, const CompareOptions& opt, doub
     }
     write_mid_slices(labels, slices, stem + "_experiment_labels");
     measure_series(labels, opt.measure, x.s, grey.empty() ? nullptr : &grey);
+    if (opt.track && opt.track_rotations) x.scan = std::move(grey);
     grey = Volume<uint16_t>();
     x.labels = std::move(labels);
   }

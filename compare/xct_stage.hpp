@@ -21,6 +21,7 @@ struct XctStage {
   Geometry geometry;  // voxel size unknown (0) for particle-table inputs
   std::optional<GreyEstimate> grey;
   Volume<uint32_t> labels;  // the stage's labels (segmented or read), for tracking; empty for tables
+  Volume<uint16_t> scan;    // the grey scan, for the tracker's rotations (CompareOptions::track_rotations)
 };
 
 // The segmentation options both worlds share at one voxel size: the scale is

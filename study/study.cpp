@@ -177,6 +177,13 @@ Study read_study(const fs::path& file_in) {
     s.track_enabled = *v;
     s.track.erase("enabled");
   }
+  // [track] scans = true: the stages' scans go to track --scans (each particle's rotation).
+  if (auto* e = s.track.get("scans")) {
+    const auto v = e->value_exact<bool>();
+    if (!v) throw InputError(f + ": track.scans must be true or false (the stages' own scans are given)");
+    s.track_scans = *v;
+    s.track.erase("scans");
+  }
 
   const Section dem = section("dem");
   dem.only({"config", "variant"});
@@ -266,9 +273,13 @@ Plan make_plan(const Study& s, const fs::path& dir, int64_t voxels) {
     analysed.push_back(a.id);
     p.steps.push_back(a);
   }
-  if (s.track_enabled)
-    p.steps.push_back({"track", StepKind::track, -1, -1, analysed, p.dir / "track", {}, 2,
-                       mb(10), minutes(1)});
+  if (s.track_enabled) {
+    std::vector<fs::path> scans;  // inputs of the step when it reads them
+    if (s.track_scans)
+      for (const auto& st : s.stages) scans.emplace_back(st.scan);
+    p.steps.push_back({"track", StepKind::track, -1, -1, analysed, p.dir / "track", scans, 2,
+                       mb(s.track_scans ? 14 : 10), minutes(s.track_scans ? 3 : 1)});
+  }
   std::vector<std::string> compared = analysed;
   if (s.track_enabled) compared.push_back("track");
   for (size_t v = 0; v < s.variants.size() && !s.dem_config.empty(); ++v) {

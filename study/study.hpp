@@ -40,6 +40,7 @@ struct Study {
   // option names (apps/config_args.hpp turns them into arguments).
   toml::table segment, measure, psd, track, compare;
   bool track_enabled = true;   // [track] enabled (default: on with two or more stages)
+  bool track_scans = false;    // [track] scans: the stages' scans go to track (rotations)
   std::filesystem::path dem_config;  // absolute; empty = no DEM and no comparison
   std::string dem_text;              // its text, read once
   std::vector<DemVariant> variants;  // one entry (name "") without [[dem.variant]]

@@ -510,6 +510,12 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
   }
 }
 
+namespace {
+bool has_voxels(const AnyVolume& v) {
+  return std::visit([](const auto& x) { return x.size() > 0; }, v);
+}
+}  // namespace
+
 Tracker::Tracker(TrackOptions o) : o_(std::move(o)) {}
 
 Tracker::~Tracker() {
@@ -521,9 +527,11 @@ void Tracker::spill(const std::string& file) {
   if (prev_.empty() || !spilled_.empty()) return;
   H5Writer w(file);
   w.write_volume("/labels", prev_, 1);
+  if (has_voxels(prev_grey_)) w.write_volume("/grey", prev_grey_, 1);
   w.commit();
   spilled_ = file;
   prev_ = Volume<uint32_t>{};
+  prev_grey_ = AnyVolume{};
 }
 
 void Tracker::finish() {
@@ -531,21 +539,18 @@ void Tracker::finish() {
   if (!spilled_.empty()) std::filesystem::remove(spilled_, ec);
   spilled_.clear();
   prev_ = Volume<uint32_t>{};
+  prev_grey_ = AnyVolume{};
   finished_ = true;
 }
-
-namespace {
-bool has_voxels(const AnyVolume& v) {
-  return std::visit([](const auto& x) { return x.size() > 0; }, v);
-}
-}  // namespace
 
 Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& name, AnyVolume grey) {
   const auto t0 = std::chrono::steady_clock::now();
   if (finished_) throw std::logic_error("Tracker::add_stage after finish()");
   if (!spilled_.empty()) {
-    AnyVolume back = H5Reader(spilled_).read_volume("/labels");
+    const H5Reader rd(spilled_);
+    AnyVolume back = rd.read_volume("/labels");
     prev_ = std::move(std::get<Volume<uint32_t>>(back));
+    if (rd.has("/grey")) prev_grey_ = rd.read_volume("/grey");
     std::error_code ec;
     std::filesystem::remove(spilled_, ec);
     spilled_.clear();

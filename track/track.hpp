@@ -480,13 +480,16 @@ class Tracker {
   TrackResult result() const;  // derives events and summary
   int stages() const { return static_cast<int>(names_.size()); }
   // Moves the last stage's labels (4 B/voxel, kept for the next add_stage)
-  // to `file` (HDF5, deflate level 1; removed when read back or when the
+  // and its scan (when one was given) to `file` (HDF5, deflate level 1; removed when read back or when the
   // tracker goes): for a caller that images or segments the next stage in
   // between, as compare does at full size. The next add_stage reads them
   // back: the lineage is the same, for one write and one read of the labels
   // (~10 s at 1220^3 with tomograin's parallel deflate).
   void spill(const std::string& file);
-  int64_t held_bytes() const { return prev_.size() * int64_t(sizeof(uint32_t)); }
+  int64_t held_bytes() const {
+    const int64_t grey = std::visit([](const auto& v) { return v.size() * int64_t(sizeof(v.data()[0])); }, prev_grey_);
+    return prev_.size() * int64_t(sizeof(uint32_t)) + grey;
+  }
   // Frees the last stage's labels (and any spill file) for a caller that adds
   // no more stages: result() does not need them. compare calls it after its
   // last stage, whose DEM imaging otherwise ran beside both trackers' labels

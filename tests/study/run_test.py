@@ -3,7 +3,8 @@
 stages (zeolite-stages, 64^3) with a DEM twin (the weak-grain cell of
 tests/pyharness.py, a checkpoint every 2000 steps) and the comparison.
 
-1. An uninterrupted run writes every step's outputs and the summary.
+1. An uninterrupted run writes every step's outputs and the summary; with
+   `[track] scans` and `[compare] track_rotations` both lineages hold rotations.
 2. Running it again does no work: every step is `up to date` and no file
    under the study folder changes (names, sizes, bytes, mtimes).
 3. For seeds 1-3: a fresh run is killed with SIGKILL at a seeded moment of the
@@ -24,6 +25,7 @@ tests/pyharness.py, a checkpoint every 2000 steps) and the comparison.
 
 Usage: run_test.py TOMOGRAIN
 """
+import csv
 import json
 import os
 import random
@@ -57,10 +59,13 @@ scan = "scans/x_stage4.h5"
 strain = 0.03
 [measure]
 feret = "30"
+[track]
+scans = true
 [dem]
 config = "dem.toml"
 [compare]
 no_plots = true
+track_rotations = true
 feret = "{feret}"
 """
 
@@ -101,6 +106,13 @@ def main():
         hist = open("out/dem/history.csv").read().splitlines()
         broken = float(hist[-1].split(",")[hist[0].split(",").index("grains_broken")])
         check(broken >= 1, f"the DEM splits grains ({broken:.0f})")
+        # [track] scans and [compare] track_rotations hand the scans to the tracker: rotations in both lineages.
+        for lin in ("out/track/lineage.csv", "out/report/tracking/lineage.csv"):
+            rows = list(csv.DictReader(open(lin)))
+            turned = [x for x in rows if int(x["parent_label"]) > 0 and x["rz_deg"] != "nan"]
+            with_parent = sum(int(x["parent_label"]) > 0 for x in rows)
+            check(with_parent > 0 and len(turned) >= with_parent // 2,
+                  f"{lin}: rotations for {len(turned)} of {with_parent} particles with a parent")
 
         # 2. Again: no work, nothing touched.
         before = H.tree_state("out")

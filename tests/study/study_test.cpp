@@ -88,6 +88,7 @@ TEST(Study, ReadsStagesVariantsAndPlans) {
   EXPECT_EQ(ids, (std::vector<std::string>{"analyse-stage0", "analyse-late", "track", "dem-m5", "compare-m5",
                                            "dem-m9", "compare-m9", "summary"}));
   EXPECT_EQ(p.step("track").needs, (std::vector<std::string>{"analyse-stage0", "analyse-late"}));
+  EXPECT_TRUE(p.step("track").inputs.empty());  // the labels only: the scans are not read
   EXPECT_EQ(p.step("compare-m9").needs, (std::vector<std::string>{"dem-m9"}));
   EXPECT_EQ(p.step("summary").needs.size(), 5u);
   EXPECT_EQ(p.record(p.step("track")), d.p / "out" / ".run" / "track.json");
@@ -99,6 +100,20 @@ TEST(Study, ReadsStagesVariantsAndPlans) {
       EXPECT_LT(j, i) << p.steps[i].id << " needs " << n;
     }
   EXPECT_NE(error_of([&] { (void)p.step("nope"); }).find("no step 'nope'"), std::string::npos);
+}
+
+// [track] scans = true: the track step reads the stages' scans (so a changed scan re-runs it).
+TEST(Study, TrackScansAreTheStepsInputs) {
+  Dir d;
+  d.scan("s0.h5", 8);
+  d.scan("s1.h5", 8);
+  d.write("s.toml", study("[track]\nscans = true\nmin_overlap = 0.3\n"));
+  const Study s = read_study(d.p / "s.toml");
+  EXPECT_TRUE(s.track_scans);
+  EXPECT_FALSE(s.track.contains("scans"));  // not passed on as an option of its own
+  EXPECT_TRUE(s.track.contains("min_overlap"));
+  const Plan p = make_plan(s, d.p / "out", 8 * 8 * 8);
+  EXPECT_EQ(p.step("track").inputs, (std::vector<fs::path>{d.p / "s0.h5", d.p / "s1.h5"}));
 }
 
 TEST(Study, RefusesBadFilesNamingFileAndKey) {
@@ -126,6 +141,7 @@ TEST(Study, RefusesBadFilesNamingFileAndKey) {
        "weibull_modulus is not a table"},
       {two + "0.1\n[compare]\nferet = \"60\"\n", "compare needs a DEM"},
       {"[[stage]]\nscan = \"s0.h5\"\nstrain = 0.0\n[track]\nenabled = true\n", "track.enabled needs two or more"},
+      {two + "0.1\n[track]\nscans = [\"s0.h5\", \"s1.h5\"]\n", "track.scans must be true or false"},
       {"[study]\nname = \"x\"\n", "no [[stage]]"},
   };
   for (const auto& c : cases) {

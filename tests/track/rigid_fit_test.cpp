@@ -7,7 +7,10 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -136,10 +139,14 @@ TEST(RigidFit, TheStandardErrorSaysWhatTheGreyHolds) {
 }
 
 // The tracker with the scans: the particle's lineage row carries the turn; without them nan.
+// The first stage's labels and scan spilled to disk between the stages (compare at full size):
+// the same turn.
 TEST(RigidFit, TrackerWritesTheRotationWithScans) {
   const Eigen::Vector3d w = Eigen::Vector3d(-1.5, 2.0, 1.0) * kFitDeg, shift(0.6, 1.2, -0.9);
   Scene s = render(rotation_matrix(w), shift, texture());
-  auto run = [&](bool scans) {
+  const std::filesystem::path spill =
+      std::filesystem::temp_directory_path() / ("tg_rigid_spill_" + std::to_string(::getpid()) + ".h5");
+  auto run = [&](bool scans, bool spilled = false) {
     Tracker tr;
     Volume<uint32_t> la(s.la.shape(), kFitGeom), lb(s.lb.shape(), kFitGeom);
     std::copy(s.la.data(), s.la.data() + s.la.size(), la.data());
@@ -151,8 +158,15 @@ TEST(RigidFit, TrackerWritesTheRotationWithScans) {
       std::copy(s.b.data(), s.b.data() + s.b.size(), b.data());
       ga = std::move(a), gb = std::move(b);
     }
+    const int64_t voxels = la.size();
     tr.add_stage(std::move(la), "a", std::move(ga));
+    if (spilled) {
+      EXPECT_EQ(tr.held_bytes(), voxels * 8);  // u32 labels and the float scan
+      tr.spill(spill.string());
+      EXPECT_EQ(tr.held_bytes(), 0);
+    }
     tr.add_stage(std::move(lb), "b", std::move(gb));
+    EXPECT_FALSE(std::filesystem::exists(spill));
     return tr.result();
   };
   const TrackResult r = run(true);
@@ -161,6 +175,8 @@ TEST(RigidFit, TrackerWritesTheRotationWithScans) {
   EXPECT_EQ(b.parent_label, 1u);
   for (int ax = 0; ax < 3; ++ax) EXPECT_NEAR(b.rotation_deg[ax], w[ax] / kFitDeg, 0.1) << ax;
   EXPECT_TRUE(std::isnan(r.lineage[0].rotation_deg[0]));  // stage 0: nothing to turn from
+  const TrackResult sp = run(true, true);
+  for (int ax = 0; ax < 3; ++ax) EXPECT_EQ(sp.lineage[1].rotation_deg[ax], b.rotation_deg[ax]) << ax;
   const TrackResult n = run(false);
   EXPECT_TRUE(std::isnan(n.lineage[1].rotation_deg[0]));
   EXPECT_TRUE(std::isnan(n.lineage[1].rotation_se_deg));

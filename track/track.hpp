@@ -20,7 +20,12 @@
 //     specimen, the moving platen outside it) a grain cut by a face at A
 //     has entered further by B, and its child is several times what A saw.
 //     (Measured on bench/track/blind_series.py, moving platen below the
-//     window: counting them, 3 % of the particles came out `new`.)
+//     window: counting them, 3 % of the particles came out `new`.) A B
+//     particle none of whose voxels the map sends inside A was not in its
+//     field: it is `new`, whatever a neighbour's refined shift (step 4)
+//     brushes; and a particle clear of B's faces may have been cut by A's (a
+//     sliver at A's face that moved in whole): every particle whose box the
+//     map does not send wholly inside A is counted.
 //  4. Refinement: each A particle's residual shift is the volume-weighted
 //     centroid of its children minus its mapped centroid (grain jitter,
 //     rotation of the packing, fragments drifting apart); step 3 is run once
@@ -30,7 +35,8 @@
 //     that moved more than a few voxels off the global map. A B particle
 //     still uncovered whose centroid lies within nearest_slack_vox of an A
 //     particle's moved equivalent sphere (A at least a quarter of its volume)
-//     takes that parent, with quality 0 (small pieces drifted off).
+//     takes that parent, with quality 0 (small pieces drifted off), unless
+//     most of it entered the field since A.
 //  5. Events, from each A particle's children (ordered by volume, largest
 //     first; f1 = largest child / all children):
 //       no child           lost (left the field, merged, or fell below the

@@ -407,9 +407,15 @@ TEST(Track, GrainEnteringTheFieldKeepsItsParent) {
   paint(s0, 500, {53, 30, 30}, 7);
   paint(s1, 501, {53 * 0.9, 30, 30}, 7);
   paint(s1, 502, {50.35, 16, 50}, 7);
-  int64_t v0 = 0, v1 = 0;
-  for (int64_t i = 0; i < s0.size(); ++i) v0 += s0.data()[i] == 500, v1 += s1.data()[i] == 501;
+  // A sliver at the face that the compression brings in whole: clear of stage 1's faces, it was
+  // still cut by stage 0's.
+  paint(s0, 510, {49.3, 16, 16}, 3);
+  paint(s1, 511, {49.3 * 0.9, 16, 16}, 3);
+  int64_t v0 = 0, v1 = 0, w0 = 0, w1 = 0;
+  for (int64_t i = 0; i < s0.size(); ++i)
+    v0 += s0.data()[i] == 500, v1 += s1.data()[i] == 501, w0 += s0.data()[i] == 510, w1 += s1.data()[i] == 511;
   ASSERT_LT(v0, 0.2 * v1);  // the plain coverage rule would call 501 new
+  ASSERT_LT(w0, 0.2 * w1);  // and 511
   Tracker tr;
   tr.add_stage(std::move(s0), "s0");
   tr.add_stage(std::move(s1), "s1");
@@ -418,6 +424,9 @@ TEST(Track, GrainEnteringTheFieldKeepsItsParent) {
   EXPECT_EQ(row(r, 1, 501).parent_label, 500u);
   EXPECT_EQ(row(r, 1, 501).grain, 500u);
   EXPECT_EQ(row(r, 1, 501).event, Event::intact);
+  EXPECT_FALSE(row(r, 1, 511).touches_border);
+  EXPECT_EQ(row(r, 1, 511).parent_label, 510u);
+  EXPECT_EQ(row(r, 1, 511).event, Event::intact);
   EXPECT_EQ(row(r, 1, 502).parent_label, 0u);
   EXPECT_EQ(row(r, 1, 502).event, Event::new_particle);
 }

@@ -5,8 +5,9 @@
 //
 // Method: the particle's region at the later stage B (its label's voxels and
 // their one-voxel rim in the void, so the surface's gradient counts; not
-// within two voxels of another particle: a contact does not turn with it,
-// and the PSF carries the neighbour's grey there; other particles are
+// within 2 + smoothing_vox / 2 voxels of another particle: a contact does not
+// turn with it, and the PSF and the smoothing carry the neighbour's grey
+// there; other particles are
 // blanked to the void's grey in both scans) is mapped into the
 // earlier stage A by x_A = R (x_B - c) + c + t (c: the region's centroid)
 // and the grey sum of squares sum_x (A(x_A) - B(x))^2 is minimised over the

@@ -49,7 +49,9 @@ grain_diameter_um = 1360
   for (int i = 0; i < 5; ++i)
     s += fmt::format("[[stage]]\nname = \"e{:02.0f}\"\nscan = \"scans_{}/xct_stage{}.h5\"\nstrain = {}\n",
                      100 * kStrains[i], xct_size, i, kStrains[i]);
-  s += fmt::format(R"([dem]
+  s += fmt::format(R"([track]
+scans = true   # each particle's rotation from the stages' grey scans (track/lineage.csv rz_deg, ry_deg, rx_deg)
+[dem]
 config = "dem.toml"
 [compare]
 synthetic = true

@@ -431,6 +431,33 @@ TEST(Track, GrainEnteringTheFieldKeepsItsParent) {
   EXPECT_EQ(row(r, 1, 502).event, Event::new_particle);
 }
 
+// A particle that entered the field whole since the stage before (the map sends none of its voxels
+// inside that stage) is new, even where a neighbour that moved further than the map (its refined
+// shift) brushes a few of its voxels: before, it became that neighbour's second child, a split.
+TEST(Track, ParticleEnteringWholeIsNewWhateverANeighbourBrushes) {
+  Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage();
+  const auto c0 = centres(0), c1 = centres(0.1);
+  const size_t g = 37;  // top row (z 37 at stage 0), y 23.6, x 37
+  for (size_t q = 0; q < c0.size(); ++q) {
+    paint(s0, label_at(0, q), c0[q], 6);
+    auto c = c1[q];
+    if (q == g) c[0] += 6;  // jostled up, 6 voxels beyond the compression
+    paint(s1, label_at(1, q), c, 6);
+  }
+  const std::array<double, 3> n{46, c0[g][1], c0[g][2]};  // above it, entered through the top face
+  paint(s1, 900, n, 2);
+  Tracker tr;
+  tr.add_stage(std::move(s0), "s0");
+  tr.add_stage(std::move(s1), "s1");
+  const auto r = tr.result();
+  ASSERT_NEAR(r.maps[1].axial_scale(), 0.9, 0.01);
+  ASSERT_GT(n[0] - 2, 48 * r.maps[1].axial_scale());  // wholly outside stage 0's field, by the map
+  EXPECT_EQ(row(r, 1, 900).parent_label, 0u);
+  EXPECT_EQ(row(r, 1, 900).event, Event::new_particle);
+  EXPECT_EQ(row(r, 1, label_at(1, g)).parent_label, label_at(0, g));
+  EXPECT_EQ(row(r, 1, label_at(1, g)).event, Event::intact);
+}
+
 // Stages of another voxel size: InputError naming the file.
 TEST(Track, RefusesMismatchedStages) {
   Tracker tr;

@@ -25,7 +25,11 @@
 //     field: it is `new`, whatever a neighbour's refined shift (step 4)
 //     brushes; and a particle clear of B's faces may have been cut by A's (a
 //     sliver at A's face that moved in whole): every particle whose box the
-//     map does not send wholly inside A is counted.
+//     map does not send wholly inside A is counted. A B particle that mostly
+//     entered the field since A takes as parent a particle cut by A's faces
+//     at least half of whose moved voxels land in it, whatever share of it
+//     that covers (a grain pushed further in than the map, by its own
+//     jitter: A's sliver of it is then smaller than what the map says A saw).
 //  4. Refinement: each A particle's residual shift is the volume-weighted
 //     centroid of its children minus its mapped centroid (grain jitter,
 //     rotation of the packing, fragments drifting apart); step 3 is run once

@@ -431,6 +431,39 @@ TEST(Track, GrainEnteringTheFieldKeepsItsParent) {
   EXPECT_EQ(row(r, 1, 502).event, Event::new_particle);
 }
 
+// A grain entering the field, pushed 2.5 voxels further in than the map says (its own jitter):
+// the part of it the map says stage 0 saw is larger than the sliver stage 0 did see, so the plain
+// coverage rule called it new; that sliver, cut by stage 0's face, lands in it whole.
+TEST(Track, GrainPushedFurtherInThanTheMapKeepsItsSliverAsParent) {
+  Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage();
+  const auto c0 = centres(0), c1 = centres(0.1);
+  for (size_t q = 0; q < c0.size(); ++q) {
+    paint(s0, label_at(0, q), c0[q], 6);
+    paint(s1, label_at(1, q), c1[q], 6);
+  }
+  paint(s0, 520, {51.7, 44, 16}, 5);  // one slice of it at the top face
+  paint(s1, 521, {51.7 * 0.9 - 2.5, 44, 16}, 5);
+  int64_t sliver = 0, grain = 0, seen = 0;
+  const Shape sh = s1.shape();
+  for (int64_t i = 0; i < s1.size(); ++i) {
+    sliver += s0.data()[i] == 520;
+    if (s1.data()[i] != 521) continue;
+    ++grain;
+    seen += (double(i / (sh.ny * sh.nx)) + 0.5) / 0.9 < 48;  // where the map sends it back inside stage 0
+  }
+  ASSERT_GT(sliver, 0);
+  ASSERT_GT(2 * (grain - seen), grain);  // it mostly entered the field since
+  ASSERT_LT(sliver, 0.2 * seen);          // the plain coverage rule would call 521 new
+  Tracker tr;
+  tr.add_stage(std::move(s0), "s0");
+  tr.add_stage(std::move(s1), "s1");
+  const auto r = tr.result();
+  ASSERT_NEAR(r.maps[1].axial_scale(), 0.9, 0.005);
+  EXPECT_EQ(row(r, 1, 521).parent_label, 520u);
+  EXPECT_EQ(row(r, 1, 521).grain, 520u);
+  EXPECT_EQ(row(r, 1, 521).event, Event::intact);
+}
+
 // A particle that entered the field whole since the stage before (the map sends none of its voxels
 // inside that stage) is new, even where a neighbour that moved further than the map (its refined
 // shift) brushes a few of its voxels: before, it became that neighbour's second child, a split.

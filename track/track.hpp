@@ -40,7 +40,11 @@
 //     still uncovered whose centroid lies within nearest_slack_vox of an A
 //     particle's moved equivalent sphere (A at least a quarter of its volume)
 //     takes that parent, with quality 0 (small pieces drifted off), unless
-//     most of it entered the field since A.
+//     most of it entered the field since A. Such a particle (mostly entered
+//     since A, no parent yet) and a particle cut by A's faces with no child,
+//     not larger, whose moved centroid lies within its equivalent sphere +
+//     nearest_slack_vox are one grain (quality 0): a sliver seen at A that the
+//     grain's jitter moved off its voxels.
 //  5. Events, from each A particle's children (ordered by volume, largest
 //     first; f1 = largest child / all children):
 //       no child           lost (left the field, merged, or fell below the

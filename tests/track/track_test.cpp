@@ -464,6 +464,43 @@ TEST(Track, GrainPushedFurtherInThanTheMapKeepsItsSliverAsParent) {
   EXPECT_EQ(row(r, 1, 521).event, Event::intact);
 }
 
+// The same grain jostled sideways as well: none of its sliver's moved voxels lands in it, but
+// the sliver, cut by stage 0's face and left without child, lies within its equivalent sphere
+// plus the slack. Before, it was new, and the sliver lost.
+TEST(Track, EnteringGrainAndChildlessSliverBesideItAreOneGrain) {
+  Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage();
+  const auto c0 = centres(0), c1 = centres(0.1);
+  for (size_t q = 0; q < c0.size(); ++q) {
+    paint(s0, label_at(0, q), c0[q], 6);
+    paint(s1, label_at(1, q), c1[q], 6);
+  }
+  paint(s0, 530, {51.5, 16, 44}, 4.5);  // one slice of it at the top face
+  paint(s1, 531, {51.5 * 0.9 - 1, 16, 49.5}, 4.5);
+  const Shape sh = s1.shape();
+  int64_t sliver = 0, landing = 0, grain = 0, seen = 0;
+  for (int64_t i = 0; i < s0.size(); ++i) {
+    const int64_t k = i / (sh.ny * sh.nx), rest = i % (sh.ny * sh.nx);
+    if (s0.data()[i] == 530) {
+      ++sliver;
+      const auto k1 = static_cast<int64_t>((double(k) + 0.5) * 0.9);  // where the map moves it
+      landing += s1.data()[k1 * sh.ny * sh.nx + rest] == 531;
+    }
+    if (s1.data()[i] == 531) ++grain, seen += (double(k) + 0.5) / 0.9 < 48;
+  }
+  ASSERT_GT(sliver, 0);
+  ASSERT_EQ(landing, 0);                 // no moved voxel of the sliver covers it
+  ASSERT_GT(2 * (grain - seen), grain);  // it mostly entered the field since
+  Tracker tr;
+  tr.add_stage(std::move(s0), "s0");
+  tr.add_stage(std::move(s1), "s1");
+  const auto r = tr.result();
+  ASSERT_NEAR(r.maps[1].axial_scale(), 0.9, 0.005);
+  EXPECT_EQ(row(r, 1, 531).parent_label, 530u);
+  EXPECT_EQ(row(r, 1, 531).grain, 530u);
+  EXPECT_EQ(row(r, 1, 531).quality, 0.0);
+  EXPECT_EQ(row(r, 1, 531).event, Event::intact);
+}
+
 // A particle that entered the field whole since the stage before (the map sends none of its voxels
 // inside that stage) is new, even where a neighbour that moved further than the map (its refined
 // shift) brushes a few of its voxels: before, it became that neighbour's second child, a split.

@@ -54,6 +54,25 @@ Volume<uint32_t> empty_stage() { return Volume<uint32_t>::filled(Shape{48, 60, 6
 // Label of grain q at a stage: q + 1 at stage 0, permuted (1000 - 7 q) later.
 uint32_t label_at(int stage, size_t q) { return stage == 0 ? static_cast<uint32_t>(q + 1) : static_cast<uint32_t>(1000 - 7 * q); }
 
+// The tracker's result on two stages (named s0, s1).
+TrackResult track_pair(Volume<uint32_t> s0, Volume<uint32_t> s1) {
+  Tracker tr;
+  tr.add_stage(std::move(s0), "s0");
+  tr.add_stage(std::move(s1), "s1");
+  return tr.result();
+}
+
+// Stages 0 and 1 of the lattice (radius 6, labels label_at), compressed by `strain` between them.
+std::pair<Volume<uint32_t>, Volume<uint32_t>> lattice_stages(double strain) {
+  std::pair<Volume<uint32_t>, Volume<uint32_t>> st{empty_stage(), empty_stage()};
+  const auto c0 = centres(0), c1 = centres(strain);
+  for (size_t q = 0; q < c0.size(); ++q) {
+    paint(st.first, label_at(0, q), c0[q], 6);
+    paint(st.second, label_at(1, q), c1[q], 6);
+  }
+  return st;
+}
+
 const LineageRow& row(const TrackResult& r, int stage, uint32_t label) {
   for (const auto& x : r.lineage)
     if (x.stage == stage && x.label == label) return x;
@@ -65,16 +84,9 @@ const LineageRow& row(const TrackResult& r, int stage, uint32_t label) {
 // Every grain moves with the compression and keeps its identity although
 // every label number changes; the map's axial scale is 1 - strain increment.
 TEST(Track, IntactGrainsFollowCompressionWithPermutedLabels) {
-  Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage();
-  const auto c0 = centres(0), c1 = centres(0.05);
-  for (size_t q = 0; q < c0.size(); ++q) {
-    paint(s0, label_at(0, q), c0[q], 6);
-    paint(s1, label_at(1, q), c1[q], 6);
-  }
-  Tracker tr;
-  tr.add_stage(std::move(s0), "s0");
-  tr.add_stage(std::move(s1), "s1");
-  const auto r = tr.result();
+  auto [s0, s1] = lattice_stages(0.05);
+  const auto c0 = centres(0);
+  const auto r = track_pair(std::move(s0), std::move(s1));
   EXPECT_NEAR(r.maps[1].axial_scale(), 0.95, 0.005);
   EXPECT_EQ(r.maps[1].method, "ransac");
   for (size_t q = 0; q < c0.size(); ++q) {
@@ -251,18 +263,10 @@ TEST(Track, EmptyStage) {
 // A grain cut by the top of the volume loses part of its visible volume as the packing moves:
 // still intact (no chipping), and its parent is right.
 TEST(Track, GrainsCutByTheBorderStayIntact) {
-  Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage();
-  const auto c0 = centres(0), c1 = centres(0.05);
-  for (size_t q = 0; q < c0.size(); ++q) {
-    paint(s0, label_at(0, q), c0[q], 6);
-    paint(s1, label_at(1, q), c1[q], 6);
-  }
+  auto [s0, s1] = lattice_stages(0.05);
   paint(s0, 500, {49, 30, 30}, 6);  // centre 1 voxel above the volume
   paint(s1, 501, {49 * 0.95 + 3, 30, 30}, 6);  // moved up a little more: less of it visible
-  Tracker tr;
-  tr.add_stage(std::move(s0), "s0");
-  tr.add_stage(std::move(s1), "s1");
-  const auto r = tr.result();
+  const auto r = track_pair(std::move(s0), std::move(s1));
   EXPECT_EQ(row(r, 1, 501).parent_label, 500u);
   EXPECT_EQ(row(r, 1, 501).event, Event::intact);
   EXPECT_TRUE(row(r, 1, 501).touches_border);
@@ -282,10 +286,7 @@ TEST(Track, LostParticlesSayWhereTheyWent) {
   paint(s0, 601, {9, 30, 30}, 2.5);   // F, between grains 5, 6, 9, 10 of the bottom row
   paint(s0, 602, {16, 30, 16}, 2.5);  // V
   paint(s1, label_at(1, 5), {9 - 5, 30, 30}, 2.5);
-  Tracker tr;
-  tr.add_stage(std::move(s0), "s0");
-  tr.add_stage(std::move(s1), "s1");
-  const auto r = tr.result();
+  const auto r = track_pair(std::move(s0), std::move(s1));
   EXPECT_NEAR(r.maps[1].M(0, 0), 1.0, 0.02);  // the bottom row, cut by the face, pulls it a little
   std::map<uint32_t, const EventRow*> lost;
   for (const auto& e : r.events)
@@ -398,12 +399,7 @@ TEST(Track, FaceVoxelsOfEachParticle) {
 // back outside the volume): same grain, intact. A grain that appears where
 // nothing was stays new.
 TEST(Track, GrainEnteringTheFieldKeepsItsParent) {
-  Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage();
-  const auto c0 = centres(0), c1 = centres(0.1);
-  for (size_t q = 0; q < c0.size(); ++q) {
-    paint(s0, label_at(0, q), c0[q], 6);
-    paint(s1, label_at(1, q), c1[q], 6);
-  }
+  auto [s0, s1] = lattice_stages(0.1);
   paint(s0, 500, {53, 30, 30}, 7);
   paint(s1, 501, {53 * 0.9, 30, 30}, 7);
   paint(s1, 502, {50.35, 16, 50}, 7);
@@ -416,10 +412,7 @@ TEST(Track, GrainEnteringTheFieldKeepsItsParent) {
     v0 += s0.data()[i] == 500, v1 += s1.data()[i] == 501, w0 += s0.data()[i] == 510, w1 += s1.data()[i] == 511;
   ASSERT_LT(v0, 0.2 * v1);  // the plain coverage rule would call 501 new
   ASSERT_LT(w0, 0.2 * w1);  // and 511
-  Tracker tr;
-  tr.add_stage(std::move(s0), "s0");
-  tr.add_stage(std::move(s1), "s1");
-  const auto r = tr.result();
+  const auto r = track_pair(std::move(s0), std::move(s1));
   EXPECT_NEAR(r.maps[1].axial_scale(), 0.9, 0.005);
   EXPECT_EQ(row(r, 1, 501).parent_label, 500u);
   EXPECT_EQ(row(r, 1, 501).grain, 500u);
@@ -435,12 +428,7 @@ TEST(Track, GrainEnteringTheFieldKeepsItsParent) {
 // the part of it the map says stage 0 saw is larger than the sliver stage 0 did see, so the plain
 // coverage rule called it new; that sliver, cut by stage 0's face, lands in it whole.
 TEST(Track, GrainPushedFurtherInThanTheMapKeepsItsSliverAsParent) {
-  Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage();
-  const auto c0 = centres(0), c1 = centres(0.1);
-  for (size_t q = 0; q < c0.size(); ++q) {
-    paint(s0, label_at(0, q), c0[q], 6);
-    paint(s1, label_at(1, q), c1[q], 6);
-  }
+  auto [s0, s1] = lattice_stages(0.1);
   paint(s0, 520, {51.7, 44, 16}, 5);  // one slice of it at the top face
   paint(s1, 521, {51.7 * 0.9 - 2.5, 44, 16}, 5);
   int64_t sliver = 0, grain = 0, seen = 0;
@@ -454,10 +442,7 @@ TEST(Track, GrainPushedFurtherInThanTheMapKeepsItsSliverAsParent) {
   ASSERT_GT(sliver, 0);
   ASSERT_GT(2 * (grain - seen), grain);  // it mostly entered the field since
   ASSERT_LT(sliver, 0.2 * seen);          // the plain coverage rule would call 521 new
-  Tracker tr;
-  tr.add_stage(std::move(s0), "s0");
-  tr.add_stage(std::move(s1), "s1");
-  const auto r = tr.result();
+  const auto r = track_pair(std::move(s0), std::move(s1));
   ASSERT_NEAR(r.maps[1].axial_scale(), 0.9, 0.005);
   EXPECT_EQ(row(r, 1, 521).parent_label, 520u);
   EXPECT_EQ(row(r, 1, 521).grain, 520u);
@@ -468,12 +453,7 @@ TEST(Track, GrainPushedFurtherInThanTheMapKeepsItsSliverAsParent) {
 // the sliver, cut by stage 0's face and left without child, lies within its equivalent sphere
 // plus the slack. Before, it was new, and the sliver lost.
 TEST(Track, EnteringGrainAndChildlessSliverBesideItAreOneGrain) {
-  Volume<uint32_t> s0 = empty_stage(), s1 = empty_stage();
-  const auto c0 = centres(0), c1 = centres(0.1);
-  for (size_t q = 0; q < c0.size(); ++q) {
-    paint(s0, label_at(0, q), c0[q], 6);
-    paint(s1, label_at(1, q), c1[q], 6);
-  }
+  auto [s0, s1] = lattice_stages(0.1);
   paint(s0, 530, {51.5, 16, 44}, 4.5);  // one slice of it at the top face
   paint(s1, 531, {51.5 * 0.9 - 1, 16, 49.5}, 4.5);
   const Shape sh = s1.shape();
@@ -490,10 +470,7 @@ TEST(Track, EnteringGrainAndChildlessSliverBesideItAreOneGrain) {
   ASSERT_GT(sliver, 0);
   ASSERT_EQ(landing, 0);                 // no moved voxel of the sliver covers it
   ASSERT_GT(2 * (grain - seen), grain);  // it mostly entered the field since
-  Tracker tr;
-  tr.add_stage(std::move(s0), "s0");
-  tr.add_stage(std::move(s1), "s1");
-  const auto r = tr.result();
+  const auto r = track_pair(std::move(s0), std::move(s1));
   ASSERT_NEAR(r.maps[1].axial_scale(), 0.9, 0.005);
   EXPECT_EQ(row(r, 1, 531).parent_label, 530u);
   EXPECT_EQ(row(r, 1, 531).grain, 530u);
@@ -516,10 +493,7 @@ TEST(Track, ParticleEnteringWholeIsNewWhateverANeighbourBrushes) {
   }
   const std::array<double, 3> n{46, c0[g][1], c0[g][2]};  // above it, entered through the top face
   paint(s1, 900, n, 2);
-  Tracker tr;
-  tr.add_stage(std::move(s0), "s0");
-  tr.add_stage(std::move(s1), "s1");
-  const auto r = tr.result();
+  const auto r = track_pair(std::move(s0), std::move(s1));
   ASSERT_NEAR(r.maps[1].axial_scale(), 0.9, 0.01);
   ASSERT_GT(n[0] - 2, 48 * r.maps[1].axial_scale());  // wholly outside stage 0's field, by the map
   EXPECT_EQ(row(r, 1, 900).parent_label, 0u);
@@ -644,10 +618,7 @@ TEST(Track, ChipAbsorbedByANeighboursLabelIsChipping) {
   paint(s1, 9, ca, 10, [](double, double, double x) { return x >= 5.5; });  // chip, in n's label
   int64_t cap = 0;
   for (int64_t q = 0; q < sh.voxels(); ++q) cap += s0.data()[q] == 1 && s1.data()[q] == 9;
-  Tracker tr;
-  tr.add_stage(std::move(s0), "s0");
-  tr.add_stage(std::move(s1), "s1");
-  const auto r = tr.result();
+  const auto r = track_pair(std::move(s0), std::move(s1));
   EXPECT_EQ(row(r, 1, 7).parent_label, 1u);
   EXPECT_EQ(row(r, 1, 7).event, Event::chipping);
   EXPECT_EQ(row(r, 1, 7).absorbed_vox, cap);
@@ -690,10 +661,7 @@ TEST(Track, ContactBoundaryMovingByAVoxelIsNotChipping) {
   int64_t moved = 0, va = 0;
   for (int64_t q = 0; q < sh.voxels(); ++q) moved += s0.data()[q] == 1 && s1.data()[q] == 9, va += s0.data()[q] == 1;
   EXPECT_GT(static_cast<double>(moved), new_contact_voxels(static_cast<double>(va), 1.0));
-  Tracker tr;
-  tr.add_stage(std::move(s0), "s0");
-  tr.add_stage(std::move(s1), "s1");
-  const auto r = tr.result();
+  const auto r = track_pair(std::move(s0), std::move(s1));
   EXPECT_EQ(row(r, 1, 7).parent_label, 1u);
   EXPECT_EQ(row(r, 1, 7).event, Event::intact);
   EXPECT_EQ(row(r, 1, 9).event, Event::intact);

@@ -174,9 +174,11 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
   parent.reset();
   res.void_components = count;
 
-  // Per component: voxels, and whether it reaches a face of the volume.
+  // Per component: voxels, and whether it reaches a face of the volume
+  // that does not close it (border), or only faces that do (at_face).
   std::vector<int64_t> size(size_t(count), 0);
-  std::vector<uint8_t> border(size_t(count), 0);
+  std::vector<uint8_t> border(size_t(count), 0), at_face(size_t(count), 0);
+  const auto& closed = opt.closed_faces;
   for (int64_t r = 0; r < rows; ++r) {
     const int64_t k = r / ny, j = r % ny;
     const bool face_row = k == 0 || k + 1 == s.nz || j == 0 || j + 1 == ny;
@@ -184,13 +186,16 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
       const Run& u = run[size_t(p)];
       const int64_t c = comp[size_t(p)];
       size[size_t(c)] += u.b - u.a;
-      if (face_row || u.a == 0 || u.b == nx) border[size_t(c)] = 1;
+      if (!face_row && u.a != 0 && u.b != nx) continue;
+      const bool on[6] = {k == 0, k + 1 == s.nz, j == 0, j + 1 == ny, u.a == 0, u.b == nx};
+      for (size_t f = 0; f < 6; ++f)
+        if (on[f]) (closed[f] ? at_face : border)[size_t(c)] = 1;
     }
   }
-  // Solid faces of each run of an enclosed component (whose neighbours
-  // all lie inside the volume): its two ends along x, and along y and z
-  // its voxels less those next to void (which belongs to the same
-  // component). Per run in parallel, summed per component in run order.
+  // Solid faces of each run of an enclosed component: its two ends along
+  // x, and along y and z its voxels less those next to void (which belongs
+  // to the same component); a closed face of the volume counts as solid.
+  // Per run in parallel, summed per component in run order.
   std::unique_ptr<int64_t[]> run_faces(new int64_t[size_t(R)]);
 #pragma omp parallel for schedule(static)
   for (int64_t r = 0; r < rows; ++r) {
@@ -202,6 +207,10 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
       int64_t f = 2;
       for (const auto& [kk, jj] : {std::pair{k, j - 1}, {k, j + 1}, {k - 1, j}, {k + 1, j}}) {
         int64_t open = 0;
+        if (kk < 0 || kk >= s.nz || jj < 0 || jj >= ny) {  // beyond a closed face
+          f += u.b - u.a;
+          continue;
+        }
         const auto [b1, e1] = row_runs(kk, jj);
         for_overlaps(b1, e1, u.a, u.b, [&](const Run& v) { open += std::min(u.b, v.b) - std::max(u.a, v.a); });
         f += (u.b - u.a) - open;
@@ -222,6 +231,7 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
       fill[size_t(c)] = 1;
       ++res.filled;
       res.filled_voxels += v;
+      res.filled_at_faces += at_face[size_t(c)];
     }
   }
   if (res.filled == 0) return res;

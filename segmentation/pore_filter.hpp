@@ -6,7 +6,13 @@
 // A void component (6-connected: the dual of the 26-connected solid) is
 // filled when all of these hold:
 //   * enclosed: it touches no face of the volume (so it is not part of the
-//     inter-granular void, which is connected and reaches the border);
+//     inter-granular void, which is connected and reaches the border), or
+//     only faces listed in closed_faces: the scan's own faces, which cut
+//     grains and so their pores (a pore cut by the face opens onto it; left
+//     void, the distance map dips there and the watershed splits the cut
+//     grain: 4 intact grains in 4 held-out blind scenes, session 38). Its
+//     area then counts the open face too (a pore cut through its centre,
+//     a hemisphere: Psi = 16/27; a shallow dent fails);
 //   * small: V <= max_volume_vox voxels;
 //   * near-spherical: sphericity Psi >= min_sphericity, with
 //       Psi = 36 pi V^2 / A^3   (1 for a ball, -> 0 for a flat sheet),
@@ -31,6 +37,7 @@
 // threads) the filter took 1.1-1.4 s with a u32 labelling of the void and
 // takes 0.31-0.35 s this way.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <string>
 
@@ -47,6 +54,10 @@ struct PoreFilterOptions {
   // falls apart into hundreds of 6-connected specks that the solid seems
   // to enclose, and filling those closed the gap.
   int void_connectivity = 6;
+  // Faces of the volume that close a void component touching them (z0, z1,
+  // y0, y1, x0, x1): the scan's own; not a slab's inner faces (the void
+  // goes on beyond them). None by default.
+  std::array<bool, 6> closed_faces{};
   static PoreFilterOptions from_grain_radius(double grain_radius_vox);
   std::string describe() const;  // one line for logs and summaries
 };
@@ -56,6 +67,7 @@ struct PoreFilterResult {
   int64_t enclosed = 0;         // of which not touching the volume border
   int64_t filled = 0;           // of which filled (small and spherical)
   int64_t filled_voxels = 0;
+  int64_t filled_at_faces = 0;  // of the filled, those a closed face cut
 };
 
 // Sphericity 36 pi V^2 / A^3 with A = (2/3) faces, clipped to [0, 1].

@@ -346,6 +346,8 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   const uint8_t bright = graded ? 2 : 1;
 
   r.pore_criteria = {opt.pore_max_volume_vox, opt.pore_min_sphericity};
+  // The scan's faces close the pores they cut; a slab's inner faces do not.
+  r.pore_criteria.closed_faces = {!slab || slab->window.scan_bottom, !slab || slab->window.scan_top, true, true, true, true};
   if (opt.fill_pores) r.pores = fill_pores(solid, r.pore_criteria, 1, bright);
   nsolid += r.pores.filled_voxels;
   if (graded && opt.fill_pores) {
@@ -354,7 +356,9 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
     // specks. Any shape (an enclosed pocket cannot part two
     // pieces that the bright solid around it joins), twice the pore volume
     // (the pore with its shell).
-    r.dim_pockets = fill_pores(solid, {2 * opt.pore_max_volume_vox, 0.0, 26}, 2, 2);
+    PoreFilterOptions pockets{2 * opt.pore_max_volume_vox, 0.0, 26};
+    pockets.closed_faces = r.pore_criteria.closed_faces;
+    r.dim_pockets = fill_pores(solid, pockets, 2, 2);
     if (r.dim_pockets.filled) nsolid = count_solid();  // an enclosed pocket may hold void voxels too
   }
   clock.lap("pores");
@@ -566,7 +570,8 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                 {"void_components", r.pores.void_components},
                 {"enclosed", r.pores.enclosed},
                 {"filled", r.pores.filled},
-                {"filled_voxels", r.pores.filled_voxels}};
+                {"filled_voxels", r.pores.filled_voxels},
+                {"filled_at_faces", r.pores.filled_at_faces}};
   j["grey_evidence"] = {{"enabled", r.graded},
                         {"bright_fraction", o.bright_fraction},
                         {"bright_sigmas", o.bright_sigmas},

@@ -183,10 +183,10 @@ bool mostly_unseen(const LineageRow& b, int64_t unseen) { return 2 * unseen > b.
 // the parent must cover min_overlap_fraction of the voxels of b that stage A could
 // see (unseen: those that entered the field since, mapped_outside()), or, where b mostly
 // entered the field since, be a particle cut by A's faces at least half of which lands in b.
-// A particle the map
-// sends wholly outside A was not in its field: new, even where a neighbour's refined
-// shift (step 4) brushes it (measured: 13 of the 19 wrong parents of particles that
-// mostly entered the field, on the truth labels of bench/track's R 8 window; no right one).
+// A particle the map sends wholly outside A was not in its field: new, even where a
+// neighbour's refined shift (step 4) brushes it (measured: 13 of the 19 wrong parents of
+// particles that mostly entered the field, on the truth labels of bench/track's R 8 window;
+// no right one).
 void assign_parents(const std::vector<Overlap>& ov, const LabelIndex& ib, const std::vector<LineageRow>& a_rows,
                     const std::vector<LineageRow>& b_rows, const std::vector<int64_t>& unseen,
                     const TrackOptions& opt, std::vector<int32_t>& parent, std::vector<int64_t>& covered) {

@@ -10,7 +10,7 @@
 //     only faces listed in closed_faces: the scan's own faces, which cut
 //     grains and so their pores (a pore cut by the face opens onto it; left
 //     void, the distance map dips there and the watershed splits the cut
-//     grain: 4 intact grains in 4 held-out blind scenes, session 38). Its
+//     grain: 4 intact grains in 4 new blind scenes, session 38). Its
 //     area then counts the open face too (a pore cut through its centre,
 //     a hemisphere: Psi = 16/27; a shallow dent fails);
 //   * small: V <= max_volume_vox voxels;

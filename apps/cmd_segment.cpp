@@ -99,7 +99,8 @@ void print_plan(const SegmentJob& o, const tg::SegmentOptions& s) {
                      : std::string("off"));
   fmt::print("  face caps: {}\n", s.split && s.face_caps
                                      ? "a label whose footprint on a scan face holds two distance maxima parted by a "
-                                       "dim contact gives up the cap of the grain cut by the face"
+                                       "dim contact, or goes on behind its footprint past a dim layer into a grain, "
+                                       "gives up the cap of the grain cut by the face"
                                      : "off");
   fmt::print("  noise specks: {}\n", s.noise_specks ? fmt::format("labels whose mean grey is void noise over the "
                                                                  "threshold (z < {:.3g}) and that have no core are "
@@ -284,7 +285,8 @@ static tg::app::Registrar reg{{"segment", 30,
     "cores parted by a darker sheet (fragments a voxel apart) is cut along it (--no-split); face\n"
     "caps: a grain cut by a face of the scan that shows only a thin cap, given by the watershed to\n"
     "the grain it touches, gets its own label when its section on the face is a second disc and\n"
-    "the contact between them is dim (--no-face-caps).\n"
+    "the contact between them is dim, or when the label goes on behind the cap, past a dim layer,\n"
+    "into a grain whose pole it is pressed on (--no-face-caps).\n"
     "Defaults derive from the expected grain radius R in voxels: pores up to 2 % of a grain's\n"
     "volume are filled (a pore the scan's face cuts too: the face closes it); marker depth\n"
     "h = max(0.5, 0.035 R) voxels (bumps grow with the grain;\n"
@@ -388,8 +390,8 @@ static tg::app::Registrar reg{{"segment", 30,
                 "fragments whose gap blur and noise bridged)");
   sub->add_flag("--no-face-caps", o->no_face_caps,
                 "Do not look for grains cut by a face of the scan whose thin cap the watershed gave to a neighbour "
-                "(two distance maxima in a label's footprint on the face, parted by a dim contact); runs with the "
-                "split repair");
+                "(two distance maxima in a label's footprint on the face parted by a dim contact, or one whose "
+                "label goes on behind the cap past a dim layer into a grain); runs with the split repair");
   sub->add_flag("--keep-noise-specks", o->keep_noise_specks,
                 "Keep labels whose mean grey says they are void noise lifted over the threshold (by default such "
                 "specks are cleared: noise_specks.hpp, the summary's noise_specks)");

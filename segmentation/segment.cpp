@@ -618,8 +618,10 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                            "(dynamic >= {} voxel, >= {} voxels deep) is parted among them, the parts' cores seeding a "
                            "watershed of the label's own distance map; a piece of >= {} voxels leaves it when the raw "
                            "grey on the sheet between it and the largest piece lies >= {} of (solid peak - threshold) "
-                           "below the solid peak (split_labels.hpp split_face_caps)",
-                           d.h, d.min_peak, d.min_piece_vox, d.min_dip);
+                           "below the solid peak; a footprint with one maximum whose label, behind a layer that thins "
+                           "out or darkens by as much, is bright solid again (a cap pressed on a grain behind it) is "
+                           "cut so too, the sheet >= {} below (split_labels.hpp split_face_caps)",
+                           d.h, d.min_peak, d.min_piece_vox, d.min_dip, d.min_dip_in_front);
                      }()},
                     {"candidates", r.face_caps.candidates},
                     {"labels_split", r.face_caps.split},

@@ -489,14 +489,101 @@ struct Box2 {
 constexpr float kFaceSeedCore = 0.5f;
 
 struct Seed {
-  int64_t voxel;  // global index, on the face
+  int64_t voxel;  // global index, on the face (or behind it: step 1b)
   uint32_t id;    // 1.. (the footprint's significant maxima)
 };
 
+// A label's seeds, and whether they come from step 1b (a cap in front of a
+// neighbour), which asks the sheet for a contact's dip (min_dip_in_front).
+struct CapCandidate {
+  std::vector<Seed> seeds;
+  bool in_front = false;
+};
+
+
+// Step 1b of the header: a footprint with one maximum, the cap's, whose
+// label goes on behind it into a neighbour (the cap is pressed on its
+// pole, so the label's sections grow inward as one grain's would). Walks
+// the cylinder over the footprint's core (`core`, face pixels) inward: the
+// mean raw grey of the label's voxels in it, layer by layer. The cap is
+// thin: a cap deeper than half its footprint's radius is a good part of a
+// grain, with a distance maximum, so a marker, of its own (dev scenes:
+// caps pressed on a neighbour 1-2 voxels deep; a dim layer deeper is a
+// pore, 4-17 voxels in on the pores 2-4 and PSF 1.5 scenes of the sweep).
+// So the layer at depth 1..max(1, top/2) where the label thins out (under
+// 30 % of the core) or darkens by min_dip of the solid's height is the
+// back of the cap; a layer deeper (by at most top+4) that is the label's
+// again and as bright as solid (within kCapBackBright) is a body behind it. One convex
+// grain's chords along the normal neither leave it and come back nor cross
+// a dim sheet, but a pore in the cylinder darkens a layer too: the sheet
+// test of step 3 decides, at min_dip_in_front. Returns the seeds (the face
+// core and the cylinder above the dim layer: 1; the bright layer: 2) or
+// none. Dev scenes: blind_scene.py R 16 seeds 401-406 (and 302 for the
+// sheet's dip), stage 4 scans of blind_series R 14 and R 18 (the face
+// layer); bench/segmentation/RESULTS.md "Caps in front of a neighbour".
+constexpr double kCapBackBright = 0.1;
+
+std::vector<Seed> cap_in_front_seeds(const Volume<uint32_t>& labels, const Volume<uint8_t>& grey, uint32_t l,
+                                     const Face& f, const std::vector<int64_t>& core, float top,
+                                     const FaceCapOptions& opt) {
+  const Shape S = labels.shape();
+  const uint32_t* L = labels.data();
+  const uint8_t* G = grey.data();
+  const double height = opt.solid - opt.floor;
+  if (core.empty() || !(height > 0)) return {};
+  const int64_t dims[3] = {S.nz, S.ny, S.nx};
+  const int64_t stride = f.a == 0 ? S.slice_voxels() : (f.a == 1 ? S.nx : 1);
+  const int64_t inward = f.c == 0 ? stride : -stride;
+  const int64_t n_core = int64_t(core.size());
+  const int64_t enough = std::max<int64_t>(3, (3 * n_core + 9) / 10);
+  const int64_t dip_last = std::max<int64_t>(1, int64_t(top / 2));
+  // Layer d of the cylinder: how many core pixels are label l there, and
+  // the darkness (solid - mean grey) / height of those.
+  auto layer = [&](int64_t d, double& dark) {
+    int64_t n = 0;
+    double sum = 0;
+    for (int64_t g : core) {
+      const int64_t q = g + d * inward;
+      if (L[q] == l) ++n, sum += G[q];
+    }
+    dark = n ? (opt.solid - sum / double(n)) / height : 1.0;
+    return n;
+  };
+  // The cap is solid where the face cuts it. A piece of one grain only a
+  // voxel or two thick at the face is partial-volume dim through, and its
+  // "back" is its own far surface (late-stage scans: face layers 0.35-0.67
+  // dark on every such false cap, 0.01-0.23 on the caps pressed on a
+  // neighbour, dev scenes R 14-18 stage 4 and R 16 seeds 402-406).
+  double front = 0;
+  if (layer(0, front) < enough || front >= opt.min_dip) return {};
+  int64_t back = -1, body = -1;
+  for (int64_t d = 1; d < dims[f.a] && d <= dip_last + int64_t(std::ceil(top)) + 4; ++d) {
+    double dark = 0;
+    const int64_t n = layer(d, dark);
+    if (back < 0) {
+      if (d > dip_last) break;
+      if (n < enough || dark >= opt.min_dip) back = d;
+    } else if (d > back + int64_t(std::ceil(top)) + 4) {
+      break;
+    } else if (n >= enough && dark < kCapBackBright) {
+      body = d;
+      break;
+    }
+  }
+  if (body < 0) return {};
+  std::vector<Seed> seeds;
+  for (int64_t g : core) {
+    for (int64_t d = 0; d < back; ++d)
+      if (L[g + d * inward] == l) seeds.push_back({g + d * inward, 1});
+    if (L[g + body * inward] == l) seeds.push_back({g + body * inward, 2});
+  }
+  return seeds;
+}
+
 // Step 1 of the header for label l's footprint within `b` on face f: the
 // seeds (empty: not a candidate).
-std::vector<Seed> footprint_seeds(const Volume<uint32_t>& labels, uint32_t l, const Face& f, const Box2& b,
-                                  const FaceCapOptions& opt) {
+CapCandidate footprint_seeds(const Volume<uint32_t>& labels, const Volume<uint8_t>& grey, uint32_t l, const Face& f,
+                             const Box2& b, const FaceCapOptions& opt) {
   const Shape S = labels.shape();
   const uint32_t* L = labels.data();
   const int64_t u0 = std::max<int64_t>(b.u0 - 1, 0), u1 = std::min(b.u1 + 1, f.nu - 1);
@@ -525,7 +612,7 @@ std::vector<Seed> footprint_seeds(const Volume<uint32_t>& labels, uint32_t l, co
     if (v + 1 < hv) visit(q + 1);
   }
   for (int64_t q = 0; q < hu * hv; ++q) F[q] = F[q] == 2 ? 0 : 1;
-  if (double(area) < 2 * M_PI * opt.min_peak * opt.min_peak) return {};  // no room for two discs min_peak deep
+  if (double(area) < M_PI * opt.min_peak * opt.min_peak) return {};  // no room for a disc min_peak deep
   EdtOptions eo;
   const std::array<double, 3> sp = opt.spacing;
   eo.spacing = f.a == 0 ? std::array<double, 3>{1.0, sp[1], sp[2]}
@@ -538,7 +625,7 @@ std::vector<Seed> footprint_seeds(const Volume<uint32_t>& labels, uint32_t l, co
     if (!std::isfinite(D[q])) return {};  // the footprint fills the whole face
   Volume<uint32_t> markers;
   const uint32_t k = find_markers(dist, markers, {opt.h, 26});
-  if (k < 2) return {};
+  if (k == 0 || (k == 1 && !opt.caps_in_front)) return {};
   const uint32_t* M = markers.data();
   std::vector<float> peak(size_t(k) + 1, 0.0f);
   for (int64_t q = 0; q < hu * hv; ++q) peak[M[q]] = std::max(peak[M[q]], D[q]);
@@ -546,7 +633,21 @@ std::vector<Seed> footprint_seeds(const Volume<uint32_t>& labels, uint32_t l, co
   uint32_t deep = 0;
   for (uint32_t m = 1; m <= k; ++m)
     if (peak[m] >= opt.min_peak) id[m] = ++deep;
-  if (deep < 2) return {};
+  if (deep == 0) return {};
+  if (deep >= 2 && double(area) < 2 * M_PI * opt.min_peak * opt.min_peak) return {};  // no room for two discs
+  if (deep == 1) {
+    if (!opt.caps_in_front) return {};
+    float top1 = 0;
+    for (uint32_t m = 1; m <= k; ++m)
+      if (id[m]) top1 = peak[m];
+    std::vector<int64_t> core;
+    for (int64_t u = 0; u < hu; ++u)
+      for (int64_t v = 0; v < hv; ++v) {
+        const int64_t g = f.index(S, u0 + u, v0 + v);
+        if (L[g] == l && D[u * hv + v] >= kFaceSeedCore * top1) core.push_back(g);
+      }
+    return {cap_in_front_seeds(labels, grey, l, f, core, top1, opt), true};
+  }
   // The whole footprint parted among the deep maxima (a watershed of its
   // distance map, no lines), and the core of each part seeds the flood in
   // depth: seeded at the maxima alone, the neighbour's front took much of a
@@ -564,13 +665,13 @@ std::vector<Seed> footprint_seeds(const Volume<uint32_t>& labels, uint32_t l, co
       const uint32_t m = M[u * hv + v];
       if (m && L[g] == l && D[u * hv + v] >= kFaceSeedCore * top[m]) seeds.push_back({g, m});
     }
-  return seeds;
+  return {seeds, false};
 }
 
 // Steps 2 and 3 for one candidate: the voxels that leave label l, with
 // their piece ordinal 1.. (Pieces::count - 1 new labels).
 Pieces split_cap(const Volume<uint32_t>& labels, const Volume<uint8_t>& grey, uint32_t l, const LabelBox& bx,
-                 const std::vector<Seed>& seeds, const FaceCapOptions& opt) {
+                 const std::vector<Seed>& seeds, double min_dip, const FaceCapOptions& opt) {
   Pieces out;
   const Shape S = labels.shape();
   const uint32_t* L = labels.data();
@@ -636,7 +737,7 @@ Pieces split_cap(const Volume<uint32_t>& labels, const Volume<uint8_t>& grey, ui
   for (uint32_t m = 1; m <= ids; ++m) {
     if (m == main || size[m] < opt.min_piece_vox || sheet_n[m] == 0 || !(height > 0)) continue;
     const double dip = (opt.solid - sheet_sum[m] / double(sheet_n[m])) / height;
-    if (dip >= opt.min_dip) ordinal[m] = out.count++;
+    if (dip >= min_dip) ordinal[m] = out.count++;
   }
   if (out.count < 2) return out;
   for (int64_t k = 0; k < B.nz; ++k)
@@ -685,25 +786,25 @@ FaceCapResult split_face_caps(Volume<uint32_t>& labels, uint32_t* count, const V
       }
     for (const auto& [l, b] : boxes) tasks.push_back({f, l, b});
   }
-  std::vector<std::vector<Seed>> found(tasks.size());
+  std::vector<CapCandidate> found(tasks.size());
 #pragma omp parallel for schedule(dynamic, 4)
   for (int64_t t = 0; t < int64_t(tasks.size()); ++t) {
     const Task& k = tasks[size_t(t)];
-    found[size_t(t)] = footprint_seeds(labels, k.l, k.f, k.b, opt);
+    found[size_t(t)] = footprint_seeds(labels, grey, k.l, k.f, k.b, opt);
   }
-  std::map<uint32_t, std::vector<Seed>> candidate;
+  std::map<uint32_t, CapCandidate> candidate;
   for (size_t t = 0; t < tasks.size(); ++t)
-    if (!found[t].empty() && !candidate.count(tasks[t].l)) candidate.emplace(tasks[t].l, std::move(found[t]));
+    if (!found[t].seeds.empty() && !candidate.count(tasks[t].l)) candidate.emplace(tasks[t].l, std::move(found[t]));
   res.candidates = int64_t(candidate.size());
   if (candidate.empty()) return res;
   const std::vector<LabelBox> box = label_boxes(labels, n);
   uint32_t next = n;
   uint32_t* Lw = labels.data();
-  for (const auto& [l, seeds] : candidate) {
+  for (const auto& [l, c] : candidate) {
     const LabelBox& b = box[l];
     const int64_t bv = (b.z1 - b.z0 + 1) * (b.y1 - b.y0 + 1) * (b.x1 - b.x0 + 1);
     if (bv > int64_t(1) << 28) continue;
-    const Pieces p = split_cap(labels, grey, l, b, seeds, opt);
+    const Pieces p = split_cap(labels, grey, l, b, c.seeds, c.in_front ? opt.min_dip_in_front : opt.min_dip, opt);
     if (!renumber_pieces(Lw, p, next, "face-cap repair")) continue;
     ++res.split;
     res.pieces_added += p.count - 1;

@@ -121,6 +121,16 @@ SplitResult split_by_grey(Volume<uint32_t>& labels, uint32_t* count, const Volum
 //     holes filled: pores cut by the face), the 2-D distance map of it,
 //     its h-maxima (markers.hpp) of dynamic >= h; a footprint with two or
 //     more maxima at least min_peak deep is a candidate.
+//  1b. A footprint with one maximum is a candidate when the label goes on
+//     behind it into a neighbour whose pole the cap is pressed on (that
+//     neighbour has no footprint of its own): the cylinder over the
+//     footprint's core, bright at the face, thins out or darkens by
+//     min_dip within half the footprint's radius and is the label's, as bright
+//     as solid, again deeper (R 16 dev scenes: 1-2 such caps a scene,
+//     35-375 voxels, glued to a grain behind them). Seeds: the face core
+//     with the cylinder above the dim layer, and the bright layer below;
+//     step 3 then asks a contact's dip, min_dip_in_front (a pore in one
+//     grain's cylinder dims the sheet to 0.25-0.27).
 //  2. The footprint is parted among those maxima (a watershed of its
 //     distance map); the core of each part (its pixels at least half as
 //     deep as its maximum) seeds a marker-controlled watershed of the
@@ -153,6 +163,13 @@ struct FaceCapOptions {
   int64_t min_piece_vox = 27;
   double solid = 0, floor = 0;       // the solid's grey peak and the threshold, in the grey's units
   double min_dip = 0.25;             // (solid - sheet) / (solid - floor)
+  bool caps_in_front = true;         // step 1b: one-maximum footprints with a grain behind the cap
+  // The sheet's dip step 1b asks for: with one footprint maximum only the
+  // grey says two grains, and a pore in the cylinder dims the sheet the
+  // flood draws through one grain to 0.25-0.27 (dev scenes' false
+  // candidates, R 16 seeds 302, 403); caps pressed on a neighbour 0.37-0.59
+  // there, 0.35-0.39 in the unit test's layout.
+  double min_dip_in_front = 0.30;
 };
 
 struct FaceCapResult {

@@ -146,6 +146,53 @@ TEST(FaceCaps, OneGrainWithANotchedFootprintStaysWhole) {
   EXPECT_GE(tested, 2);
 }
 
+// A cap in front of a neighbour (step 1b of split_face_caps): B's centre 9
+// voxels beyond the face z = 0 (a cap 3 voxels deep shows), A behind it,
+// 5 voxels aside, pressed 0.5 voxel into it (|AB| = 25.5), so A's pole lies
+// 2 voxels inside the face and A has no footprint there: the label's
+// footprint is the cap's disc alone, one maximum. Chosen among B at -9 and
+// -10, overlaps 0.5 and 1, offsets 0-8 (noise seeds 1-3) as one the
+// watershed glues; straight behind (offset 0) the contact's solid lens
+// fills the cylinder over the cap's core and no layer darkens.
+const std::vector<Ball> kFrontScene{{-9 + std::sqrt(25.5 * 25.5 - 25.0), 24, 29, 14}, {-9, 24, 24, 12}};
+
+TEST(FaceCaps, CapInFrontOfANeighbourGetsItsOwnLabel) {
+  int glued = 0;
+  for (uint64_t seed : {21u, 22u, 23u, 24u, 25u, 26u}) {
+    const Scene sc = render(Shape{44, 48, 48}, kFrontScene, no_slot, seed);
+    SegmentOptions o = options();
+    o.face_caps = false;
+    glued += best_iou(sc.truth, segment(sc.grey, o).labels, 2) < 0.5;
+    const SegmentResult r = segment(sc.grey, options());
+    EXPECT_GE(best_iou(sc.truth, r.labels, 2), 0.5) << "seed " << seed;
+    EXPECT_GE(best_iou(sc.truth, r.labels, 1), 0.85) << "seed " << seed;
+    EXPECT_EQ(r.count, 2u) << "seed " << seed;
+  }
+  EXPECT_GE(glued, 3);  // without the repair the cap is mostly the neighbour's
+}
+
+TEST(FaceCaps, OneGrainWithAPoreBehindItsFaceStaysWhole) {
+  // One grain cut by the face z = 0 through its upper part, a pore of
+  // radius 4 centred 5.5 voxels inside the face under the footprint's
+  // centre: the cylinder over the footprint's core darkens there and is
+  // bright again deeper (a step 1b candidate), but the sheet the flood
+  // draws runs mostly through the grain's solid. (Pores of radius 3-4.5,
+  // 4.5-6 voxels deep, noise seeds 1-3: a candidate, never split.)
+  const std::vector<Ball> one{{8, 24, 24, 14}};
+  auto pore = [](double z, double y, double x) {
+    return (z - 5.5) * (z - 5.5) + (y - 24) * (y - 24) + (x - 24) * (x - 24) <= 4.0 * 4.0;
+  };
+  int tested = 0;
+  for (uint64_t seed : {21u, 22u, 23u, 24u}) {
+    const Scene sc = render(Shape{32, 48, 48}, one, pore, seed);
+    const SegmentResult r = segment(sc.grey, options());
+    tested += r.face_caps.candidates >= 1;
+    EXPECT_EQ(r.face_caps.split, 0) << "seed " << seed;
+    EXPECT_EQ(r.count, 1u) << "seed " << seed;
+  }
+  EXPECT_GE(tested, 2);
+}
+
 TEST(FaceCaps, SameLabelsSlabBySlab) {
   // The cap scene in a window of 192 slices, segmented whole and in slabs
   // of 16 core slices and 80 of margin: the z = 0 face is a scan face for

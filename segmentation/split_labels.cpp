@@ -500,7 +500,6 @@ struct CapCandidate {
   bool in_front = false;
 };
 
-
 // Step 1b of the header: a footprint with one maximum, the cap's, whose
 // label goes on behind it into a neighbour (the cap is pressed on its
 // pole, so the label's sections grow inward as one grain's would). Walks
@@ -513,14 +512,15 @@ struct CapCandidate {
 // So the layer at depth 1..max(1, top/2) where the label thins out (under
 // 30 % of the core) or darkens by min_dip of the solid's height is the
 // back of the cap; a layer deeper (by at most top+4) that is the label's
-// again and as bright as solid (within kCapBackBright) is a body behind it. One convex
-// grain's chords along the normal neither leave it and come back nor cross
-// a dim sheet, but a pore in the cylinder darkens a layer too: the sheet
-// test of step 3 decides, at min_dip_in_front. Returns the seeds (the face
-// core and the cylinder above the dim layer: 1; the bright layer: 2) or
-// none. Dev scenes: blind_scene.py R 16 seeds 401-406 (and 302 for the
-// sheet's dip), stage 4 scans of blind_series R 14 and R 18 (the face
-// layer); bench/segmentation/RESULTS.md "Caps in front of a neighbour".
+// again and as bright as solid (within kCapBackBright) is a body behind
+// it. One convex grain's chords along the normal neither leave it and
+// come back nor cross a dim sheet, but a pore in the cylinder darkens a
+// layer too: the sheet test of step 3 decides, at min_dip_in_front.
+// Returns the seeds (the face core and the cylinder above the dim layer:
+// 1; the bright layer: 2) or none. Dev scenes: blind_scene.py R 16 seeds
+// 401-406 (and 302 for the sheet's dip), stage 4 scans of blind_series R 14
+// and R 18 (the face layer); bench/segmentation/RESULTS.md "Caps in front
+// of a neighbour".
 constexpr double kCapBackBright = 0.1;
 
 std::vector<Seed> cap_in_front_seeds(const Volume<uint32_t>& labels, const Volume<uint8_t>& grey, uint32_t l,

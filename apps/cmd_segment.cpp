@@ -72,6 +72,7 @@ tg::SegmentOptions segment_options(const SegmentJob& o, const tg::Geometry& geom
   s.merge = !o.no_merge;
   s.split = !o.no_split;
   s.face_caps = !o.no_face_caps;
+  s.face_slivers = !o.no_face_slivers;
   s.noise_specks = !o.keep_noise_specks;
   s.grey_evidence = !o.no_grey_evidence;
   if (o.grain_radius_vox > 0) {
@@ -102,6 +103,11 @@ void print_plan(const SegmentJob& o, const tg::SegmentOptions& s) {
                                        "dim contact, or goes on behind its footprint past a dim layer into a grain, "
                                        "gives up the cap of the grain cut by the face"
                                      : "off");
+  fmt::print("  face slivers: {}\n", s.face_slivers && s.threshold != tg::ThresholdMethod::local
+                                        ? "labels lying within 2 voxels of a scan face take the voxels beside them "
+                                          "above half their own contrast over the void, where that is below the "
+                                          "threshold (dim, partial-volume slivers); the size floor applies after"
+                                        : "off");
   fmt::print("  noise specks: {}\n", s.noise_specks ? fmt::format("labels whose mean grey is void noise over the "
                                                                  "threshold (z < {:.3g}) and that have no core are "
                                                                  "cleared", s.speck_z)
@@ -235,6 +241,9 @@ int run_segment(SegmentJob& o) {
                "smoothed over {:.2g} voxels)\n",
                res.split.split, res.split.tested, res.split.pieces_added, res.split_depth, res.smoothed_noise_sigma,
                res.split_smoothing_vox);
+  if (res.face_slivers_used && res.face_slivers.labels_grown)
+    fmt::print("  face slivers: {} thin labels on the scan's faces took {} partial-volume voxels\n",
+               res.face_slivers.labels_grown, res.face_slivers.voxels_added);
   if (res.face_caps_used && res.face_caps.candidates)
     fmt::print("  face caps: {} of {} candidate labels on the scan's faces split ({} pieces added)\n",
                res.face_caps.split, res.face_caps.candidates, res.face_caps.pieces_added);
@@ -286,7 +295,10 @@ static tg::app::Registrar reg{{"segment", 30,
     "caps: a grain cut by a face of the scan that shows only a thin cap, given by the watershed to\n"
     "the grain it touches, gets its own label when its section on the face is a second disc and\n"
     "the contact between them is dim, or when the label goes on behind the cap, past a dim layer,\n"
-    "into a grain whose pole it is pressed on (--no-face-caps).\n"
+    "into a grain whose pole it is pressed on (--no-face-caps); face slivers: a grain the face\n"
+    "cuts a voxel or two from its edge is all partial volume; where it is dim (a volume imaged\n"
+    "alone), its label (within 2 voxels of the face) takes the voxels beside it above half its own\n"
+    "contrast over the void, before the size floor (--no-face-slivers).\n"
     "Defaults derive from the expected grain radius R in voxels: pores up to 2 % of a grain's\n"
     "volume are filled (a pore the scan's face cuts too: the face closes it); marker depth\n"
     "h = max(0.5, 0.035 R) voxels (bumps grow with the grain;\n"
@@ -392,6 +404,10 @@ static tg::app::Registrar reg{{"segment", 30,
                 "Do not look for grains cut by a face of the scan whose thin cap the watershed gave to a neighbour "
                 "(two distance maxima in a label's footprint on the face parted by a dim contact, or one whose "
                 "label goes on behind the cap past a dim layer into a grain); runs with the split repair");
+  sub->add_flag("--no-face-slivers", o->no_face_slivers,
+                "Do not let labels lying within 2 voxels of a scan face (grains the face cuts near their edge: "
+                "all partial volume) take the unlabelled voxels beside them above half their own contrast over the "
+                "void grey");
   sub->add_flag("--keep-noise-specks", o->keep_noise_specks,
                 "Keep labels whose mean grey says they are void noise lifted over the threshold (by default such "
                 "specks are cleared: noise_specks.hpp, the summary's noise_specks)");

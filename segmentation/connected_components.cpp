@@ -171,7 +171,8 @@ ComponentsResult connected_components(const Volume<uint8_t>& mask, Volume<uint32
   return res;
 }
 
-RelabelResult relabel_consecutive(Volume<uint32_t>& labels, int64_t min_size, const std::vector<uint32_t>* premap) {
+RelabelResult relabel_consecutive(Volume<uint32_t>& labels, int64_t min_size, const std::vector<uint32_t>* premap,
+                                  const std::vector<uint8_t>* exempt) {
   uint32_t* L = labels.data();
   const int64_t n = labels.size();
   size_t nl = 0;
@@ -216,7 +217,7 @@ RelabelResult relabel_consecutive(Volume<uint32_t>& labels, int64_t min_size, co
   for (const auto& o : order)
     for (const uint32_t l : o) {
       if (to[l] != kUnset) continue;
-      if (total[l] >= min_size) {
+      if (total[l] >= min_size || (exempt && l < exempt->size() && (*exempt)[l])) {
         to[l] = ++res.count;
         res.sizes.push_back(total[l]);
       } else {

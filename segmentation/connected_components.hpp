@@ -55,7 +55,10 @@ struct RelabelResult {
 // in parallel (each thread lists the labels of its share in order).
 // With a premap, each label l is first read as premap[l] (every label must
 // be below premap.size()): a merge's roots applied in the same pass.
+// exempt (or nullptr): exempt[l] != 0 keeps label l (after the premap)
+// whatever its size.
 RelabelResult relabel_consecutive(Volume<uint32_t>& labels, int64_t min_size = 1,
-                                  const std::vector<uint32_t>* premap = nullptr);
+                                  const std::vector<uint32_t>* premap = nullptr,
+                                  const std::vector<uint8_t>* exempt = nullptr);
 
 }  // namespace tg

@@ -108,18 +108,23 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
       if (o.split_depth_sigmas * sm.sigma <= kSplitDepthShare * height) break;
     }
   }
-  if (o.noise_specks && o.threshold != ThresholdMethod::local) {
+  if ((o.noise_specks || o.face_slivers) && o.threshold != ThresholdMethod::local) {
     // The void's noise above t (noise_specks.hpp): the void peak's mode and
     // the sigma of its lower side, the voxels a noisy scan clipped at 0
     // counted in (the solid's sigma is no stand-in: where the threshold lies
-    // low, the void's tail fills the histogram above it).
+    // low, the void's tail fills the histogram above it). The void's grey
+    // also sets the face slivers' low level (face_slivers.hpp).
+    const PhaseLevels pl = phase_levels(hist, d.levels.zeros_clipped ? d.levels.zero_count : 0);
+    d.void_level = pl.void_level;
+  }
+  if (o.noise_specks && o.threshold != ThresholdMethod::local) {
     const PhaseLevels pl = phase_levels(hist, d.levels.zeros_clipped ? d.levels.zero_count : 0);
     d.speck_test.threshold = double(d.t.value);
     d.speck_test.void_level = pl.void_level;
     d.speck_test.sigma = pl.void_sigma;
     d.speck_test.z_crit = o.speck_z;
   }
-  if (d.split_depth > 0 || d.speck_test.sigma > 0) d.split_code = GreyCode::from_histogram(hist);
+  if (d.split_depth > 0 || d.speck_test.sigma > 0 || d.void_level > 0) d.split_code = GreyCode::from_histogram(hist);
 }
 
 GreyDecisions choose_threshold(const Volume<uint16_t>& grey, const SegmentOptions& o) {
@@ -144,6 +149,7 @@ GreyDecisions choose_threshold(const Volume<uint16_t>& grey, const SegmentOption
 struct SlabRun {
   SlabWindow window;
   SlabOutcome* out = nullptr;
+  int64_t min_size_vox = 8;  // the caller's size floor (the slab's own chain runs with 1)
 };
 
 // grey_code (or nullptr) and split_depth > 0: the split repair runs on the
@@ -151,7 +157,8 @@ struct SlabRun {
 // noise-speck test (in the code's units) runs first.
 SegmentResult segment_graded(Volume<uint8_t> mask, const SegmentOptions& opt, bool graded, SlabRun* slab = nullptr,
                              const Volume<uint8_t>* grey_code = nullptr, double split_depth = 0,
-                             double split_floor = 0, const SpeckTest* specks = nullptr, double solid_level = 0);
+                             double split_floor = 0, const SpeckTest* specks = nullptr, double solid_level = 0,
+                             const FaceSliverOptions* slivers = nullptr);
 
 // grey -> mask with the decisions d, then the chain. The core's solid count
 // (slab) or the field of view's goes to *nsolid_out.
@@ -164,8 +171,9 @@ SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* ow
   // scan becomes the mask in its own storage.
   const bool split = d.split_depth > 0 && t.method != ThresholdMethod::local;
   const bool specks = d.speck_test.sigma > 0 && t.method != ThresholdMethod::local;
+  const bool slivers = opt.face_slivers && d.void_level > 0 && t.method != ThresholdMethod::local;
   Volume<uint8_t> code;
-  if (split || specks) code = quantise_grey(grey, d.split_code);
+  if (split || specks || slivers) code = quantise_grey(grey, d.split_code);
   Volume<uint8_t> mask;
   if (t.method == ThresholdMethod::local) {
     mask = owned ? binarise_local(std::move(*owned), d.local, d.fov) : binarise_local(grey, d.local, d.fov);
@@ -193,9 +201,13 @@ SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* ow
   st.threshold = (st.threshold - c.lo) / c.step, st.void_level = (st.void_level - c.lo) / c.step, st.sigma /= c.step;
   SegmentOptions o = opt;
   o.split_smoothing_vox = d.split_smoothing;  // chosen from the noise (decide_grey) unless given
-  return segment_graded(std::move(mask), o, d.graded, slab, split || specks ? &code : nullptr,
+  FaceSliverOptions fs;  // in the code's units; a slab's cut faces are not the scan's
+  fs.threshold = (double(t.value) - c.lo) / c.step, fs.void_level = (d.void_level - c.lo) / c.step;
+  if (slab) fs.faces[0] = slab->window.scan_bottom, fs.faces[1] = slab->window.scan_top;
+  fs.min_size_vox = slab ? slab->min_size_vox : opt.min_size_vox;
+  return segment_graded(std::move(mask), o, d.graded, slab, split || specks || slivers ? &code : nullptr,
                         split ? d.split_depth / c.step : 0.0, (double(t.value) - c.lo) / c.step, specks ? &st : nullptr,
-                        (d.solid_level - c.lo) / c.step);
+                        (d.solid_level - c.lo) / c.step, slivers ? &fs : nullptr);
 }
 
 
@@ -229,6 +241,7 @@ void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& o
   r.split_depth = r.split_used ? d.split_depth : 0.0;
   r.split_code = d.split_code;
   r.speck_test = d.speck_test;
+  r.void_level = d.void_level;
   if (opt.split && !r.split_used)
     r.notes.push_back(t.method == ThresholdMethod::local
                           ? "split repair off: it needs one global threshold (not --threshold local)"
@@ -285,7 +298,7 @@ SlabOutcome segment_slab(Volume<uint16_t>&& grey, const GreyDecisions& d, const 
   SegmentOptions opt = opt_in;
   opt.min_size_vox = 1;  // the size filter needs whole particles: the caller applies it
   SlabOutcome out;
-  SlabRun run{w, &out};
+  SlabRun run{w, &out, opt_in.min_size_vox};
   SegmentResult r0;
   StageClock clock(r0);
   Volume<uint16_t> g = std::move(grey);
@@ -326,7 +339,7 @@ namespace {
 // 1 dim, 2 bright (the header's grey evidence).
 SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in, bool graded, SlabRun* slab,
                              const Volume<uint8_t>* grey_code, double split_depth, double split_floor,
-                             const SpeckTest* specks, double solid_level) {
+                             const SpeckTest* specks, double solid_level, const FaceSliverOptions* slivers) {
   const SegmentOptions opt = opt_in.resolved();
   SegmentResult r;
   StageClock clock(r);
@@ -453,21 +466,36 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   if (opt.merge) r.merge = merge_oversegmented(lab, levels, mo);
   clock.lap("merge");
   levels = Volume<uint8_t>();
-  auto rl = relabel_consecutive(lab, opt.min_size_vox, r.merge.root.empty() ? nullptr : &r.merge.root);
+  // With the face slivers the size floor spares the labels at the scan's
+  // faces until they have grown (a sliver's voxels above the threshold are
+  // often fewer than the floor): then the last renumbering applies it.
+  const bool slivers_on = grey_code && slivers;
+  const bool floor_deferred = slivers_on && opt.min_size_vox > 1;
+  const std::vector<uint32_t>* roots = r.merge.root.empty() ? nullptr : &r.merge.root;
+  const std::vector<uint8_t> spared = floor_deferred ? labels_in_shell(lab, *slivers, roots) : std::vector<uint8_t>{};
+  auto rl = relabel_consecutive(lab, opt.min_size_vox, roots, floor_deferred ? &spared : nullptr);
   r.merge.root = {};
   r.count = rl.count;
   r.dropped = rl.dropped;
   clock.lap("relabel");
   if (grey_code && specks) {
     // Noise specks (noise_specks.hpp) before the split repair, which then
-    // need not look at them.
+    // need not look at them, and before the face slivers grow (the test
+    // reads a sliver's voxels above the threshold only).
     r.specks = find_noise_specks(lab, r.count, *grey_code, *specks);
     if (r.specks.dropped > 0) {
-      rl = relabel_consecutive(lab, opt.min_size_vox, &r.specks.keep);
+      rl = relabel_consecutive(lab, floor_deferred ? 1 : opt.min_size_vox, &r.specks.keep);
       r.count = rl.count;
     }
     r.specks.keep = {};
     clock.lap("specks");
+  }
+  if (slivers_on) {
+    // Face slivers (face_slivers.hpp): thin labels at the scan's faces take
+    // their partial-volume voxels.
+    r.face_slivers_used = true;
+    grow_face_slivers(lab, r.count, *grey_code, *slivers, &r.face_slivers);
+    clock.lap("face_slivers");
   }
   if (grey_code && split_depth > 0) {
     // Split repair (split_labels.hpp), then raster order again (a chunked
@@ -493,12 +521,16 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
       r.face_caps = split_face_caps(lab, &count, *grey_code, fo);
       clock.lap("face_caps");
     }
-    if (r.split.pieces_added + r.face_caps.pieces_added > 0) {
-      rl = relabel_consecutive(lab, opt.min_size_vox);
-      r.count = rl.count;
-      r.dropped += rl.dropped;
-      clock.lap("renumber");
-    }
+  }
+  // (Grown or joined slivers may start earlier in raster order, or leave a
+  // number unused.)
+  if (r.split.pieces_added + r.face_caps.pieces_added + r.face_slivers.slivers_joined +
+          r.face_slivers.voxels_added > 0 ||
+      floor_deferred) {
+    rl = relabel_consecutive(lab, opt.min_size_vox);
+    r.count = rl.count;
+    r.dropped += rl.dropped;
+    clock.lap("renumber");
   }
   r.labels = std::move(lab);
   if (slab) slab->out->sizes = std::move(rl.sizes);
@@ -626,6 +658,20 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                     {"candidates", r.face_caps.candidates},
                     {"labels_split", r.face_caps.split},
                     {"pieces_added", r.face_caps.pieces_added}};
+  j["face_slivers"] = {{"enabled", r.face_slivers_used},
+                       {"rule", [] {
+                          const FaceSliverOptions d;  // the values segment() runs with
+                          return fmt::format(
+                              "a label lying wholly within {} voxels of a scan face (crumbs of one under {} x the size "
+                              "floor joined across a line first) grows {} times into the unlabelled voxels there above "
+                              "void + {} (its brightest voxel - void), where that is below the threshold, whose "
+                              "labelled neighbours are its alone; the size floor applies after (face_slivers.hpp)",
+                              d.depth, d.crumbs, d.rounds, d.half);
+                        }()},
+                       {"void_level", r.void_level},
+                       {"slivers_joined", r.face_slivers.slivers_joined},
+                       {"labels_grown", r.face_slivers.labels_grown},
+                       {"voxels_added", r.face_slivers.voxels_added}};
   j["noise_specks"] = {{"enabled", r.specks.used},
                        {"rule", "a label is void noise, and cleared, when z = (m - mu0) / (s0 / sqrt(n)) < z_crit "
                                 "(m its mean grey's excess over the threshold in noise sigmas, n its voxels, mu0 and s0 "

@@ -87,6 +87,7 @@
 #include <vector>
 
 #include "core/volume.hpp"
+#include "segmentation/face_slivers.hpp"
 #include "segmentation/field_of_view.hpp"
 #include "segmentation/local_threshold.hpp"
 #include "segmentation/merge_labels.hpp"
@@ -171,6 +172,11 @@ struct SegmentOptions {
   // Face caps (split_labels.hpp split_face_caps): with the split repair.
   bool face_caps = true;
 
+  // Face slivers (face_slivers.hpp): grains the scan's faces cut a voxel or
+  // two from their edge keep their partial-volume voxels (grey scans with a
+  // global threshold).
+  bool face_slivers = true;
+
   // Noise specks (noise_specks.hpp): labels whose grey says "void noise
   // above the threshold" are cleared (grey scans with a global threshold).
   bool noise_specks = true;
@@ -206,6 +212,9 @@ struct SegmentResult {
   SplitResult split;
   bool face_caps_used = false;  // the face-cap repair ran (with the split repair, face_caps on)
   FaceCapResult face_caps;
+  bool face_slivers_used = false;  // the face-sliver step ran
+  FaceSliverResult face_slivers;   // its low_level in the code's units
+  double void_level = 0;           // the void's grey peak (0: not known)
   SpeckTest speck_test;     // grey levels (not the code's units)
   SpeckResult specks;
   uint32_t count = 0;       // final labels
@@ -248,6 +257,7 @@ struct GreyDecisions {
   double solid_level = 0;  // the solid's grey peak (split repair on): the face-cap repair's dip
   // Noise specks: the test in grey levels (sigma 0: off); it reads the same code.
   SpeckTest speck_test;
+  double void_level = 0;  // the void's grey peak (noise specks or face slivers on; 0: unknown)
 };
 
 // The split repair's smoothing, chosen from the noise when not given

@@ -8,7 +8,6 @@
 
 #include <array>
 #include <cmath>
-#include <map>
 #include <vector>
 
 #include "data_synth/imaging.hpp"
@@ -19,78 +18,10 @@
 namespace tg {
 namespace {
 
-struct Ball {
-  double z, y, x, r;
-};
-
-constexpr int64_t kPad = 6;  // rendered beyond the window on every side, then cropped: a window of a larger scan
-
-// Truth (ball index + 1, 0 void) and grey of a window `s` onto balls (centres
-// in window voxel coordinates, possibly outside it), minus the voxels where
-// `slot` is true. Partial volume by 3^3 supersampling, PSF 0.7 voxel,
-// contrast 10000 / 30000, noise 1538 (CNR 13).
-struct Scene {
-  Volume<uint32_t> truth;
-  Volume<uint16_t> grey;
-};
-template <class Slot>
-Scene render(const Shape& s, const std::vector<Ball>& balls, Slot slot, uint64_t seed) {
-  const Shape p{s.nz + 2 * kPad, s.ny + 2 * kPad, s.nx + 2 * kPad};
-  Volume<float> phi = Volume<float>::filled(p, 0.f);
-  Scene out{Volume<uint32_t>::filled(s, 0u), Volume<uint16_t>(s, Geometry::isotropic_m(10e-6))};
-  for (int64_t k = 0; k < p.nz; ++k)
-    for (int64_t j = 0; j < p.ny; ++j)
-      for (int64_t i = 0; i < p.nx; ++i) {
-        int in = 0;
-        std::array<int, 8> of{};
-        for (int a = 0; a < 3; ++a)
-          for (int b = 0; b < 3; ++b)
-            for (int d = 0; d < 3; ++d) {
-              const double z = double(k - kPad) + (a + 0.5) / 3, y = double(j - kPad) + (b + 0.5) / 3,
-                           x = double(i - kPad) + (d + 0.5) / 3;  // voxel (k, j, i) covers [k, k+1)
-              if (slot(z, y, x)) continue;
-              for (size_t q = 0; q < balls.size(); ++q) {
-                const Ball& c = balls[q];
-                if ((z - c.z) * (z - c.z) + (y - c.y) * (y - c.y) + (x - c.x) * (x - c.x) <= c.r * c.r) {
-                  ++in, ++of[q];
-                  break;
-                }
-              }
-            }
-        phi(k, j, i) = float(in) / 27.f;
-        const int64_t wk = k - kPad, wj = j - kPad, wi = i - kPad;
-        if (s.contains(wk, wj, wi) && in >= 14) {
-          size_t best = 0;
-          for (size_t q = 1; q < balls.size(); ++q)
-            if (of[q] > of[best]) best = q;
-          out.truth(wk, wj, wi) = uint32_t(best + 1);
-        }
-      }
-  synth::ImagingOptions im;
-  im.void_grey = 10000, im.solid_grey = 30000, im.psf_sigma = 0.7, im.noise_sigma = 20000.0 / 13;
-  im.seed = seed;
-  synth::apply_imaging(phi, im);
-  const Volume<uint16_t> g = synth::to_u16(phi).volume;
-  for (int64_t k = 0; k < s.nz; ++k)
-    for (int64_t j = 0; j < s.ny; ++j)
-      for (int64_t i = 0; i < s.nx; ++i) out.grey(k, j, i) = g(k + kPad, j + kPad, i + kPad);
-  return out;
-}
-
-// IoU of truth particle t with the label holding most of it.
-double best_iou(const Volume<uint32_t>& truth, const Volume<uint32_t>& labels, uint32_t t) {
-  std::map<uint32_t, int64_t> both, size;
-  int64_t nt = 0;
-  for (int64_t q = 0; q < truth.size(); ++q) {
-    if (labels[q]) ++size[labels[q]];
-    if (truth[q] != t) continue;
-    ++nt;
-    if (labels[q]) ++both[labels[q]];
-  }
-  double best = 0;
-  for (const auto& [l, c] : both) best = std::max(best, double(c) / double(nt + size[l] - c));
-  return best;
-}
+using test::Ball;
+using test::best_iou;
+using test::render;
+using test::Scene;
 
 // A: a grain inside the window, reaching 2 voxels past the face z = 0; B: a
 // grain whose centre lies 9 voxels beyond that face, so a cap 3 voxels deep

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -152,6 +153,87 @@ inline Volume<uint32_t> segment_slab_by_slab(const Volume<uint16_t>& grey, const
   plan.margin = margin;
   *out = segment_chunked(s, grey.geometry(), read, write, o, plan);
   return labels;
+}
+
+// A window onto balls (face_caps_test, face_slivers_test): centres in window
+// voxel coordinates, possibly outside it, the grey rendered kPad voxels
+// beyond the window on every side and then cropped, so blur reaches in from
+// grains outside it as in a window of a larger scan; or, with pad 0, the
+// window imaged alone, its blur replicating the border voxels (as
+// bench/segmentation/blind_scene.py images its scans).
+struct Ball {
+  double z, y, x, r;
+};
+
+inline constexpr size_t kMaxBalls = 16;
+inline constexpr int64_t kPad = 6;  // rendered beyond the window on every side, then cropped: a window of a larger scan
+
+// Truth (ball index + 1, 0 void) and grey of a window `s` onto balls (centres
+// in window voxel coordinates, possibly outside it), minus the voxels where
+// `slot` is true. Partial volume by 3^3 supersampling, PSF 0.7 voxel,
+// contrast 10000 / 30000, noise 1538 (CNR 13).
+struct Scene {
+  Volume<uint32_t> truth;
+  Volume<uint16_t> grey;
+};
+template <class Slot>
+Scene render(const Shape& s, const std::vector<Ball>& balls, Slot slot, uint64_t seed, int64_t pad = kPad) {
+  if (balls.size() > kMaxBalls) throw UsageError("render: at most 16 balls");
+  const Shape p{s.nz + 2 * pad, s.ny + 2 * pad, s.nx + 2 * pad};
+  Volume<float> phi = Volume<float>::filled(p, 0.f);
+  Scene out{Volume<uint32_t>::filled(s, 0u), Volume<uint16_t>(s, Geometry::isotropic_m(10e-6))};
+  for (int64_t k = 0; k < p.nz; ++k)
+    for (int64_t j = 0; j < p.ny; ++j)
+      for (int64_t i = 0; i < p.nx; ++i) {
+        int in = 0;
+        std::array<int, kMaxBalls> of{};
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b)
+            for (int d = 0; d < 3; ++d) {
+              const double z = double(k - pad) + (a + 0.5) / 3, y = double(j - pad) + (b + 0.5) / 3,
+                           x = double(i - pad) + (d + 0.5) / 3;  // voxel (k, j, i) covers [k, k+1)
+              if (slot(z, y, x)) continue;
+              for (size_t q = 0; q < balls.size(); ++q) {
+                const Ball& c = balls[q];
+                if ((z - c.z) * (z - c.z) + (y - c.y) * (y - c.y) + (x - c.x) * (x - c.x) <= c.r * c.r) {
+                  ++in, ++of[q];
+                  break;
+                }
+              }
+            }
+        phi(k, j, i) = float(in) / 27.f;
+        const int64_t wk = k - pad, wj = j - pad, wi = i - pad;
+        if (s.contains(wk, wj, wi) && in >= 14) {
+          size_t best = 0;
+          for (size_t q = 1; q < balls.size(); ++q)
+            if (of[q] > of[best]) best = q;
+          out.truth(wk, wj, wi) = uint32_t(best + 1);
+        }
+      }
+  synth::ImagingOptions im;
+  im.void_grey = 10000, im.solid_grey = 30000, im.psf_sigma = 0.7, im.noise_sigma = 20000.0 / 13;
+  im.seed = seed;
+  synth::apply_imaging(phi, im);
+  const Volume<uint16_t> g = synth::to_u16(phi).volume;
+  for (int64_t k = 0; k < s.nz; ++k)
+    for (int64_t j = 0; j < s.ny; ++j)
+      for (int64_t i = 0; i < s.nx; ++i) out.grey(k, j, i) = g(k + pad, j + pad, i + pad);
+  return out;
+}
+
+// IoU of truth particle t with the label holding most of it.
+inline double best_iou(const Volume<uint32_t>& truth, const Volume<uint32_t>& labels, uint32_t t) {
+  std::map<uint32_t, int64_t> both, size;
+  int64_t nt = 0;
+  for (int64_t q = 0; q < truth.size(); ++q) {
+    if (labels[q]) ++size[labels[q]];
+    if (truth[q] != t) continue;
+    ++nt;
+    if (labels[q]) ++both[labels[q]];
+  }
+  double best = 0;
+  for (const auto& [l, c] : both) best = std::max(best, double(c) / double(nt + size[l] - c));
+  return best;
 }
 
 }  // namespace tg::test

@@ -663,7 +663,8 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                           const FaceSliverOptions d;  // the values segment() runs with
                           return fmt::format(
                               "a label lying wholly within {} voxels of a scan face (crumbs of one under {} x the size "
-                              "floor joined across a line first) grows {} times into the unlabelled voxels there above "
+                              "floor joined across a line first; a crumb under the floor beside a deeper label left to "
+                              "the floor) grows {} times into the unlabelled voxels there above "
                               "void + {} (its brightest voxel - void), where that is below the threshold, whose "
                               "labelled neighbours are its alone; the size floor applies after (face_slivers.hpp)",
                               d.depth, d.crumbs, d.rounds, d.half);

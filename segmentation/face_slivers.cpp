@@ -88,44 +88,59 @@ void grow_face_slivers(Volume<uint32_t>& labels, uint32_t count, const Volume<ui
   if (opt.depth < 0 || count == 0) return;
   uint32_t* L = labels.data();
   const uint8_t* g = grey.data();
-  // Thin labels: in the shell, never at depth + 1 (a connected label going
-  // deeper crosses that layer: a 26-step changes the depth by at most 1).
-  std::vector<uint8_t> thin(size_t(count) + 1, 0);
-  std::vector<int64_t> size(size_t(count) + 1, 0);  // voxels in the shell: a thin label's size
-  std::vector<uint8_t> peak(size_t(count) + 1, 0);  // its brightest voxel
-  for_each_shell_voxel(s, opt.faces, opt.depth, [&](int64_t q, int64_t, int64_t, int64_t, int64_t) {
-    if (L[q] && L[q] <= count) thin[L[q]] = 1, ++size[L[q]], peak[L[q]] = std::max(peak[L[q]], g[q]);
-  });
+  const FaceDepth fd{s, opt.faces};
+  auto coords = [&](int64_t q, int64_t& k, int64_t& j, int64_t& i) {
+    i = q % s.nx, j = (q / s.nx) % s.ny, k = q / (s.nx * s.ny);
+  };
+  // One pass over the shell and the layer behind it: the labels in the
+  // shell (their voxels there and brightest voxel), those reaching the
+  // layer behind (not thin: a connected label going deeper crosses it, a
+  // 26-step changes the depth by at most 1), and the shell's line voxels
+  // (unlabelled, above t).
+  std::vector<uint8_t> thin(size_t(count) + 1, 0), deep(size_t(count) + 1, 0), peak(size_t(count) + 1, 0);
+  std::vector<int64_t> size(size_t(count) + 1, 0);  // a thin label's size
+  std::vector<int64_t> lines;
   for_each_shell_voxel(s, opt.faces, opt.depth + 1, [&](int64_t q, int64_t, int64_t, int64_t, int64_t d) {
-    if (d == opt.depth + 1 && L[q] && L[q] <= count) thin[L[q]] = 0;
+    const uint32_t l = L[q];
+    if (d > opt.depth) {
+      if (l && l <= count) deep[l] = 1;
+    } else if (l) {
+      if (l <= count) thin[l] = 1, ++size[l], peak[l] = std::max(peak[l], g[q]);
+    } else if (double(g[q]) > opt.threshold) {
+      lines.push_back(q);
+    }
   });
-  // Thin crumbs meeting across a line voxel above t, together under
-  // crumbs x the floor, are one sliver (the header).
+  bool any = false;
+  for (uint32_t l = 1; l <= count; ++l) thin[l] = thin[l] && !deep[l], any = any || thin[l];
+  if (!any) return;
+  // A crumb under the size floor beside a label that reaches deeper, across
+  // a line voxel, is a piece of that label's grain the watershed cut off:
+  // the floor takes it, as without this step.
+  std::vector<uint8_t> attached(size_t(count) + 1, 0);
+  for (const int64_t q : lines) {
+    int64_t k, j, i;
+    coords(q, k, j, i);
+    bool deeper = false;
+    for_each_neighbour(s, q, k, j, i, [&](int64_t n) { deeper = deeper || (L[n] && (L[n] > count || !thin[L[n]])); });
+    if (!deeper) continue;
+    for_each_neighbour(s, q, k, j, i, [&](int64_t n) {
+      const uint32_t l = L[n];
+      if (l && l <= count && thin[l] && size[l] < opt.min_size_vox) attached[l] = 1;
+    });
+  }
+  for (uint32_t l = 1; l <= count; ++l)
+    if (attached[l]) thin[l] = 0;
+  // Thin crumbs meeting across a line voxel, together under crumbs x the
+  // floor, are one sliver (the header).
   std::vector<uint32_t> parent(size_t(count) + 1);
   for (uint32_t l = 0; l <= count; ++l) parent[l] = l;
   auto find = [&](uint32_t l) {
     while (parent[l] != l) l = parent[l] = parent[parent[l]];
     return l;
   };
-  // A crumb under the size floor beside a label that reaches deeper, across
-  // a line voxel above t, is a piece of that label's grain the watershed
-  // cut off: the floor takes it, as without this step.
-  std::vector<uint8_t> attached(size_t(count) + 1, 0);
-  for_each_shell_voxel(s, opt.faces, opt.depth, [&](int64_t q, int64_t k, int64_t j, int64_t i, int64_t) {
-    if (L[q] != 0 || double(g[q]) <= opt.threshold) return;
-    bool deep = false;
-    for_each_neighbour(s, q, k, j, i, [&](int64_t n) { deep = deep || (L[n] && (L[n] > count || !thin[L[n]])); });
-    if (!deep) return;
-    for_each_neighbour(s, q, k, j, i, [&](int64_t n) {
-      const uint32_t l = L[n];
-      if (l && l <= count && thin[l] && size[l] < opt.min_size_vox) attached[l] = 1;
-    });
-  });
-  for (uint32_t l = 1; l <= count; ++l)
-    if (attached[l]) thin[l] = 0;
-  bool joined = false;
-  for_each_shell_voxel(s, opt.faces, opt.depth, [&](int64_t q, int64_t k, int64_t j, int64_t i, int64_t) {
-    if (L[q] != 0 || double(g[q]) <= opt.threshold) return;
+  for (const int64_t q : lines) {
+    int64_t k, j, i;
+    coords(q, k, j, i);
     uint32_t first = 0;
     bool all_thin = true, two = false;
     for_each_neighbour(s, q, k, j, i, [&](int64_t n) {
@@ -135,33 +150,55 @@ void grow_face_slivers(Volume<uint32_t>& labels, uint32_t count, const Volume<ui
       if (first && l != first) two = true;
       if (!first) first = l;
     });
-    if (!two || !all_thin) return;
+    if (!two || !all_thin) continue;
     for_each_neighbour(s, q, k, j, i, [&](int64_t n) {
       const uint32_t a = find(first), b = L[n] ? find(L[n]) : a;
       if (a == b || size[a] + size[b] >= opt.crumbs * opt.min_size_vox) return;
       const uint32_t lo = std::min(a, b), hi = std::max(a, b);  // the lower number stays
-      parent[hi] = lo, size[lo] += size[hi], peak[lo] = std::max(peak[lo], peak[hi]), joined = true;
+      parent[hi] = lo, size[lo] += size[hi], peak[lo] = std::max(peak[lo], peak[hi]);
     });
-  });
-  if (joined) {
-    for_each_shell_voxel(s, opt.faces, opt.depth, [&](int64_t q, int64_t, int64_t, int64_t, int64_t) {
-      if (L[q] && L[q] <= count && thin[L[q]]) L[q] = find(L[q]);
-    });
-    for (uint32_t l = 1; l <= count; ++l) result->slivers_joined += find(l) != l;
   }
+  // The thin labels' voxels: the joins written, and the growth's first front.
+  std::vector<int64_t> front;
+  for_each_shell_voxel(s, opt.faces, opt.depth, [&](int64_t q, int64_t, int64_t, int64_t, int64_t) {
+    const uint32_t l = L[q];
+    if (l && l <= count && thin[l]) L[q] = find(l), front.push_back(q);
+  });
+  for (uint32_t l = 1; l <= count; ++l) result->slivers_joined += find(l) != l;
   // Each thin label's level: halfway from the void to its own peak, where
   // that lies below t (a sliver the blur dimmed; the header).
   std::vector<double> low(size_t(count) + 1, opt.threshold);
   for (uint32_t l = 1; l <= count; ++l)
     if (thin[l] && find(l) == l)
       low[l] = std::min(opt.threshold, opt.void_level + opt.half * (double(peak[l]) - opt.void_level));
+  // Grows from the front: the unlabelled shell voxels beside it above its
+  // label's level whose labelled neighbours are that label alone.
+  auto in_shell = [&](int64_t k, int64_t j, int64_t i) {
+    return std::min({fd.z(k), fd.y(j), fd.x(i)}) <= opt.depth;
+  };
   std::vector<uint8_t> grown(size_t(count) + 1, 0);
-  std::vector<int64_t> at;
+  std::vector<int64_t> cand, at;
   std::vector<uint32_t> to;
-  for (int round = 0; round < opt.rounds; ++round) {
+  for (int round = 0; round < opt.rounds && !front.empty(); ++round) {
+    cand.clear();
+    for (const int64_t f : front) {
+      const uint32_t l = L[f];
+      if (!(low[l] < opt.threshold)) continue;  // a bright sliver: as thresholded
+      int64_t k, j, i;
+      coords(f, k, j, i);
+      for (const seg::Step& d : seg::kSteps) {
+        const int64_t kk = k + d.dz, jj = j + d.dy, ii = i + d.dx;
+        if (kk < 0 || jj < 0 || ii < 0 || kk >= s.nz || jj >= s.ny || ii >= s.nx || !in_shell(kk, jj, ii)) continue;
+        const int64_t n = f + seg::step_offset(s, d);
+        if (L[n] == 0 && double(g[n]) > low[l]) cand.push_back(n);
+      }
+    }
+    std::sort(cand.begin(), cand.end());
+    cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
     at.clear(), to.clear();
-    for_each_shell_voxel(s, opt.faces, opt.depth, [&](int64_t q, int64_t k, int64_t j, int64_t i, int64_t) {
-      if (L[q] != 0 || double(g[q]) <= opt.void_level) return;
+    for (const int64_t q : cand) {
+      int64_t k, j, i;
+      coords(q, k, j, i);
       uint32_t one = 0;
       bool mixed = false;
       for_each_neighbour(s, q, k, j, i, [&](int64_t n) {
@@ -171,23 +208,23 @@ void grow_face_slivers(Volume<uint32_t>& labels, uint32_t count, const Volume<ui
         one = l;
       });
       if (one && !mixed && one <= count && thin[one] && double(g[q]) > low[one]) at.push_back(q), to.push_back(one);
-    });
+    }
     // Two labels claiming neighbouring voxels in one round would touch:
     // neither claim stands.
     std::vector<uint8_t> ok(at.size(), 1);
     for (size_t c = 0; c < at.size(); ++c) {
       const int64_t q = at[c];
-      const int64_t i = q % s.nx, j = (q / s.nx) % s.ny, k = q / (s.nx * s.ny);
+      int64_t k, j, i;
+      coords(q, k, j, i);
       for_each_neighbour(s, q, k, j, i, [&](int64_t n) {
         const auto it = std::lower_bound(at.begin(), at.end(), n);
         if (it != at.end() && *it == n && to[size_t(it - at.begin())] != to[c]) ok[c] = 0;
       });
     }
-    int64_t added = 0;
+    front.clear();
     for (size_t c = 0; c < at.size(); ++c)
-      if (ok[c]) L[at[c]] = to[c], grown[to[c]] = 1, ++added;
-    result->voxels_added += added;
-    if (added == 0) break;
+      if (ok[c]) L[at[c]] = to[c], grown[to[c]] = 1, front.push_back(at[c]);
+    result->voxels_added += int64_t(front.size());
   }
   for (uint32_t l = 1; l <= count; ++l) result->labels_grown += grown[l];
 }

@@ -54,8 +54,11 @@
 // always; the rule reads a voxel's 26-neighbourhood only, so slab by slab
 // gives the whole run's labels.
 //
-// Cost: the shell only (6 faces x (depth + 2) layers, three or four
-// passes), serial.
+// Cost: serial, two passes over the shell (and the layer behind it), then
+// the growth from the thin labels' own voxels: 0.007-0.008 s of 0.70 s at
+// 256^3 (data_synth stage, 4 labels grown; the whole run as fast as
+// without it, within its noise). A first version that re-read the whole
+// shell in every pass and round took 0.09 s.
 #pragma once
 #include <array>
 #include <cstdint>

@@ -1,10 +1,9 @@
 // Slivers at the scan's faces (face_slivers.hpp). Serial: the shell is a
-// few per cent of the volume, and one pass in raster order numbers new
-// labels and orders claims the same way on any thread count.
+// few per cent of the volume, and passes in raster order make the joins
+// and claims the same on any thread count.
 #include "segmentation/face_slivers.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <limits>
 
 #include "segmentation/neighbourhood.hpp"

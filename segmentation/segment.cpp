@@ -113,16 +113,15 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
     // the sigma of its lower side, the voxels a noisy scan clipped at 0
     // counted in (the solid's sigma is no stand-in: where the threshold lies
     // low, the void's tail fills the histogram above it). The void's grey
-    // also sets the face slivers' low level (face_slivers.hpp).
+    // also sets the face slivers' half levels (face_slivers.hpp).
     const PhaseLevels pl = phase_levels(hist, d.levels.zeros_clipped ? d.levels.zero_count : 0);
     d.void_level = pl.void_level;
-  }
-  if (o.noise_specks && o.threshold != ThresholdMethod::local) {
-    const PhaseLevels pl = phase_levels(hist, d.levels.zeros_clipped ? d.levels.zero_count : 0);
-    d.speck_test.threshold = double(d.t.value);
-    d.speck_test.void_level = pl.void_level;
-    d.speck_test.sigma = pl.void_sigma;
-    d.speck_test.z_crit = o.speck_z;
+    if (o.noise_specks) {
+      d.speck_test.threshold = double(d.t.value);
+      d.speck_test.void_level = pl.void_level;
+      d.speck_test.sigma = pl.void_sigma;
+      d.speck_test.z_crit = o.speck_z;
+    }
   }
   if (d.split_depth > 0 || d.speck_test.sigma > 0 || d.void_level > 0) d.split_code = GreyCode::from_histogram(hist);
 }

@@ -213,7 +213,7 @@ struct SegmentResult {
   bool face_caps_used = false;  // the face-cap repair ran (with the split repair, face_caps on)
   FaceCapResult face_caps;
   bool face_slivers_used = false;  // the face-sliver step ran
-  FaceSliverResult face_slivers;   // its low_level in the code's units
+  FaceSliverResult face_slivers;   // the step's counts (whole runs; null in a chunked summary)
   double void_level = 0;           // the void's grey peak (0: not known)
   SpeckTest speck_test;     // grey levels (not the code's units)
   SpeckResult specks;

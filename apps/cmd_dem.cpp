@@ -135,12 +135,15 @@ static tg::app::Registrar reg{{"dem", 60,
       "target's points; |yield_run - yield|/yield; RMS of broken-fraction differences (at strains; at\n"
       "stresses, 1 for one never reached); RMS of min(1, |log10 ratio|) of the bonds broken at the\n"
       "stresses (1 for one never reached); |b_run - b|/b of the crush tests' mean bonds broken (CONFIG's\n"
-      "material and breakage, the candidate's parameters).\n"
+      "material and breakage, the candidate's parameters). With a [crush] target the search models b_run\n"
+      "(log) and J - w_crush x m_crush with a surrogate each and combines them: the crush term's narrow\n"
+      "valley along lambda is kept, where one surrogate of J rounds it off.\n"
       "DIR receives runs.csv (every run's parameters, figures, misfits, objective), best.toml (CONFIG with\n"
       "the best run's parameters), calibration.json (objective, weights, ranges, best, surrogate's\n"
       "predicted optimum), surface.csv and objective_surface.png (Debian's python3-matplotlib).\n"
       "Measured (bench/dem/RESULTS.md): on the 126-grain demo cell sigma_t0 is recovered within 3 %;\n"
-      "lambda hardly moves the oedometer curve and is not identifiable from it (dem/calibration/README.md).\n\n"
+      "lambda hardly moves the oedometer curve and is not identifiable from it; the [crush] target\n"
+      "identifies it (dem/calibration/README.md).\n\n"
       "Example:\n"
       "  tomograin dem calibrate dem/examples/demo.toml --target curve.csv -o calib --runs 20 --jobs 2 --batch 2");
   cal->add_option("config", o->calib_config, "Oedometer TOML config (unknown keys are errors; breakage on)")->required();

@@ -191,6 +191,9 @@ CalibrationResult run_calibration(const CalibrateOptions& o) {
   res.target = read_target(o.target);
   const Target& t = res.target;
   const std::vector<Parameter>& params = t.parameters;
+  // The crush term has a model of its own in the search (surrogate.hpp, SeparateTerm).
+  SearchOptions search = so;
+  if (t.crush_bonds_broken > 0) search.separate = {t.crush_bonds_broken, t.w_crush};
   // The config as a run sees it (midpoint parameters): every key checked now.
   std::vector<double> mid;
   for (const auto& p : params) mid.push_back(0.5 * (p.min + p.max));
@@ -211,7 +214,7 @@ CalibrationResult run_calibration(const CalibrateOptions& o) {
   fs::create_directories(o.out / "runs");
 
   std::vector<RunRecord> runs;
-  const Evaluate evaluate = [&](const std::vector<Point>& pts) {
+  const EvaluateTerms evaluate = [&](const std::vector<Point>& pts) {
     const size_t first = runs.size();
     std::map<pid_t, size_t> running;
     std::vector<std::chrono::steady_clock::time_point> start(pts.size());
@@ -285,11 +288,11 @@ CalibrationResult run_calibration(const CalibrateOptions& o) {
     if (!any)
       throw ResourceError(o.out.string() + ": every run of the initial design failed (" + runs.front().status +
                           "); see runs.csv and runs/*.log");
-    std::vector<double> v;
-    for (size_t i = 0; i < pts.size(); ++i) v.push_back(runs[first + i].score.objective);
+    std::vector<Evaluation> v;
+    for (size_t i = 0; i < pts.size(); ++i) v.push_back({runs[first + i].score.objective, crush[i].bonds_broken});
     return v;
   };
-  res.search = minimise(static_cast<int>(params.size()), so, evaluate);
+  res.search = minimise(static_cast<int>(params.size()), search, evaluate);
   const SearchResult& r = res.search;
   if (r.best < 0) throw ResourceError(o.out.string() + ": no run finished; see runs.csv and runs/*.log");
   res.best_parameters = runs[r.best].params;
@@ -308,6 +311,7 @@ CalibrationResult run_calibration(const CalibrateOptions& o) {
         const Point u{i / 40.0, j / 40.0};
         double mu, sg;
         r.surrogate.predict(u, mu, sg);
+        mu = r.surrogate.guess(u);  // what the optimum minimises (the composite's plug-in)
         const auto v = scale(params, u);
         a.push_back(v[0]);
         b.push_back(v[1]);
@@ -352,17 +356,30 @@ CalibrationResult run_calibration(const CalibrateOptions& o) {
                                {"min", params[k].min}, {"max", params[k].max}});
   j["search"] = {{"method", "Latin hypercube (maximin of 64), then Gaussian-process expected improvement; "
                             "Matern 5/2 ARD kernel, hyperparameters by profile marginal likelihood on a grid; "
-                            "batches by kriging believer; failed runs count as the worst objective"},
+                            "batches by kriging believer; failed runs count as the worst objective; with a crush target the "
+                            "objective less w_crush*m_crush and log b_run get a GP each, combined (composite objective)"},
                  {"runs", so.evaluations}, {"initial", so.initial}, {"batch", so.batch}, {"seed", so.seed},
                  {"jobs", o.jobs}, {"threads_per_run", o.threads_per_run}};
   j["best"] = {{"run", run_name(r.best)}, {"objective", r.values[r.best]}, {"parameters", res.best_parameters}};
-  j["surrogate"] = {{"length_scales_unit_box", r.surrogate.length_scales()},
-                    {"nugget", r.surrogate.nugget()},
-                    {"signal_sd", r.surrogate.signal_sd()},
-                    {"log_likelihood", r.surrogate.log_likelihood()},
-                    {"predicted_optimum", res.predicted_parameters},
-                    {"predicted_objective", r.predicted_value},
-                    {"predicted_objective_sd", r.predicted_sd}};
+  {
+    // The objective's GP (the rest, when the crush term has its own model) and log b's.
+    const GaussianProcess& g = r.surrogate.rest();
+    j["surrogate"] = {{"length_scales_unit_box", g.length_scales()},
+                      {"nugget", g.nugget()},
+                      {"signal_sd", g.signal_sd()},
+                      {"log_likelihood", g.log_likelihood()},
+                      {"crush_term_modelled_apart", r.surrogate.composite()},
+                      {"predicted_optimum", res.predicted_parameters},
+                      {"predicted_objective", r.predicted_value},
+                      {"predicted_objective_sd", r.predicted_sd}};
+    if (r.surrogate.composite()) {
+      const GaussianProcess& q = r.surrogate.log_q();
+      j["surrogate"]["log_crush_bonds"] = {{"length_scales_unit_box", q.length_scales()},
+                                           {"nugget", q.nugget()},
+                                           {"signal_sd", q.signal_sd()},
+                                           {"log_likelihood", q.log_likelihood()}};
+    }
+  }
   write_file_atomic(o.out / "calibration.json", j.dump(2) + "\n");
 
   const fs::path script = plot_script(o.plot_script);

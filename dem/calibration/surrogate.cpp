@@ -198,38 +198,133 @@ Point minimise_on_box(int d, uint64_t seed, const std::function<double(const Poi
   return best;
 }
 
+namespace {
+
+// Non-finite values replaced by the worst finite one (1 when none is).
+std::vector<double> worst_for_failed(std::vector<double> y) {
+  double worst = -std::numeric_limits<double>::infinity();
+  for (double v : y)
+    if (std::isfinite(v)) worst = std::max(worst, v);
+  if (!std::isfinite(worst)) worst = 1;
+  for (double& v : y)
+    if (!std::isfinite(v)) v = worst;
+  return y;
+}
+
+}  // namespace
+
+void Surrogate::fit(const std::vector<Point>& x, const std::vector<Evaluation>& e, const SeparateTerm& term) {
+  term_ = term;
+  x_ = x;
+  y_.clear();
+  xq_.clear();
+  yq_.clear();
+  for (size_t i = 0; i < x.size(); ++i) {
+    const double q = e[i].quantity;
+    const bool measured = term.active() && std::isfinite(q) && q > 0;
+    if (measured) {
+      xq_.push_back(x[i]);
+      yq_.push_back(std::log(q));
+    }
+    // The rest: a failed run (or one whose q is missing) at the worst rest.
+    const double v = e[i].value;
+    y_.push_back(!term.active() ? v : measured && std::isfinite(v) ? v - term.weight * std::abs(q - term.target) / term.target
+                                                                   : std::numeric_limits<double>::quiet_NaN());
+  }
+  // Two measured q at least, or one GP of the whole value.
+  composite_ = term.active() && xq_.size() >= 2;
+  if (term.active() && !composite_) {
+    y_.clear();
+    for (const Evaluation& v : e) y_.push_back(v.value);
+  }
+  y_ = worst_for_failed(y_);
+  rest_.fit(x_, y_);
+  if (composite_) log_q_.fit(xq_, yq_);
+}
+
+double Surrogate::guess(const Point& p) const {
+  double mu, sd;
+  rest_.predict(p, mu, sd);
+  if (!composite_) return mu;
+  double m, s;
+  log_q_.predict(p, m, s);
+  return mu + term_.weight * std::abs(std::exp(m) - term_.target) / term_.target;
+}
+
+void Surrogate::predict(const Point& p, double& mean, double& sd) const {
+  using namespace surrogate_detail;
+  rest_.predict(p, mean, sd);
+  if (!composite_) return;
+  double m, s;
+  log_q_.predict(p, m, s);
+  // term = weight |q - target| / target with q ~ N(e^m, (e^m s)^2): a
+  // folded normal of mu_t = weight (e^m - target) / target, sd s_t.
+  const double mu_t = term_.weight * (std::exp(m) - term_.target) / term_.target;
+  const double s_t = term_.weight * std::exp(m) * s / term_.target;
+  double e = std::abs(mu_t), var = 0;
+  if (s_t > 1e-12) {
+    const double z = mu_t / s_t;
+    e = s_t * std::sqrt(2 / std::numbers::pi) * std::exp(-0.5 * z * z) + mu_t * (1 - 2 * normal_cdf(-z));
+    var = std::max(0.0, mu_t * mu_t + s_t * s_t - e * e);
+  }
+  mean += e;
+  sd = std::sqrt(sd * sd + var);
+}
+
+double Surrogate::believe(const Point& p) {
+  double mu, sd;
+  rest_.predict(p, mu, sd);
+  const double g = guess(p);
+  x_.push_back(p);
+  y_.push_back(mu);
+  rest_.refit(x_, y_);
+  if (composite_) {
+    double m, s;
+    log_q_.predict(p, m, s);
+    xq_.push_back(p);
+    yq_.push_back(m);
+    log_q_.refit(xq_, yq_);
+  }
+  return g;
+}
+
 SearchResult minimise(int d, const SearchOptions& o, const Evaluate& evaluate) {
+  SearchOptions plain = o;
+  plain.separate = {};
+  return minimise(d, plain, [&](const std::vector<Point>& pts) {
+    std::vector<Evaluation> e;
+    for (double v : evaluate(pts)) e.push_back({v, std::numeric_limits<double>::quiet_NaN()});
+    return e;
+  });
+}
+
+SearchResult minimise(int d, const SearchOptions& o, const EvaluateTerms& evaluate) {
   using surrogate_detail::kMinSeparation;
   if (d < 1 || o.initial < 2 || o.evaluations < o.initial || o.batch < 1)
     throw std::invalid_argument("minimise: need d >= 1, 2 <= initial <= evaluations, batch >= 1");
+  if (o.separate.active() && !(std::isfinite(o.separate.target) && std::isfinite(o.separate.weight)))
+    throw std::invalid_argument("minimise: the separate term's target and weight must be finite");
   SearchResult r;
+  std::vector<Evaluation> evals;
   auto run = [&](const std::vector<Point>& pts) {
-    const std::vector<double> v = evaluate(pts);
+    const std::vector<Evaluation> v = evaluate(pts);
     if (v.size() != pts.size()) throw std::logic_error("minimise: evaluate returned the wrong number of values");
     for (size_t i = 0; i < pts.size(); ++i) {
       r.points.push_back(pts[i]);
-      r.values.push_back(v[i]);
+      r.values.push_back(v[i].value);
+      r.quantities.push_back(v[i].quantity);
+      evals.push_back(v[i]);
     }
-  };
-  // Failed evaluations count as the worst value seen (finite data for the GP).
-  auto finite_values = [&] {
-    double worst = -std::numeric_limits<double>::infinity();
-    for (double v : r.values)
-      if (std::isfinite(v)) worst = std::max(worst, v);
-    if (!std::isfinite(worst)) worst = 1;
-    std::vector<double> y = r.values;
-    for (double& v : y)
-      if (!std::isfinite(v)) v = worst;
-    return y;
   };
   run(latin_hypercube(o.initial, d, o.seed));
   int round = 0;
   while (static_cast<int>(r.points.size()) < o.evaluations) {
     const int q = std::min(o.batch, o.evaluations - static_cast<int>(r.points.size()));
     std::vector<Point> x = r.points;
-    std::vector<double> y = finite_values();
-    GaussianProcess gp;
-    gp.fit(x, y);
+    // Failed evaluations count as the worst value seen.
+    std::vector<double> y = worst_for_failed(r.values);
+    Surrogate model;
+    model.fit(x, evals, o.separate);
     std::vector<Point> picks;
     for (int j = 0; j < q; ++j) {
       const double best = *std::min_element(y.begin(), y.end());
@@ -240,28 +335,21 @@ SearchResult minimise(int d, const SearchOptions& o, const Evaluate& evaluate) {
         for (const Point& v : x)
           if (surrogate_detail::sq_dist(u, v) < kMinSeparation * kMinSeparation) return 0.0;
         double mu, sd;
-        gp.predict(u, mu, sd);
+        model.predict(u, mu, sd);
         return -expected_improvement(mu, sd, best);
       });
       picks.push_back(p);
-      double mu, sd;
-      gp.predict(p, mu, sd);
-      x.push_back(p);  // kriging believer: the prediction stands in for the run
-      y.push_back(mu);
-      gp.refit(x, y);
+      x.push_back(p);  // kriging believer: the model's guess stands in for the run
+      y.push_back(model.believe(p));
     }
     run(picks);
   }
-  const std::vector<double> y = finite_values();
   for (size_t i = 0; i < r.values.size(); ++i)
     if (std::isfinite(r.values[i]) && (r.best < 0 || r.values[i] < r.values[r.best])) r.best = static_cast<int>(i);
-  r.surrogate.fit(r.points, y);
-  r.predicted_optimum = minimise_on_box(d, o.seed + 7, [&](const Point& u) {
-    double mu, sd;
-    r.surrogate.predict(u, mu, sd);
-    return mu;
-  });
+  r.surrogate.fit(r.points, evals, o.separate);
+  r.predicted_optimum = minimise_on_box(d, o.seed + 7, [&](const Point& u) { return r.surrogate.guess(u); });
   r.surrogate.predict(r.predicted_optimum, r.predicted_value, r.predicted_sd);
+  r.predicted_value = r.surrogate.guess(r.predicted_optimum);
   return r;
 }
 

@@ -216,27 +216,22 @@ std::vector<double> worst_for_failed(std::vector<double> y) {
 void Surrogate::fit(const std::vector<Point>& x, const std::vector<Evaluation>& e, const SeparateTerm& term) {
   term_ = term;
   x_ = x;
-  y_.clear();
   xq_.clear();
   yq_.clear();
-  for (size_t i = 0; i < x.size(); ++i) {
-    const double q = e[i].quantity;
-    const bool measured = term.active() && std::isfinite(q) && q > 0;
-    if (measured) {
+  auto measured = [&](const Evaluation& v) { return term.active() && std::isfinite(v.quantity) && v.quantity > 0; };
+  for (size_t i = 0; i < x.size(); ++i)
+    if (measured(e[i])) {
       xq_.push_back(x[i]);
-      yq_.push_back(std::log(q));
+      yq_.push_back(std::log(e[i].quantity));
     }
-    // The rest: a failed run (or one whose q is missing) at the worst rest.
-    const double v = e[i].value;
-    y_.push_back(!term.active() ? v : measured && std::isfinite(v) ? v - term.weight * std::abs(q - term.target) / term.target
-                                                                   : std::numeric_limits<double>::quiet_NaN());
-  }
   // Two measured q at least, or one GP of the whole value.
-  composite_ = term.active() && xq_.size() >= 2;
-  if (term.active() && !composite_) {
-    y_.clear();
-    for (const Evaluation& v : e) y_.push_back(v.value);
-  }
+  composite_ = xq_.size() >= 2;
+  // The rest (a failed run, or one whose q is missing: NaN, then the worst rest).
+  y_.clear();
+  for (const Evaluation& v : e)
+    y_.push_back(!composite_ ? v.value
+                 : measured(v) ? v.value - term.weight * std::abs(v.quantity - term.target) / term.target
+                               : std::numeric_limits<double>::quiet_NaN());
   y_ = worst_for_failed(y_);
   rest_.fit(x_, y_);
   if (composite_) log_q_.fit(xq_, yq_);
@@ -305,7 +300,11 @@ SearchResult minimise(int d, const SearchOptions& o, const EvaluateTerms& evalua
   if (o.separate.active() && !(std::isfinite(o.separate.target) && std::isfinite(o.separate.weight)))
     throw std::invalid_argument("minimise: the separate term's target and weight must be finite");
   SearchResult r;
-  std::vector<Evaluation> evals;
+  auto evaluations = [&] {
+    std::vector<Evaluation> e;
+    for (size_t i = 0; i < r.values.size(); ++i) e.push_back({r.values[i], r.quantities[i]});
+    return e;
+  };
   auto run = [&](const std::vector<Point>& pts) {
     const std::vector<Evaluation> v = evaluate(pts);
     if (v.size() != pts.size()) throw std::logic_error("minimise: evaluate returned the wrong number of values");
@@ -313,7 +312,6 @@ SearchResult minimise(int d, const SearchOptions& o, const EvaluateTerms& evalua
       r.points.push_back(pts[i]);
       r.values.push_back(v[i].value);
       r.quantities.push_back(v[i].quantity);
-      evals.push_back(v[i]);
     }
   };
   run(latin_hypercube(o.initial, d, o.seed));
@@ -324,7 +322,7 @@ SearchResult minimise(int d, const SearchOptions& o, const EvaluateTerms& evalua
     // Failed evaluations count as the worst value seen.
     std::vector<double> y = worst_for_failed(r.values);
     Surrogate model;
-    model.fit(x, evals, o.separate);
+    model.fit(x, evaluations(), o.separate);
     std::vector<Point> picks;
     for (int j = 0; j < q; ++j) {
       const double best = *std::min_element(y.begin(), y.end());
@@ -346,7 +344,7 @@ SearchResult minimise(int d, const SearchOptions& o, const EvaluateTerms& evalua
   }
   for (size_t i = 0; i < r.values.size(); ++i)
     if (std::isfinite(r.values[i]) && (r.best < 0 || r.values[i] < r.values[r.best])) r.best = static_cast<int>(i);
-  r.surrogate.fit(r.points, evals, o.separate);
+  r.surrogate.fit(r.points, evaluations(), o.separate);
   r.predicted_optimum = minimise_on_box(d, o.seed + 7, [&](const Point& u) { return r.surrogate.guess(u); });
   r.surrogate.predict(r.predicted_optimum, r.predicted_value, r.predicted_sd);
   r.predicted_value = r.surrogate.guess(r.predicted_optimum);

@@ -68,7 +68,7 @@ double expected_improvement(double mean, double sd, double best);
 // term's kink at q = target is neither, and one GP of the whole value
 // rounds that narrow valley off: where it lies along a parameter the rest
 // hardly sees (λ), the whole-value optimum landed 11 % from a known λ that
-// the composite put within 3 % from the same runs (bench/dem/RESULTS.md,
+// the composite put 3.3 % from it from the same runs (bench/dem/RESULTS.md,
 // "A separate model of the crush term"). So log q gets a GP of its own and
 // rest another.
 struct SeparateTerm {

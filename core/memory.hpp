@@ -11,7 +11,8 @@ namespace tg {
 // limit if one is set and lower). Returns INT64_MAX when neither can be read.
 int64_t available_memory_bytes();
 
-// Throws ResourceError naming `what` if `bytes` exceeds what is available.
+// Throws ResourceError naming `what` if `bytes` exceeds what is available
+// (requests from 16 MiB up; smaller ones are not checked).
 // The environment variable TOMOGRAIN_MEMORY_LIMIT (bytes, accepts K/M/G
 // suffix) lowers the limit, which tests and shared machines use.
 void check_allocation(int64_t bytes, const std::string& what);

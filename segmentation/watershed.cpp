@@ -95,10 +95,10 @@ class Bucket {
   size_t fill_ = kBlock;  // entries in the last block
 };
 
-// One round of the frontier in row order (slice order in slabs where the
-// round is much sparser than the rows): a stable counting sort of spans of
-// entries into a buffer that is reused round after round. Also gives where
-// each slab of the round starts. Row order lets the voxels of a row of the
+// A slab's share of one round of the frontier, put in row order (slice
+// order where the round is much sparser than the slab's rows): a stable
+// counting sort of the slab's own entries, by the thread that then visits
+// them (they stay in its cache). Row order lets the voxels of a row of the
 // frontier share the cache lines of their neighbour rows; at 256^3 (10 M
 // solid voxels, 2 threads) the visits took 0.24-0.32 s in row order
 // against 0.47 s in slice order.
@@ -107,109 +107,43 @@ class Bucket {
 // for the whole round from its total, which made the order in one slab, so
 // the ties of the flood and the labels, depend on the rest of the volume:
 // a slab of slices segmented alone, segment_chunked.hpp, then differed from
-// the same slices in the whole volume.) Counting costs O(m + slices + the
-// rows of the dense slabs), as before.
+// the same slices in the whole volume.)
+// The entries reach a slab already parted by slab (each slab queues into
+// lists by the slab of the voxel queued): one counting sort of the whole
+// round by every row of the volume, cleared and summed in one thread each
+// round, took 0.08 s of a 0.33 s flood at 256^3 (325 rounds, 30 000
+// entries each), most of it that fixed cost; now 0.01-0.02 s.
 template <class Index>
-class Round {
+class SlabOrder {
  public:
-  Round(const Shape& s, int64_t slab_slices, int64_t slabs)
-      : rows_{s.nx, s.nz * s.ny, slab_slices * s.ny}, slices_{s.slice_voxels(), s.nz, slab_slices},
-        ny_(s.ny), slab_slices_(slab_slices), slab_start_(size_t(slabs) + 1), base_(size_t(s.nz) + 1),
-        dense_(size_t(s.nz)) {}
+  SlabOrder(const Shape& s, int64_t slab_slices, int64_t slabs)
+      : rows_(s.nx), slices_(s.slice_voxels()), nz_(s.nz), ny_(s.ny), slab_slices_(slab_slices), slabs_(slabs) {}
   using Spans = std::vector<std::pair<const Index*, size_t>>;
-  // Sorts the entries of the spans (in queue order; m in all) into the
-  // buffer. Large rounds are counted and scattered by threads, each on a
-  // contiguous share of the entries; a stable sort has one result, so the
-  // thread count does not change it. The keys depend on each slab's
-  // entries alone, so they do not either.
-  void sort(const Spans& spans, size_t m) {
-    const int64_t nz = slices_.bins;
-    const int64_t slabs = int64_t(slab_start_.size()) - 1;
-    if (buf_size_ < m) {
-      // A fresh, uninitialised buffer with room to grow: the old entries are
-      // not needed, and growing a std::vector copied and zeroed them in one
-      // thread (at 256^3 four growths, 50 ms of a 0.36 s flood).
-      buf_size_ = m + m / 4;
-      buf_.reset();
-      buf_.reset(new Index[buf_size_]);
-    }
-    const int threads = m >= (size_t(1) << 16) ? omp_get_max_threads() : 1;
-    count_.assign(size_t(threads) * size_t(nz), 0);
-    int64_t bins = nz;
-#pragma omp parallel num_threads(threads)
-    {
-      const int t = omp_get_thread_num(), nt = omp_get_num_threads();
-      const size_t lo = m * size_t(t) / size_t(nt), hi = m * size_t(t + 1) / size_t(nt);
-      // Calls f(entry) for the entries at positions [lo, hi).
-      auto share = [&](auto&& f) {
-        size_t pos = 0;
-        for (const auto& [p, len] : spans) {
-          const size_t a = std::max(pos, lo), b = std::min(pos + len, hi);
-          for (size_t i = a; i < b; ++i) f(p[i - pos]);
-          pos += len;
-          if (pos >= hi) break;
-        }
-      };
-      {
-        int64_t* c = count_.data() + size_t(t) * size_t(nz);
-        share([&](Index x) { ++c[slices_.of(x)]; });
-      }
-#pragma omp barrier
-#pragma omp single
-      {
-        // Each slab's density decides its key; bins are laid out slice by
-        // slice: ny of them (rows) in a dense slab, one in a sparse one.
-        bool any_dense = false;
-        for (int64_t p = 0; p < slabs; ++p) {
-          const int64_t k0 = p * slab_slices_, k1 = p + 1 < slabs ? k0 + slab_slices_ : nz;
-          int64_t mp = 0;
-          for (int64_t k = k0; k < k1; ++k)
-            for (int u = 0; u < nt; ++u) mp += count_[size_t(u) * size_t(nz) + size_t(k)];
-          const bool dense = mp * 4 >= (k1 - k0) * ny_;
-          any_dense = any_dense || dense;
-          for (int64_t k = k0; k < k1; ++k) dense_[size_t(k)] = dense;
-        }
-        for (int64_t k = 0; k < nz; ++k) base_[size_t(k + 1)] = base_[size_t(k)] + (dense_[size_t(k)] ? ny_ : 1);
-        bins = base_[size_t(nz)];
-        if (any_dense) count_.assign(size_t(nt) * size_t(bins), 0);
-      }
-      int64_t* c = count_.data() + size_t(t) * size_t(bins);
-      auto bin_of = [&](Index x) {
-        const int64_t k = slices_.of(x);
-        return dense_[size_t(k)] ? base_[size_t(k)] + rows_.of(x) - k * ny_ : base_[size_t(k)];
-      };
-      if (bins != nz) share([&](Index x) { ++c[bin_of(x)]; });
-#pragma omp barrier
-#pragma omp single
-      {
-        // Start of (bin b, share u): all of bins < b, then shares < u of bin b.
-        int64_t run = 0;
-        for (int64_t p = 0; p < slabs; ++p) {
-          slab_start_[size_t(p)] = run;
-          const int64_t b0 = base_[size_t(p * slab_slices_)];
-          const int64_t b1 = p + 1 < slabs ? base_[size_t((p + 1) * slab_slices_)] : bins;
-          for (int64_t b = b0; b < b1; ++b)
-            for (int u = 0; u < nt; ++u) {
-              int64_t& cu = count_[size_t(u) * size_t(bins) + size_t(b)];
-              const int64_t here = cu;
-              cu = run;
-              run += here;
-            }
-        }
-        slab_start_[size_t(slabs)] = int64_t(m);
-      }
-      share([&](Index x) { buf_[size_t(c[bin_of(x)]++)] = x; });
-    }
+  // The entries of slab p (the spans, in queue order, m in all) in their
+  // order for the visits, in `to`; `count` is scratch. Both belong to the
+  // calling thread. Returns [begin, end) of the sorted entries.
+  std::pair<const Index*, const Index*> sort(int64_t p, const Spans& spans, size_t m, std::vector<Index>& to,
+                                             std::vector<int64_t>& count) const {
+    const int64_t k0 = p * slab_slices_, k1 = p + 1 < slabs_ ? k0 + slab_slices_ : nz_;
+    const bool dense = int64_t(m) * 4 >= (k1 - k0) * ny_;
+    const int64_t bins = dense ? (k1 - k0) * ny_ : k1 - k0;
+    const int64_t first = dense ? k0 * ny_ : k0;
+    const Key& key = dense ? rows_ : slices_;
+    if (to.size() < m) to.resize(m + m / 4);
+    count.assign(size_t(bins) + 1, 0);
+    for (const auto& [e, len] : spans)
+      for (size_t i = 0; i < len; ++i) ++count[size_t(key.of(e[i]) - first) + 1];
+    for (int64_t b = 1; b <= bins; ++b) count[size_t(b)] += count[size_t(b - 1)];
+    for (const auto& [e, len] : spans)
+      for (size_t i = 0; i < len; ++i) to[size_t(count[size_t(key.of(e[i]) - first)]++)] = e[i];
+    return {to.data(), to.data() + m};
   }
-  // The entries of slab p: [slab_begin(p), slab_begin(p + 1)).
-  const Index* slab_begin(int64_t p) const { return buf_.get() + slab_start_[size_t(p)]; }
 
  private:
-  // A sort key: the entry's index divided by `size` (a row's or a slice's
-  // voxels), `bins` keys in all, `slab` keys to a slab.
+  // A sort key: the entry's index divided by `size` (a row's or a slice's voxels).
   struct Key {
-    Key(int64_t size_, int64_t bins_, int64_t slab_) : size(size_), bins(bins_), slab(slab_), inv(1.0 / double(size_)) {}
-    int64_t size, bins, slab;
+    explicit Key(int64_t size_) : size(size_), inv(1.0 / double(size_)) {}
+    int64_t size;
     double inv;
     int64_t of(Index x) const {  // x / size without a division per entry
       int64_t k = int64_t(double(x) * inv);
@@ -219,11 +153,7 @@ class Round {
     }
   };
   Key rows_, slices_;
-  int64_t ny_, slab_slices_;
-  std::vector<int64_t> slab_start_, count_, base_;  // base_[k]: first bin of slice k
-  std::vector<char> dense_;                          // per slice: its slab sorts by rows
-  std::unique_ptr<Index[]> buf_;  // buf_size_ entries
-  size_t buf_size_ = 0;
+  int64_t nz_, ny_, slab_slices_, slabs_;
 };
 
 template <class Index>
@@ -248,10 +178,18 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
       }
     }
   }
-  BlockPool<Index> pool;
-  std::array<Bucket<Index>, 256> bucket;
+  // The markers by level (a stable counting sort: index order within a
+  // level), so that a slab finds its markers of a level by bisection.
+  std::array<size_t, 257> mstart{};
   for (const auto& mine : part)
-    for (const Index i : mine) bucket[lev[i]].push(i, pool);
+    for (const Index i : mine) ++mstart[size_t(lev[i]) + 1];
+  for (size_t l = 1; l < mstart.size(); ++l) mstart[l] += mstart[l - 1];
+  std::vector<Index> markers(mstart[256]);
+  {
+    std::array<size_t, 257> at = mstart;
+    for (const auto& mine : part)
+      for (const Index i : mine) markers[at[lev[i]]++] = i;
+  }
   part.clear();
   const int64_t sl = s.slice_voxels(), nx = s.nx;
   // A voxel queues its free neighbours in index order (their offsets
@@ -305,16 +243,18 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
     return uint32_t(_mm_cvtsi128_si32(v));
   };
 #endif
-  // The voxels queued by one slab: at the current level in this round (the
-  // next round), and at lower levels in buckets of its own, from blocks of
-  // its own, so that no thread waits on another to queue them.
+  // The voxels queued by one slab, by the slab they lie in (index 0: the
+  // slab below, 1: its own, 2: the slab above): at the current level for
+  // the next round, and at lower levels in buckets of its own, from blocks
+  // of its own, so that no thread waits on another to queue them.
   struct Queued {
-    std::vector<Index> now;
-    std::array<Bucket<Index>, 256> later;
+    std::array<std::vector<Index>, 3> now, next;  // read in this round, filled for the next
+    std::array<std::array<Bucket<Index>, 3>, 256> later;
     BlockPool<Index> pool;
   };
-  // Visits the voxel x leaving the queue at level cur.
-  auto visit = [&](const int64_t x, const int cur, Queued& out) {
+  // Visits the voxel x leaving the queue at level cur, in the slab of the
+  // voxels [lo, hi).
+  auto visit = [&](const int64_t x, const int cur, Queued& out, const int64_t lo, const int64_t hi) {
     const uint32_t lx = L[x];
     const bool border = lx & kBorder;
     uint32_t seen = 0;
@@ -390,8 +330,9 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
     for (int c = 0; c < nc; ++c) {
       const int64_t y = cand[c];
       L[y] = (L[y] & kBorder) | kQueued | push_label;
-      if (lev[y] >= cur) out.now.push_back(Index(y));
-      else out.later[lev[y]].push(Index(y), out.pool);
+      const size_t to = y < lo ? 0 : y < hi ? 1 : 2;
+      if (lev[y] >= cur) out.next[to].push_back(Index(y));
+      else out.later[lev[y]][to].push(Index(y), out.pool);
     }
   };
   // Threads share a round by slabs of kSlab slices, a partition fixed by
@@ -400,16 +341,26 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
   // slabs at work at the same time never touch the same voxel; and two
   // neighbours of one round are never decided at the same time, so the
   // second one sees the first one's label and lines stay one voxel thick,
-  // as in the serial flood. Each slab queues into lists and buckets of its
-  // own, taken in slab order (after the markers) when a round or a level
-  // starts: a round is sorted by row or slice, which lie within one slab,
-  // so the order of the queue, and so the result, does not depend on the
-  // thread count.
+  // as in the serial flood. A slab's round is its markers of the level,
+  // then what the slab below, itself and the slab above queued for it, in
+  // that order (the order of the whole queue taken slab by slab), sorted by
+  // row or slice within the slab: the order of the queue, and so the
+  // result, does not depend on the thread count.
   constexpr int64_t kSlab = 8;  // >= 2 slices, or two slabs at work could meet
   const int64_t nslab = std::max<int64_t>(1, s.nz / kSlab);  // the last slab takes the rest
   std::vector<Queued> out{size_t(nslab)};
-  Round<Index> round(s, kSlab, nslab);
-  typename Round<Index>::Spans spans;
+  const SlabOrder<Index> order(s, kSlab, nslab);
+  auto slab_lo = [&](int64_t p) { return p * kSlab * sl; };
+  auto slab_hi = [&](int64_t p) { return p + 1 < nslab ? (p + 1) * kSlab * sl : n; };
+  // Each slab's entries of the round (spans and their count).
+  std::vector<typename SlabOrder<Index>::Spans> in(static_cast<size_t>(nslab));
+  std::vector<size_t> in_count(static_cast<size_t>(nslab));
+  // Each thread's scratch for putting a slab's entries in order.
+  struct Scratch {
+    std::vector<Index> entries;
+    std::vector<int64_t> count;
+  };
+  std::vector<Scratch> scratch{size_t(omp_get_max_threads())};
   // Software prefetch of the 3x3 rows around the voxel kAhead places down
   // the queue, labels and levels: the hardware cannot guess these addresses.
   constexpr int64_t kAhead = 12;
@@ -418,8 +369,11 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
   // Integer addresses: next to a border the row may lie outside the volume,
   // where a prefetch is harmless but pointer arithmetic would not be.
   const auto Lbase = reinterpret_cast<uintptr_t>(L), lbase = reinterpret_cast<uintptr_t>(lev);
-  auto run_slab = [&](const Index* q, const Index* qe, int cur, int64_t p) {
+  auto run_slab = [&](int cur, int64_t p) {
+    Scratch& sc = scratch[size_t(omp_get_thread_num())];
+    auto [q, qe] = order.sort(p, in[size_t(p)], in_count[size_t(p)], sc.entries, sc.count);
     Queued& o = out[size_t(p)];
+    const int64_t lo = slab_lo(p), hi = slab_hi(p);
     for (; q < qe; ++q) {
       if (qe - q > kAhead) {
         const uintptr_t z = uintptr_t(q[kAhead]);
@@ -428,15 +382,21 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
           __builtin_prefetch(reinterpret_cast<const void*>(lbase + (z + uintptr_t(r))));
         }
       }
-      visit(int64_t(*q), cur, o);
+      visit(int64_t(*q), cur, o, lo, hi);
     }
   };
+  // Adds what slab p - 1 + from queued for slab p (from: 0 below, 1 itself,
+  // 2 above) to p's entries of the round.
+  auto take = [&](int64_t p, size_t from, auto&& lists_of) {
+    const int64_t src = p - 1 + int64_t(from);
+    if (src < 0 || src >= nslab) return;
+    lists_of(out[size_t(src)], 2 - from);
+  };
   for (int cur = 255; cur >= 1; --cur) {
-    auto& b = bucket[size_t(cur)];  // markers
     // Breadth-first rounds: the voxels queued at this level so far, then
     // those they queue at this level, and so on (within a level, voxels
     // leave in order of geodesic distance, as with one FIFO). Each round is
-    // put in slice order first, so the flood sweeps the volume instead of
+    // put in row order first, so the flood sweeps the volume instead of
     // jumping around it: the loop is bound by cache misses on the labels.
     // Measured on a 256^3 scan (10 M solid voxels, one core): 2.4 s in plain
     // FIFO order, 1.7 s in slice order, 0.95 s with the prefetch. (Deciding
@@ -445,29 +405,54 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
     // labels, and the rule that makes one of them a line doubled the time
     // on one core and thickened the lines: median grain volume error -1.1 %
     // instead of -1.0 %. Tried and dropped for the slabs above.)
-    size_t m = b.size();
-    spans.clear();
-    b.for_each_span([&](const Index* p, size_t c) { spans.emplace_back(p, c); });
-    for (const Queued& o : out) {
-      m += o.later[size_t(cur)].size();
-      o.later[size_t(cur)].for_each_span([&](const Index* p, size_t c) { spans.emplace_back(p, c); });
+    size_t m = 0;
+    for (int64_t p = 0; p < nslab; ++p) {
+      auto& spans = in[size_t(p)];
+      spans.clear();
+      const Index* m0 = markers.data() + mstart[size_t(cur)];
+      const Index* m1 = markers.data() + mstart[size_t(cur) + 1];
+      const Index* a = std::lower_bound(m0, m1, Index(slab_lo(p)));
+      const Index* b = std::lower_bound(a, m1, Index(slab_hi(p)));
+      size_t c = size_t(b - a);
+      if (c) spans.emplace_back(a, c);
+      for (size_t from = 0; from < 3; ++from)
+        take(p, from, [&](const Queued& o, size_t to) {
+          const auto& bk = o.later[size_t(cur)][to];
+          c += bk.size();
+          bk.for_each_span([&](const Index* e, size_t len) { spans.emplace_back(e, len); });
+        });
+      in_count[size_t(p)] = c;
+      m += c;
     }
-    round.sort(spans, m);
-    b.release(pool);
-    for (Queued& o : out) o.later[size_t(cur)].release(o.pool);
+    bool level_start = true;
     while (m) {
       for (int64_t phase = 0; phase < 2; ++phase) {
 #pragma omp parallel for schedule(dynamic, 1) if (m >= 4096)
-        for (int64_t p = phase; p < nslab; p += 2) run_slab(round.slab_begin(p), round.slab_begin(p + 1), cur, p);
+        for (int64_t p = phase; p < nslab; p += 2)
+          if (in_count[size_t(p)]) run_slab(cur, p);
       }
+      if (level_start)
+        for (Queued& o : out)
+          for (auto& bk : o.later[size_t(cur)]) bk.release(o.pool);
+      level_start = false;
+      for (Queued& o : out)
+        for (size_t t = 0; t < 3; ++t) {
+          o.now[t].clear();
+          std::swap(o.now[t], o.next[t]);
+        }
       m = 0;
-      for (const Queued& o : out) m += o.now.size();
-      if (m) {
+      for (int64_t p = 0; p < nslab; ++p) {
+        auto& spans = in[size_t(p)];
         spans.clear();
-        for (const Queued& o : out) spans.emplace_back(o.now.data(), o.now.size());
-        round.sort(spans, m);
+        size_t c = 0;
+        for (size_t from = 0; from < 3; ++from)
+          take(p, from, [&](const Queued& o, size_t to) {
+            if (!o.now[to].empty()) spans.emplace_back(o.now[to].data(), o.now[to].size());
+            c += o.now[to].size();
+          });
+        in_count[size_t(p)] = c;
+        m += c;
       }
-      for (Queued& o : out) o.now.clear();
     }
   }
 #pragma omp parallel for schedule(static)

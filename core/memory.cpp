@@ -3,13 +3,18 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <limits>
+#include <mutex>
 #include <sstream>
+#include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include "core/errors.hpp"
 
@@ -111,22 +116,78 @@ std::string human_bytes(double b) {
   return buf;
 }
 
+namespace {
+
+// Freed large blocks kept for the next request of about their size. A
+// segmentation allocates and frees volumes of one shape stage after stage;
+// each fresh block costs the kernel a page fault and a cleared page for
+// every page first touched (at 256^3, ~0.2 s of CPU time of a ~2 s run).
+// A cached block is reused for a request of its size (rounded to 2 MiB:
+// volumes of one shape and type); any request the cache cannot serve
+// empties the cache first, so idle blocks never add to the peak of the
+// stage that allocates. (Reusing blocks up to 5/4 of the request, their
+// excess pages given back, was as fast and raised the peak of a 256^3
+// segmentation by 0.1 B/voxel.) Not under AddressSanitizer, which must see
+// every block freed.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kCacheBlocks = false;
+#else
+constexpr bool kCacheBlocks = true;
+#endif
+constexpr size_t kHuge = size_t(2) << 20;
+std::mutex block_mutex;
+std::unordered_map<void*, size_t> live_blocks;      // large blocks handed out: their sizes
+std::vector<std::pair<void*, size_t>> idle_blocks;  // freed large blocks kept
+
+}  // namespace
+
 void* allocate_large(size_t bytes) {
-  constexpr size_t kHuge = size_t(2) << 20;
   if (bytes < kHuge) {
     void* p = std::malloc(bytes ? bytes : 1);
     if (!p) throw ResourceError("out of memory allocating " + human_bytes(double(bytes)));
     return p;
   }
-  void* p = nullptr;
   const size_t rounded = (bytes + kHuge - 1) / kHuge * kHuge;
+  if (kCacheBlocks) {
+    std::lock_guard<std::mutex> lock(block_mutex);
+    const auto it = std::find_if(idle_blocks.begin(), idle_blocks.end(),
+                                 [rounded](const auto& b) { return b.second == rounded; });
+    if (it != idle_blocks.end()) {
+      void* p = it->first;
+      idle_blocks.erase(it);
+      live_blocks[p] = rounded;
+      return p;
+    }
+    for (const auto& [p, have] : idle_blocks) std::free(p);
+    idle_blocks.clear();
+  }
+  void* p = nullptr;
   if (posix_memalign(&p, kHuge, rounded) != 0 || !p)
     throw ResourceError("out of memory allocating " + human_bytes(double(bytes)));
   madvise(p, rounded, MADV_HUGEPAGE);  // a hint: ignored where THP is off
+  if (kCacheBlocks) {
+    std::lock_guard<std::mutex> lock(block_mutex);
+    live_blocks[p] = rounded;
+  }
   return p;
 }
 
-void free_large(void* p) noexcept { std::free(p); }
+void free_large(void* p) noexcept {
+  if (!p) return;
+  if (kCacheBlocks) {
+    std::lock_guard<std::mutex> lock(block_mutex);
+    if (const auto it = live_blocks.find(p); it != live_blocks.end()) {
+      try {
+        idle_blocks.emplace_back(p, it->second);
+        live_blocks.erase(it);
+        return;
+      } catch (...) {  // no room to keep it: give it back
+        live_blocks.erase(it);
+      }
+    }
+  }
+  std::free(p);
+}
 
 void discard_pages(void* p, size_t bytes) noexcept {
   const size_t page = size_t(sysconf(_SC_PAGESIZE));

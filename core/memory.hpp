@@ -3,7 +3,9 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <type_traits>
 
 namespace tg {
 
@@ -37,8 +39,11 @@ std::string human_bytes(double bytes);
 // Storage for large arrays (volumes): aligned to 2 MiB and, from 2 MiB up,
 // marked for transparent huge pages (madvise), because first touching fresh
 // memory in 4 KiB pages costs more than the work on it in several stages
-// (measured on the CI VM: 2.9 s per GiB). Uninitialised. Never returns null:
-// throws ResourceError. Release with free_large (or LargeFree).
+// (measured on the CI VM: 2.9 s per GiB). Blocks from 2 MiB up that are
+// freed are kept for a later request of about their size (fresh pages still
+// cost a fault and a clearing each; memory.cpp says how the peak is kept).
+// Uninitialised. Never returns null: throws ResourceError. Release with
+// free_large (or LargeFree).
 void* allocate_large(size_t bytes);
 void free_large(void* p) noexcept;
 // Gives the whole pages inside [p, p + bytes) back to the system; the
@@ -48,5 +53,14 @@ void discard_pages(void* p, size_t bytes) noexcept;
 struct LargeFree {
   void operator()(void* p) const noexcept { free_large(p); }
 };
+// An uninitialised array of n plain values from allocate_large (a scratch
+// array as large as a volume reuses a freed volume's pages, and the reverse).
+template <class T>
+using LargeArray = std::unique_ptr<T[], LargeFree>;
+template <class T>
+LargeArray<T> large_array(size_t n) {
+  static_assert(std::is_trivially_default_constructible_v<T> && std::is_trivially_destructible_v<T>);
+  return LargeArray<T>(static_cast<T*>(allocate_large(n * sizeof(T))));
+}
 
 }  // namespace tg

@@ -11,6 +11,7 @@
 #include <omp.h>
 
 #include "core/errors.hpp"
+#include "core/memory.hpp"
 #include "segmentation/runs.hpp"
 
 namespace tg {
@@ -73,7 +74,7 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
   // read) and first written by the threads: zeroing them, and taking their
   // fresh pages, in one thread was most of this function's time (a 256^3
   // scan: ~1.3 M runs, 40 MB of arrays, twice per segmentation).
-  const std::unique_ptr<Run[]> run(new Run[size_t(R)]);
+  const LargeArray<Run> run = large_array<Run>(size_t(R));
 #pragma omp parallel for schedule(static)
   for (int64_t r = 0; r < rows; ++r) {
     const uint8_t* row = m + r * nx;
@@ -97,7 +98,7 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
   // or the slice below, z - 1) by union-find over run numbers, the smaller
   // root kept; slabs of slices in parallel, then their seams, as in
   // connected_components: the sets do not depend on the split.
-  std::unique_ptr<int64_t[]> parent(new int64_t[size_t(R)]);
+  LargeArray<int64_t> parent = large_array<int64_t>(size_t(R));
 #pragma omp parallel for schedule(static)
   for (int64_t p = 0; p < R; ++p) parent[size_t(p)] = p;
   auto find = [&](int64_t x) {
@@ -147,7 +148,7 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
   // (per-chunk counts, then each chunk from its start), then every run
   // takes its root's number. In parallel: the serial loop, one dependent
   // load per run, was 15 ms of a 0.12 s stage at 256^3.
-  const std::unique_ptr<int64_t[]> comp(new int64_t[size_t(R)]);
+  const LargeArray<int64_t> comp = large_array<int64_t>(size_t(R));
   constexpr int64_t kChunks = 256;
   std::vector<int64_t> roots_before(size_t(kChunks) + 1, 0);
   auto chunk_begin = [&](int64_t c) { return R * c / kChunks; };
@@ -196,7 +197,7 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
   // x, and along y and z its voxels less those next to void (which belongs
   // to the same component); a closed face of the volume counts as solid.
   // Per run in parallel, summed per component in run order.
-  std::unique_ptr<int64_t[]> run_faces(new int64_t[size_t(R)]);
+  LargeArray<int64_t> run_faces = large_array<int64_t>(size_t(R));
 #pragma omp parallel for schedule(static)
   for (int64_t r = 0; r < rows; ++r) {
     const int64_t k = r / ny, j = r % ny;

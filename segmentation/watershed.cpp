@@ -226,10 +226,16 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
   const int64_t simd_end = n - (sl + nx + 2);
   const __m128i label_mask = _mm_set1_epi32(int32_t(kLabelMask));
   const __m128i zero = _mm_setzero_si128(), ones = _mm_set1_epi32(-1);
-  __m128i row_lanes[9];  // all-ones on the lanes that are neighbours
+  // Per row: the label bits on the lanes that are neighbours, 0 elsewhere.
+  // A voxel with a label has been queued (markers at the start, the others
+  // when they take a label), so a neighbour is labelled exactly where its
+  // masked word is not 0: no test of the queued flag, and the OR of the
+  // masked words is the OR of the labels (a third fewer operations a row).
+  __m128i row_label_mask[9];
   for (int r = 0; r < 9; ++r)
-    row_lanes[r] = _mm_set_epi32(0, (nb_bits >> (3 * r + 2)) & 1 ? -1 : 0,
-                                         (nb_bits >> (3 * r + 1)) & 1 ? -1 : 0, (nb_bits >> (3 * r)) & 1 ? -1 : 0);
+    row_label_mask[r] = _mm_and_si128(
+        label_mask, _mm_set_epi32(0, (nb_bits >> (3 * r + 2)) & 1 ? -1 : 0, (nb_bits >> (3 * r + 1)) & 1 ? -1 : 0,
+                                  (nb_bits >> (3 * r)) & 1 ? -1 : 0));
   // The labelled neighbours carry one label exactly when the OR of their
   // labels equals the AND (a | b == a & b only if a == b): two bitwise
   // operations a row instead of a signed max and min, which SSE2 lacks.
@@ -268,12 +274,9 @@ void flood(const uint8_t* lev, uint32_t* L, const Shape& s, const seg::Neighbour
       uint32_t free_bits = 0;
       for (int r = 0; r < 9; ++r) {
         const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(L + x + row_off[size_t(r)]));
-        const __m128i queued = _mm_srai_epi32(v, 31);  // kQueued is the sign bit
-        const __m128i lab = _mm_and_si128(v, label_mask);
-        const __m128i labelled =
-            _mm_andnot_si128(_mm_cmpeq_epi32(lab, zero), _mm_and_si128(queued, row_lanes[r]));
-        any = _mm_or_si128(any, _mm_and_si128(labelled, lab));
-        all = _mm_and_si128(all, _mm_or_si128(lab, _mm_andnot_si128(labelled, ones)));
+        const __m128i lab = _mm_and_si128(v, row_label_mask[r]);  // 0: not a labelled neighbour
+        any = _mm_or_si128(any, lab);
+        all = _mm_and_si128(all, _mm_or_si128(lab, _mm_cmpeq_epi32(lab, zero)));
         free_bits |= uint32_t(~_mm_movemask_ps(_mm_castsi128_ps(v)) & 7) << (3 * r);
       }
       free_bits &= nb_bits;

@@ -440,6 +440,10 @@ void smoothed_sample_histogram(const Volume<uint16_t>& slab, int64_t z0, int64_t
     for (int64_t z = z0 + ((8 - z0 % 16) % 16 + 16) % 16; z < z0 + S.nz; z += 16) zs.push_back(z);
   }
   std::vector<float> a(static_cast<size_t>(plane)), b(static_cast<size_t>(plane));
+  // Each thread's counts over all the sample slices, summed at the end (a
+  // fresh 65536-bin table a thread and a slice, and their sums in a
+  // critical section, cost more than the slices' smoothing at 256^3).
+  std::vector<std::vector<int64_t>> part(static_cast<size_t>(omp_get_max_threads()), std::vector<int64_t>(65536, 0));
   const uint16_t* G = slab.data();
   for (const int64_t z : zs) {
     // z pass: the slice's neighbours, the scan's end faces repeated.
@@ -461,10 +465,9 @@ void smoothed_sample_histogram(const Volume<uint16_t>& slab, int64_t z0, int64_t
         for (int64_t t = -r; t <= r; ++t) acc += w[size_t(t + r)] * a[size_t(clampi(j + t, 0, S.ny - 1) * S.nx + i)];
         b[size_t(j * S.nx + i)] = acc;
       }
-    std::vector<int64_t> h(65536, 0);
 #pragma omp parallel
     {
-      std::vector<int64_t> hl(65536, 0);
+      std::vector<int64_t>& hl = part[size_t(omp_get_thread_num())];
 #pragma omp for schedule(static) nowait
       for (int64_t j = 0; j < S.ny; ++j) {
         const int64_t lo = fov.active ? fov.x0[size_t(j)] : 0, hi = fov.active ? fov.x1[size_t(j)] : S.nx;
@@ -474,11 +477,10 @@ void smoothed_sample_histogram(const Volume<uint16_t>& slab, int64_t z0, int64_t
           ++hl[size_t(clampi(std::lround(acc), 0, 65535))];
         }
       }
-#pragma omp critical
-      for (size_t g = 0; g < hl.size(); ++g) h[g] += hl[g];
     }
-    for (size_t g = 0; g < h.size(); ++g) hist[g] += h[g];
   }
+  for (const auto& hl : part)
+    for (size_t g = 0; g < hl.size(); ++g) hist[g] += hl[g];
 }
 
 namespace {

@@ -172,6 +172,13 @@ void* allocate_large(size_t bytes) {
   return p;
 }
 
+void release_idle_blocks() noexcept {
+  if (!kCacheBlocks) return;
+  std::lock_guard<std::mutex> lock(block_mutex);
+  for (const auto& [p, have] : idle_blocks) std::free(p);
+  idle_blocks.clear();
+}
+
 void free_large(void* p) noexcept {
   if (!p) return;
   if (kCacheBlocks) {

@@ -46,6 +46,10 @@ std::string human_bytes(double bytes);
 // free_large (or LargeFree).
 void* allocate_large(size_t bytes);
 void free_large(void* p) noexcept;
+// Gives the kept blocks back to the system: called where a long stage ends
+// (a segmentation), so that what follows (measuring, writing) does not hold
+// them resident beside its own memory.
+void release_idle_blocks() noexcept;
 // Gives the whole pages inside [p, p + bytes) back to the system; the
 // range stays allocated and reads as zeros if touched again. For the unused
 // tail of a buffer that a smaller result took over (see Volume::reuse_as).

@@ -319,17 +319,28 @@ SegmentOptions SegmentOptions::resolved() const {
   return o;
 }
 
+// Each entry point gives back the blocks its stages freed (core/memory.hpp):
+// the caller's next steps should not find them resident.
 SegmentResult segment(const Volume<uint16_t>& grey, const SegmentOptions& opt) {
-  return run_from_grey(grey, nullptr, opt);
+  SegmentResult r = run_from_grey(grey, nullptr, opt);
+  release_idle_blocks();
+  return r;
 }
 
 SegmentResult segment(Volume<uint16_t>&& grey, const SegmentOptions& opt) {
-  Volume<uint16_t> g = std::move(grey);
-  return run_from_grey(g, &g, opt);
+  SegmentResult r;
+  {
+    Volume<uint16_t> g = std::move(grey);
+    r = run_from_grey(g, &g, opt);
+  }
+  release_idle_blocks();
+  return r;
 }
 
 SegmentResult segment_mask(Volume<uint8_t> solid, const SegmentOptions& opt) {
-  return segment_graded(std::move(solid), opt, false);
+  SegmentResult r = segment_graded(std::move(solid), opt, false);
+  release_idle_blocks();
+  return r;
 }
 
 namespace {

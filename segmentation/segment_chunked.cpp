@@ -260,6 +260,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
   r.stage_seconds.insert(r.stage_seconds.begin(), {"pass1", cr.pass1_seconds});
   record_decisions(r, std::move(d), opt, shape);
   r.peak_rss_bytes = peak_rss_bytes();
+  release_idle_blocks();  // the slabs' blocks (core/memory.hpp)
   return cr;
 }
 

@@ -100,7 +100,9 @@ TEST(PoreFilter, MatchesAVoxelByVoxelOracle) {
     }();
     ASSERT_GT(r0.filled, 5) << p_void;
     ASSERT_GT(r0.enclosed, r0.filled) << p_void;
-    if (closed[0]) ASSERT_GT(at_faces, 0) << p_void;  // the closed faces are exercised
+    if (closed[0]) {
+      ASSERT_GT(at_faces, 0) << p_void;  // the closed faces are exercised
+    }
     for (int threads : {1, 2, 3}) {
       omp_set_num_threads(threads);
       Volume<uint8_t> m = m0.clone();

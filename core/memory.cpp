@@ -124,11 +124,13 @@ namespace {
 // every page first touched (at 256^3, ~0.2 s of CPU time of a ~2 s run).
 // A cached block is reused for a request of its size (rounded to 2 MiB:
 // volumes of one shape and type); any request the cache cannot serve
-// empties the cache first, so idle blocks never add to the peak of the
-// stage that allocates. (Reusing blocks up to 5/4 of the request, their
-// excess pages given back, was as fast and raised the peak of a 256^3
-// segmentation by 0.1 B/voxel.) Not under AddressSanitizer, which must see
-// every block freed.
+// empties the cache first, so idle blocks never sit beside a new large
+// block; only smaller allocations (vectors, under 2 MiB) can meet them
+// resident, until the next such request or release_idle_blocks() (256^3
+// segmentation: peak 8.49 -> 8.65 B/voxel; 512^3 7.21 -> 7.23). (Reusing
+// blocks up to 5/4 of the request, their excess pages given back, was as
+// fast and raised the 256^3 peak to 8.72.) Not under AddressSanitizer,
+// which must see every block freed.
 #if defined(__SANITIZE_ADDRESS__)
 constexpr bool kCacheBlocks = false;
 #else

@@ -118,7 +118,7 @@ std::string human_bytes(double b) {
 
 namespace {
 
-// Freed large blocks kept for the next request of about their size. A
+// Freed large blocks kept for the next request of their size. A
 // segmentation allocates and frees volumes of one shape stage after stage;
 // each fresh block costs the kernel a page fault and a cleared page for
 // every page first touched (at 256^3, ~0.2 s of CPU time of a ~2 s run).
@@ -156,8 +156,8 @@ void* allocate_large(size_t bytes) {
                                  [rounded](const auto& b) { return b.second == rounded; });
     if (it != idle_blocks.end()) {
       void* p = it->first;
+      live_blocks[p] = rounded;  // first: if this throws, the block stays idle
       idle_blocks.erase(it);
-      live_blocks[p] = rounded;
       return p;
     }
     for (const auto& [p, have] : idle_blocks) std::free(p);
@@ -169,7 +169,10 @@ void* allocate_large(size_t bytes) {
   madvise(p, rounded, MADV_HUGEPAGE);  // a hint: ignored where THP is off
   if (kCacheBlocks) {
     std::lock_guard<std::mutex> lock(block_mutex);
-    live_blocks[p] = rounded;
+    try {
+      live_blocks[p] = rounded;
+    } catch (...) {  // not recorded: free_large then gives it back instead of keeping it
+    }
   }
   return p;
 }

@@ -31,6 +31,7 @@ std::vector<float> gaussian_kernel(double sigma) {
 
 constexpr size_t kBins = 4096;  // flood levels per label (counting sort)
 constexpr size_t kConn = 6;  // the flood's neighbourhood (see the header)
+constexpr int64_t kScreenPiece = 24;  // the screen's piece: min_piece / 24 (split_one)
 
 int64_t clampi(int64_t v, int64_t lo, int64_t hi) { return v < lo ? lo : (v > hi ? hi : v); }
 
@@ -300,12 +301,17 @@ Pieces split_one(const Volume<uint32_t>& labels, const Volume<T>& grey, uint32_t
   const uint32_t* L = labels.data();
   const int64_t vmin = std::max<int64_t>(opt.min_piece_vox, int64_t(std::ceil(opt.min_piece_fraction * double(bx.voxels))));
   // Screen: the same flood on every second voxel along each axis (1/8 of
-  // the work), with half the depth and an eighth of the piece. Most labels
-  // are whole and stop here. Measured against the full flood alone: the same
-  // labels on the 7 development scenes; on the 76 scenes of the blind sweep
-  // (with the threshold floor) F1 fell by 0.002 at most (3 points moved).
+  // the work), with half the depth and 1/kScreenPiece of the piece. Most
+  // labels are whole and stop here. A thin piece (a chip 2-4 voxels thick
+  // above the sheet) shows far fewer than an eighth of its voxels on the
+  // coarse grid, whose sheet also sits higher: a chip of 191 voxels above
+  // its sheet had 10 there (bench/segmentation/RESULTS.md "Thin pieces in
+  // the split repair's screen"). With an eighth, the screen dropped 7 of
+  // the splits the full flood makes on 18 middle-setting scenes (R 16 and
+  // 20); with 1/16 one, with 1/24 none, at +0.02 s at 256^3 (85 full floods
+  // of 574 labels instead of 68).
   smooth_box(s, grey, bx, w, 2);
-  if (!flood_box(s, L, l, S, bx, bz, by, bxn, 2, std::max<int64_t>(4, vmin / 8), 0.5f * float(opt.depth),
+  if (!flood_box(s, L, l, S, bx, bz, by, bxn, 2, std::max<int64_t>(4, vmin / kScreenPiece), 0.5f * float(opt.depth),
                  float(opt.floor), true))
     return out;
   smooth_box(s, grey, bx, w, 1);

@@ -97,7 +97,10 @@ inline Volume<uint16_t> image(const Volume<uint8_t>& truth, double sigma, const 
 // and a gap `gap` voxels wide; `pores` void balls of radius 2 inside each
 // half when gap < 0 (then no cut: an intact grain). Partial volume by 4^3
 // supersampling; imaging as data_synth's (PSF, Gaussian noise at CNR cnr).
-inline Volume<uint16_t> split_ball_scan(int64_t n, double R, double gap, int pores, double psf, double cnr, uint64_t seed) {
+// offset: the cut plane's distance from the centre, in R (0: halves; 0.75:
+// a chip, the cap beyond it, 0.25 R high).
+inline Volume<uint16_t> split_ball_scan(int64_t n, double R, double gap, int pores, double psf, double cnr, uint64_t seed,
+                                        double offset = 0) {
   const Shape s{n, n, n};
   Volume<float> phi = Volume<float>::filled(s, 0.f);
   const double c = double(n) / 2 - 0.5, nn = std::sqrt(1 + 0.09 + 0.04);
@@ -116,7 +119,7 @@ inline Volume<uint16_t> split_ball_scan(int64_t n, double R, double gap, int por
               const double z = double(k) + (a + 0.5) / 4 - 0.5 - c, y = double(j) + (b + 0.5) / 4 - 0.5 - c,
                            x = double(i) + (d + 0.5) / 4 - 0.5 - c;
               bool solid = z * z + y * y + x * x <= R * R;
-              if (gap > 0) solid = solid && std::abs((x + 0.3 * y + 0.2 * z) / nn) > gap / 2;
+              if (gap > 0) solid = solid && std::abs((x + 0.3 * y + 0.2 * z) / nn - offset * R) > gap / 2;
               for (const auto& p : pore)
                 solid = solid && (z - p[0]) * (z - p[0]) + (y - p[1]) * (y - p[1]) + (x - p[2]) * (x - p[2]) > 4.0;
               in += solid;

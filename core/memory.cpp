@@ -2,6 +2,7 @@
 
 #include <sys/mman.h>
 #include <unistd.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <cctype>
@@ -141,6 +142,28 @@ std::mutex block_mutex;
 std::unordered_map<void*, size_t> live_blocks;      // large blocks handed out: their sizes
 std::vector<std::pair<void*, size_t>> idle_blocks;  // freed large blocks kept
 
+// A fresh block of >= 16 MiB has its pages faulted in right away, by all
+// threads, 2 MiB at a time (dynamic schedule): the kernel clears each page
+// on its first touch, and left to the first pass over the block, that cost
+// falls on whichever thread's static share is slow to fault: on the 2-core
+// VM one thread cleared most of a 64 MB distance map while the other waited
+// at the barrier (perf: 0.1 s of one thread idle in a 0.75 s segmentation
+// of 256^3). Interleaved medians, 256^3: EDT 0.068 -> 0.061 s, markers
+// 0.035 -> 0.029, total 0.781 -> 0.746 (15 runs each; 2-4 % in three such
+// comparisons); 512^3 unchanged; peak 8.72 -> 8.76 B/voxel. Every block of
+// that size is written whole (volumes; the pore filter's run arrays), so
+// no page is made resident that would not be.
+constexpr size_t kPrefaultBytes = size_t(16) << 20;
+void prefault(void* p, size_t bytes) {
+  const int64_t chunks = int64_t(bytes / kHuge);
+#pragma omp parallel for schedule(dynamic, 1) if (!omp_in_parallel())
+  for (int64_t c = 0; c < chunks; ++c) {
+    char* q = static_cast<char*>(p) + size_t(c) * kHuge;
+    if (madvise(q, kHuge, MADV_POPULATE_WRITE) != 0)  // Linux >= 5.14; else one write a page
+      for (size_t i = 0; i < kHuge; i += 4096) static_cast<volatile char*>(q)[i] = 0;
+  }
+}
+
 }  // namespace
 
 void* allocate_large(size_t bytes) {
@@ -167,6 +190,7 @@ void* allocate_large(size_t bytes) {
   if (posix_memalign(&p, kHuge, rounded) != 0 || !p)
     throw ResourceError("out of memory allocating " + human_bytes(double(bytes)));
   madvise(p, rounded, MADV_HUGEPAGE);  // a hint: ignored where THP is off
+  if (rounded >= kPrefaultBytes) prefault(p, rounded);
   if (kCacheBlocks) {
     std::lock_guard<std::mutex> lock(block_mutex);
     try {

@@ -72,6 +72,7 @@ tg::SegmentOptions segment_options(const SegmentJob& o, const tg::Geometry& geom
   s.merge = !o.no_merge;
   s.split = !o.no_split;
   s.face_caps = !o.no_face_caps;
+  s.thin_pieces = !o.no_thin_pieces;
   s.face_slivers = !o.no_face_slivers;
   s.noise_specks = !o.keep_noise_specks;
   s.grey_evidence = !o.no_grey_evidence;
@@ -98,6 +99,13 @@ void print_plan(const SegmentJob& o, const tg::SegmentOptions& s) {
                                                              : std::string("0.7 or 1 (from the noise)"),
                                    s.split_depth_sigmas)
                      : std::string("off"));
+  fmt::print("  thin pieces: {}\n",
+             s.split && s.thin_pieces
+                 ? fmt::format("a piece of a label thinner than 2 x {:.3g} voxels (outside its opening by a ball of that "
+                               "radius) that touches the rest by under a fifth of its voxels gets a label of its own "
+                               "(a chip pressed on a grain)",
+                               r.thin_piece_radius_vox)
+                 : std::string("off"));
   fmt::print("  face caps: {}\n", s.split && s.face_caps
                                      ? "a label whose footprint on a scan face holds two distance maxima parted by a "
                                        "dim contact, or goes on behind its footprint past a dim layer into a grain, "
@@ -241,6 +249,9 @@ int run_segment(SegmentJob& o) {
                "smoothed over {:.2g} voxels)\n",
                res.split.split, res.split.tested, res.split.pieces_added, res.split_depth, res.smoothed_noise_sigma,
                res.split_smoothing_vox);
+  if (res.thin_pieces_used && res.thin_pieces.split)
+    fmt::print("  thin pieces: {} of {} labels gave up a thin piece ({} pieces added; opening radius {:.3g} voxels)\n",
+               res.thin_pieces.split, res.thin_pieces.tested, res.thin_pieces.pieces_added, res.thin_piece_radius_vox);
   if (res.face_slivers_used && res.face_slivers.labels_grown)
     fmt::print("  face slivers: {} thin labels on the scan's faces took {} partial-volume voxels\n",
                res.face_slivers.labels_grown, res.face_slivers.voxels_added);
@@ -291,8 +302,11 @@ static tg::app::Registrar reg{{"segment", 30,
     "and a merge needs a mostly bright interface. Off on very noisy scans (CNR below ~6).\n"
     "Repairs after the watershed (the plan printed at the start says which run, the summary what\n"
     "each changed): noise specks cleared; split repair: a label whose smoothed grey holds two bright\n"
-    "cores parted by a darker sheet (fragments a voxel apart) is cut along it (--no-split); face\n"
-    "caps: a grain cut by a face of the scan that shows only a thin cap, given by the watershed to\n"
+    "cores parted by a darker sheet (fragments a voxel apart) is cut along it (--no-split); thin\n"
+    "pieces: a chip pressed on a grain (thinner than the ball of radius max(3, 0.15 R) whose\n"
+    "opening keeps the grain, touching it by a small contact) gets its own label\n"
+    "(--no-thin-pieces); face caps: a grain cut by a face of the scan that shows only a thin\n"
+    "cap, given by the watershed to "
     "the grain it touches, gets its own label when its section on the face is a second disc and\n"
     "the contact between them is dim, or when the label goes on behind the cap, past a dim layer,\n"
     "into a grain whose pole it is pressed on (--no-face-caps); face slivers: a grain the face\n"
@@ -404,6 +418,15 @@ static tg::app::Registrar reg{{"segment", 30,
                 "Do not look for grains cut by a face of the scan whose thin cap the watershed gave to a neighbour "
                 "(two distance maxima in a label's footprint on the face parted by a dim contact, or one whose "
                 "label goes on behind the cap past a dim layer into a grain); runs with the split repair");
+  sub->add_flag("--no-thin-pieces", o->no_thin_pieces,
+                "Do not give a label of their own to thin pieces pressed on a grain (a chip: thinner than twice the "
+                "opening radius, touching the rest of its label by under a fifth of its voxels); runs with the split "
+                "repair");
+  sub->add_option("--thin-piece-radius-vox", o->seg.thin_piece_radius_vox,
+                  "Radius of the ball whose opening keeps a grain's body and drops thin pieces, voxels (0: max(3, "
+                  "0.15 x the grain radius))")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   sub->add_flag("--no-face-slivers", o->no_face_slivers,
                 "Do not let labels lying within 2 voxels of a scan face (grains the face cuts near their edge: "
                 "all partial volume) take the unlabelled voxels beside them above half their own contrast over the "

@@ -312,6 +312,9 @@ SegmentOptions SegmentOptions::resolved() const {
   if (o.pore_max_volume_vox < 0) o.pore_max_volume_vox = PoreFilterOptions::from_grain_radius(grain_radius_vox).max_volume_vox;
   if (std::isnan(o.h)) throw UsageError("segment: the marker depth h must be a number");
   if (o.h < 0) o.h = std::max(0.5, 0.035 * o.grain_radius_vox);
+  if (std::isnan(o.thin_piece_radius_vox) || o.thin_piece_radius_vox < 0 || !std::isfinite(o.thin_piece_radius_vox))
+    throw UsageError("segment: the thin-piece radius must be >= 0 voxels (0: from the grain radius)");
+  if (o.thin_piece_radius_vox == 0) o.thin_piece_radius_vox = std::max(3.0, 0.15 * o.grain_radius_vox);
   if (!(o.bright_fraction >= 0 && o.bright_fraction <= 1))
     throw UsageError("segment: the bright fraction must be in [0, 1]");
   if (!(o.bright_sigmas >= 0) || !std::isfinite(o.bright_sigmas))
@@ -519,6 +522,18 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
     uint32_t count = r.count;
     r.split = split_by_grey(lab, &count, *grey_code, so);
     clock.lap("split");
+    if (opt.thin_pieces) {
+      // Thin pieces (split_labels.hpp split_thin_pieces): chips pressed on
+      // a grain, which neither the distance map nor the grey part.
+      r.thin_pieces_used = true;
+      ThinPieceOptions to;
+      to.radius_vox = opt.thin_piece_radius_vox;
+      to.min_piece_fraction = opt.split_min_piece_fraction;
+      to.spacing = eo.spacing;
+      r.thin_piece_radius_vox = to.radius_vox;
+      r.thin_pieces = split_thin_pieces(lab, &count, to);
+      clock.lap("thin_pieces");
+    }
     if (opt.face_caps) {
       // Face caps (split_labels.hpp split_face_caps): the scan's faces only
       // (a slab's cut faces are not).
@@ -534,7 +549,7 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   }
   // (Grown or joined slivers may start earlier in raster order, or leave a
   // number unused.)
-  if (r.split.pieces_added + r.face_caps.pieces_added + r.face_slivers.slivers_joined +
+  if (r.split.pieces_added + r.thin_pieces.pieces_added + r.face_caps.pieces_added + r.face_slivers.slivers_joined +
           r.face_slivers.voxels_added > 0 ||
       floor_deferred) {
     rl = relabel_consecutive(lab, opt.min_size_vox);
@@ -652,6 +667,22 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                 {"labels_split", r.split.split},
                 {"pieces_added", r.split.pieces_added},
                 {"labels_too_large_to_test", r.split.skipped_large}};
+  j["thin_pieces"] = {{"enabled", r.thin_pieces_used},
+                      {"radius_vox", r.thin_piece_radius_vox},
+                      {"rule", [] {
+                         const ThinPieceOptions d;  // the values segment() runs with (radius aside)
+                         return fmt::format(
+                             "a label's voxels left by its opening with a ball of radius_vox (those within radius_vox "
+                             "of a voxel deeper than radius_vox) form a thin piece, given a label of its own, where a "
+                             "6-connected component holds >= max({}, min_piece_fraction x the label) voxels, <= {} of "
+                             "the label, touches no scan face, and < {} of its voxels touch the opening "
+                             "(split_labels.hpp split_thin_pieces)",
+                             d.min_piece_vox, d.max_share, d.max_contact);
+                       }()},
+                      {"labels_tested", r.thin_pieces.tested},
+                      {"labels_tested_in_full", r.thin_pieces.screened_in},
+                      {"labels_split", r.thin_pieces.split},
+                      {"pieces_added", r.thin_pieces.pieces_added}};
   j["face_caps"] = {{"enabled", r.face_caps_used},
                     {"rule", [] {
                        const FaceCapOptions d;  // the values segment() runs with

@@ -9,7 +9,9 @@
 //               (bright interfaces, one best partner per label)
 //            -> consecutive labels with a size filter
 //            -> split repair (a label whose smoothed grey holds two bright
-//               cores parted by a darker sheet: split_labels.hpp) -> labels u32
+//               cores parted by a darker sheet: split_labels.hpp)
+//            -> thin pieces (a chip pressed on a grain: split_labels.hpp
+//               split_thin_pieces) -> face caps -> labels u32
 //
 // Each stage is its own header (threshold, pore_filter, distance_transform,
 // markers, watershed, merge_labels, connected_components), with the method
@@ -171,6 +173,10 @@ struct SegmentOptions {
   double split_min_piece_fraction = 0.005;
   // Face caps (split_labels.hpp split_face_caps): with the split repair.
   bool face_caps = true;
+  // Thin pieces (split_labels.hpp split_thin_pieces): with the split repair.
+  // thin_piece_radius_vox 0 (default): max(3, 0.15 grain_radius_vox).
+  bool thin_pieces = true;
+  double thin_piece_radius_vox = 0;
 
   // Face slivers (face_slivers.hpp): grains the scan's faces cut a voxel or
   // two from their edge keep their partial-volume voxels (grey scans with a
@@ -210,6 +216,9 @@ struct SegmentResult {
   double split_depth = 0;         // grey levels
   GreyCode split_code;
   SplitResult split;
+  bool thin_pieces_used = false;     // the thin-piece repair ran (with the split repair, thin_pieces on)
+  double thin_piece_radius_vox = 0;  // the opening's radius it used
+  ThinPieceResult thin_pieces;
   bool face_caps_used = false;  // the face-cap repair ran (with the split repair, face_caps on)
   FaceCapResult face_caps;
   bool face_slivers_used = false;  // the face-sliver step ran

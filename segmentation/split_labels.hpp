@@ -184,6 +184,63 @@ struct FaceCapResult {
 FaceCapResult split_face_caps(Volume<uint32_t>& labels, uint32_t* count, const Volume<uint8_t>& grey,
                               const FaceCapOptions& opt);
 
+// Thin pieces: a chip a few voxels thick pressed on a grain (its own, or a
+// neighbour it touches) has no distance maximum of its own (its deepest
+// voxel is 2-3 voxels from the void, as deep as the neck where it touches),
+// so it seeds no marker and the watershed gives it to the grain; where it
+// is pressed on a neighbour the contact is as bright as solid, so the grey
+// shows no sheet either (blind_scene.py R 16-20: most of the particles
+// missed, bench/segmentation/RESULTS.md "Thin pieces glued to a grain").
+// Its shape still tells: it is thinner than any part of a grain, and joined
+// to the grain by a contact much smaller than itself.
+// Method, per label (in its box, its own voxels only):
+//  1. The morphological opening of the label by a ball of radius r: its
+//     voxels within r of a voxel deeper than r (two exact distance maps,
+//     distance_transform.hpp; the volume's faces are not void, as for
+//     segment()'s map). A grain's body is its own opening but for a thin
+//     skin at sharp edges; a piece thinner than 2r is not in it.
+//  2. What the opening leaves, in 6-connected components. A component is a
+//     thin piece when it holds at least min_piece voxels (max(27, 0.005 of
+//     the label), as the split repair's), at most max_share of the label,
+//     touches no face of the volume (a grain the face cuts thin is the face
+//     caps' business), and fewer than max_contact of its voxels touch the
+//     opening (a chip touches the grain by a small contact, 4-19 % of its
+//     voxels on the dev scenes; the skin of an edge lies along the body).
+//  3. Each thin piece gets a new label; the rest keeps the label.
+// Defaults, from the grain radius R the user gives: r = max(3, 0.15 R)
+// voxels (the chips of blind_scene.py R 16-20 are 2.8-6 voxels thick, their
+// deepest voxels 1.4-3.0 from the void; at R 40, r 4 cut the skin of two
+// small fragments, 6 nothing), max_contact 0.2 (chips 0.04-0.19), max_share
+// 0.2 (chips 1-13 % of the label they were glued to; the skins cut at R 40
+// 25 %). Dev scenes (a Python prototype, then this code): R 16 seeds
+// 411-414, R 20 511-512, angular (0.15, 0.3) and elongated (1.6, 2) R 20
+// seed 1, R 8, 12 and 40 sweep seed 1, data_synth 256^3 stage 4 (seed 12):
+// 41 pieces, each another particle's, none of them face-cut, before the
+// face and share rules 2 false (bench/segmentation/RESULTS.md).
+// Cost: each label is screened first on every second voxel of its box (a
+// radius one voxel larger, looser size, share and contact); only a label
+// the screen finds a piece in is read in full. Each label's result depends
+// only on its own box: labels in parallel, the same whatever the thread
+// count.
+struct ThinPieceOptions {
+  double radius_vox = 3.0;          // r, the opening's ball, voxels
+  double max_contact = 0.2;         // share of a piece's voxels touching the opening
+  double max_share = 0.2;           // a piece is at most this share of its label
+  double min_piece_fraction = 0.005;
+  int64_t min_piece_vox = 27;
+  std::array<double, 3> spacing{1.0, 1.0, 1.0};  // voxel edges (z, y, x) over the finest, as segment()'s map
+  int64_t max_box_vox = int64_t(1) << 28;
+};
+
+struct ThinPieceResult {
+  int64_t tested = 0;        // labels large enough to hold a piece and a body
+  int64_t screened_in = 0;   // of those, the ones the screen (every second voxel) sent to the full test
+  int64_t split = 0;         // labels a thin piece left
+  int64_t pieces_added = 0;  // new labels
+};
+
+ThinPieceResult split_thin_pieces(Volume<uint32_t>& labels, uint32_t* count, const ThinPieceOptions& opt);
+
 // The grey the split repair keeps beside the markers, one byte a voxel:
 // code c stands for grey lo + c step (rounded, clipped to 0..255). segment()
 // takes lo and hi (step = (hi - lo) / 255) as the 0.1th and 99.9th

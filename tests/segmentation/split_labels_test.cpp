@@ -272,3 +272,85 @@ TEST(SplitLabels, BadSmoothingIsAUsageError) {
 
 }  // namespace
 }  // namespace tg
+
+namespace tg {
+namespace {
+
+// A ball (radius 12, centre x 20) and a chip pressed on it: the cap, 3
+// voxels high, of a ball of radius 10 centred at x 42 (its curved face
+// toward the first ball, the apexes meeting at x 32; its flat cut at x 35,
+// ~250 voxels), one label, as the watershed leaves a chip pressed on a
+// grain (no distance maximum of its own, the contact as deep as the chip).
+// nx: the volume's width (36: the chip's flat face is the volume's face).
+Volume<uint32_t> ball_and_chip(int64_t nx) {
+  const int64_t n = 48;
+  auto l = Volume<uint32_t>::filled(Shape{n, n, nx}, 0u);
+  for (int64_t k = 0; k < n; ++k)
+    for (int64_t j = 0; j < n; ++j)
+      for (int64_t i = 0; i < nx; ++i) {
+        const double dz = double(k) - 24, dy = double(j) - 24, dx = double(i) - 20, dc = double(i) - 42;
+        const bool ball = dz * dz + dy * dy + dx * dx <= 144;
+        const bool chip = dz * dz + dy * dy + dc * dc <= 100 && i <= 35;
+        if (ball || chip) l(k, j, i) = 1;
+      }
+  return l;
+}
+
+TEST(ThinPieces, ChipPressedOnAGrainGetsItsOwnLabel) {
+  auto lab = ball_and_chip(48);
+  uint32_t count = 1;
+  const ThinPieceResult r = split_thin_pieces(lab, &count, ThinPieceOptions{});
+  EXPECT_EQ(r.tested, 1);
+  EXPECT_EQ(r.split, 1);
+  ASSERT_EQ(count, 2u);
+  // The new label: the chip (x 32..35, beyond the ball but for its apex),
+  // all of it but a few voxels where it meets the ball.
+  int64_t piece = 0, piece_in_chip = 0, chip = 0;
+  for (int64_t k = 0; k < 48; ++k)
+    for (int64_t j = 0; j < 48; ++j)
+      for (int64_t i = 0; i < 48; ++i) {
+        const uint32_t v = lab(k, j, i);
+        piece += v == 2;
+        const bool in_chip = i >= 32 && v != 0;
+        chip += in_chip;
+        piece_in_chip += in_chip && v == 2;
+      }
+  EXPECT_EQ(piece, piece_in_chip) << "the piece lies in the chip";
+  EXPECT_GT(double(piece_in_chip) / double(chip), 0.9) << piece_in_chip << " of " << chip;
+}
+
+TEST(ThinPieces, GrainsWithEdgesAndCutsStayWhole) {
+  // A cube (sharp edges: their skin lies along the body), a half ball (a
+  // rim as thin as a chip, all along its body), and the ball and chip with
+  // the chip's cut on the volume's face (a grain the face cuts thin: the
+  // face caps' business): none split.
+  const int64_t n = 40;
+  auto cube = Volume<uint32_t>::filled(Shape{n, n, n}, 0u);
+  auto half = Volume<uint32_t>::filled(Shape{n, n, n}, 0u);
+  for (int64_t k = 0; k < n; ++k)
+    for (int64_t j = 0; j < n; ++j)
+      for (int64_t i = 0; i < n; ++i) {
+        if (k >= 8 && k < 32 && j >= 8 && j < 32 && i >= 8 && i < 32) cube(k, j, i) = 1;
+        const double dz = double(k) - 20, dy = double(j) - 20, dx = double(i) - 20;
+        if (dz * dz + dy * dy + dx * dx <= 196 && i >= 20) half(k, j, i) = 1;
+      }
+  auto at_face = ball_and_chip(36);  // the chip's flat face is the volume's face
+  for (auto* v : {&cube, &half, &at_face}) {
+    uint32_t count = 1;
+    const ThinPieceResult r = split_thin_pieces(*v, &count, ThinPieceOptions{});
+    EXPECT_EQ(r.tested, 1);
+    EXPECT_EQ(r.split, 0);
+    EXPECT_EQ(count, 1u);
+  }
+}
+
+TEST(ThinPieces, BadRadiusIsAUsageError) {
+  auto lab = ball_and_chip(48);
+  uint32_t count = 1;
+  ThinPieceOptions o;
+  o.radius_vox = 0;
+  EXPECT_THROW(split_thin_pieces(lab, &count, o), UsageError);
+}
+
+}  // namespace
+}  // namespace tg

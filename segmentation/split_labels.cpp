@@ -351,6 +351,21 @@ bool renumber_pieces(uint32_t* L, const Pieces& p, uint32_t& next, const char* r
   return true;
 }
 
+// Numbers the pieces of labels 1..n (pieces[l]) in label order, from
+// n + 1 on: the same whatever the thread count that found them. Counts the
+// labels split and the pieces added; *count becomes the last number.
+void apply_pieces(uint32_t* L, const std::vector<Pieces>& pieces, uint32_t n, uint32_t* count, const char* repair,
+                  int64_t* split, int64_t* added) {
+  uint32_t next = n;
+  for (uint32_t l = 1; l <= n; ++l) {
+    const Pieces& p = pieces[l];
+    if (!renumber_pieces(L, p, next, repair)) continue;
+    ++*split;
+    *added += p.count - 1;
+  }
+  *count = next;
+}
+
 template <class T>
 SplitResult split_impl(Volume<uint32_t>& labels, uint32_t* count, const Volume<T>& grey, const SplitOptions& opt) {
   if (!(labels.shape() == grey.shape())) throw std::logic_error("split_by_grey: labels and grey differ in shape");
@@ -381,16 +396,7 @@ SplitResult split_impl(Volume<uint32_t>& labels, uint32_t* count, const Volume<T
   }
   res.tested = tested;
   res.skipped_large = skipped;
-  // New numbers in label order: the same whatever the thread count.
-  uint32_t next = n;
-  uint32_t* L = labels.data();
-  for (uint32_t l = 1; l <= n; ++l) {
-    const Pieces& p = pieces[l];
-    if (!renumber_pieces(L, p, next, "split repair")) continue;
-    ++res.split;
-    res.pieces_added += p.count - 1;
-  }
-  *count = next;
+  apply_pieces(labels.data(), pieces, n, count, "split repair", &res.split, &res.pieces_added);
   return res;
 }
 
@@ -925,16 +931,7 @@ ThinPieceResult split_thin_pieces(Volume<uint32_t>& labels, uint32_t* count, con
   }
   res.tested = tested;
   res.screened_in = passed;
-  // New numbers in label order: the same whatever the thread count.
-  uint32_t next = n;
-  uint32_t* L = labels.data();
-  for (uint32_t l = 1; l <= n; ++l) {
-    const Pieces& p = pieces[l];
-    if (!renumber_pieces(L, p, next, "thin-piece repair")) continue;
-    ++res.split;
-    res.pieces_added += p.count - 1;
-  }
-  *count = next;
+  apply_pieces(labels.data(), pieces, n, count, "thin-piece repair", &res.split, &res.pieces_added);
   return res;
 }
 

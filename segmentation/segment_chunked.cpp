@@ -254,6 +254,8 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
   r.dropped = dropped;
   r.split_used = split_used;
   r.face_caps_used = split_used && opt.face_caps;
+  r.thin_pieces_used = split_used && opt.thin_pieces;
+  r.thin_piece_radius_vox = opt.thin_piece_radius_vox;
   r.face_slivers_used = opt.face_slivers && d.void_level > 0 && d.t.method != ThresholdMethod::local;
   r.specks.used = specks_used;
   r.stage_seconds = std::move(stage_sum);
@@ -281,6 +283,7 @@ std::string summary_json(const ChunkedResult& cr, const SegmentOptions& opt) {
   for (const char* k : {"touching_pairs", "passing_pairs", "merges"}) j["merge"][k] = nullptr;
   for (const char* k : {"labels_tested", "labels_split", "pieces_added", "labels_too_large_to_test"}) j["split"][k] = nullptr;
   for (const char* k : {"candidates", "labels_split", "pieces_added"}) j["face_caps"][k] = nullptr;
+  for (const char* k : {"labels_tested", "labels_tested_in_full", "labels_split", "pieces_added"}) j["thin_pieces"][k] = nullptr;
   for (const char* k : {"slivers_joined", "labels_grown", "voxels_added"}) j["face_slivers"][k] = nullptr;
   for (const char* k : {"mu0", "s0", "labels_tested", "labels_dropped", "voxels_dropped"}) j["noise_specks"][k] = nullptr;
   json slabs = json::array();

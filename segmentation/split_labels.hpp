@@ -215,7 +215,7 @@ FaceCapResult split_face_caps(Volume<uint32_t>& labels, uint32_t* count, const V
 // 25 %). Dev scenes (a Python prototype, then this code): R 16 seeds
 // 411-414, R 20 511-512, angular (0.15, 0.3) and elongated (1.6, 2) R 20
 // seed 1, R 8, 12 and 40 sweep seed 1, data_synth 256^3 stage 4 (seed 12):
-// 41 pieces, each another particle's, none of them face-cut, before the
+// 36 pieces, each another particle's, none of them face-cut, before the
 // face and share rules 2 false (bench/segmentation/RESULTS.md).
 // Cost: each label is screened first on every second voxel of its box (a
 // radius one voxel larger, looser size, share and contact); only a label

@@ -159,6 +159,7 @@ int run_measure_chunked(const MeasureJob& o, measure::ParticleOptions po, const 
     levels = checked_levels(grey, shape.nz, std::max<int64_t>(1, plan.core), o.grey);
     po.grey_levels.void_grey = levels.void_level;
     po.grey_levels.solid_grey = levels.solid;
+    po.grey_levels.local_solid = !o.grey_global_level;
   }
   Progress bar("measure slabs", double(shape.nz), "slices");
   measure::ChunkedMeasure res;
@@ -272,6 +273,7 @@ int run_measure(const MeasureJob& o) {
     }
     po.grey_levels.void_grey = levels.void_level;
     po.grey_levels.solid_grey = levels.solid;
+    po.grey_levels.local_solid = !o.grey_global_level;
   }
   const auto particles = measure::measure_particles(labels.view(), po);
   Table t = measure::particle_table(particles);
@@ -380,7 +382,12 @@ tg::app::Registrar reg_measure{{"measure", 40,
   sub->add_option("--grey", o->grey,
                   "The grey scan the labels were segmented from: volume_mm3 and d_eq_mm become partial-volume "
                   "estimates from its grey levels, void lines and threshold bias included "
-                  "(measure/grey_volume.hpp); d_med_mm and fr stay on the labels; volume_from says which");
+                  "(measure/grey_volume.hpp); d_med_mm and fr stay on the labels; volume_from says which. Each "
+                  "particle's surface band is read against its own solid level (the grey of its core), so that "
+                  "beam hardening (a darker centre) or grains of different density do not bias it");
+  sub->add_flag("--grey-global-level", o->grey_global_level,
+                "With --grey: read every particle's band against the scan's solid level instead of its own "
+                "(the estimate before the local level; blind sweep, cupping 0.3: median |dV/V| 2.9 % against 0.3 %)");
   sub->add_option("--memory-limit", o->memory_limit,
                   "Memory to stay under, e.g. 16GiB, 512MiB, 2G or a byte count. Labels (any format) whose measuring "
                   "needs more (~5 B/voxel, 7 with a --grey scan read whole; a uint16 one is read in slabs) are measured slab by slab, with the same table; .csv "

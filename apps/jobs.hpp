@@ -53,6 +53,9 @@ struct MeasureJob {
   // The grey scan the labels came from (any format segment reads): the
   // volumes become partial-volume estimates (measure/grey_volume.hpp).
   std::string grey;
+  // With grey: every particle's band read with the scan's solid level, not
+  // its own (measure/grey_volume.hpp "Local solid level").
+  bool grey_global_level = false;
   // When set (analyse), these labels (read from `in` by an earlier step) are
   // measured instead of reading `in` again; `in` still names them.
   const Volume<uint32_t>* labels = nullptr;

@@ -22,9 +22,32 @@ inline int64_t fixed(double voxels) { return static_cast<int64_t>(std::llround(v
 
 std::vector<double> grey_volumes(const VolumeView<const uint32_t>& labels, const VolumeView<const uint16_t>& grey,
                                  const std::vector<uint32_t>& ids, const GreyVolumeOptions& opt) {
-  const std::vector<int64_t> sum = grey_volume_sums(labels, grey, ids, opt, 0, labels.shape().nz);
-  std::vector<double> out(sum.size());
-  for (size_t n = 0; n < sum.size(); ++n) out[n] = double(sum[n]) / grey_volume_detail::kUnit;
+  return grey_volumes_from_sums(grey_volume_sums(labels, grey, ids, opt, 0, labels.shape().nz), opt);
+}
+
+void GreyVolumeSums::resize(size_t n) {
+  inner.assign(n, 0), band.assign(n, 0), solid_grey.assign(n, 0), solid_count.assign(n, 0);
+}
+
+void GreyVolumeSums::add(size_t to, const GreyVolumeSums& o, size_t from) {
+  inner[to] += o.inner[from], band[to] += o.band[from];
+  solid_grey[to] += o.solid_grey[from], solid_count[to] += o.solid_count[from];
+}
+
+std::vector<double> grey_volumes_from_sums(const GreyVolumeSums& s, const GreyVolumeOptions& opt) {
+  const size_t n = s.inner.size();
+  // The scale of each label's band (header, "local solid level"): the
+  // scan's contrast over the contrast of this label's core.
+  const double all = opt.solid_grey - opt.void_grey;
+  std::vector<double> out(n);
+  for (size_t x = 0; x < n; ++x) {
+    double scale = 1;
+    if (opt.local_solid && all > 0 && s.solid_count[x] >= opt.min_solid_voxels) {
+      const double own = double(s.solid_grey[x]) / double(s.solid_count[x]) - opt.void_grey;
+      scale = std::clamp(all / std::max(own, 1e-9), kMinBandScale, kMaxBandScale);
+    }
+    out[x] = (double(s.inner[x]) + double(s.band[x]) * scale) / grey_volume_detail::kUnit;
+  }
   return out;
 }
 
@@ -38,7 +61,8 @@ std::vector<double> grey_volumes(const VolumeView<const uint32_t>& labels, const
                                  int64_t window_slices) {
   if (window_slices < 3) throw UsageError("grey volume: a window needs >= 3 slices (a core and one on each side)");
   const Shape s = labels.shape();
-  std::vector<int64_t> sum(ids.size(), 0);
+  GreyVolumeSums sum;
+  sum.resize(ids.size());
   // Windows of equal size (one buffer serves them all): [c0 - 1, c0 - 1 + W)
   // holds the core [c0, c0 + W - 2); the first starts at the face, the last
   // ends there.
@@ -50,18 +74,15 @@ std::vector<double> grey_volumes(const VolumeView<const uint32_t>& labels, const
     if (!(g.shape() == ws))
       throw InputError("grey slab of slices " + std::to_string(w0) + ".." + std::to_string(w1 - 1) + " is " +
                        g.shape().str() + ", expected " + ws.str());
-    const std::vector<int64_t> part = grey_volume_sums(labels.slices(w0, w1 - w0), g.view(), ids, opt, c0 - w0, c1 - w0);
-    for (size_t n = 0; n < sum.size(); ++n) sum[n] += part[n];
+    const GreyVolumeSums part = grey_volume_sums(labels.slices(w0, w1 - w0), g.view(), ids, opt, c0 - w0, c1 - w0);
+    for (size_t n = 0; n < ids.size(); ++n) sum.add(n, part, n);
     c0 = c1;
   }
-  std::vector<double> out(sum.size());
-  for (size_t n = 0; n < sum.size(); ++n) out[n] = double(sum[n]) / grey_volume_detail::kUnit;
-  return out;
+  return grey_volumes_from_sums(sum, opt);
 }
 
-std::vector<int64_t> grey_volume_sums(const VolumeView<const uint32_t>& labels, const VolumeView<const uint16_t>& grey,
-                                      const std::vector<uint32_t>& ids, const GreyVolumeOptions& opt, int64_t c0,
-                                      int64_t c1) {
+GreyVolumeSums grey_volume_sums(const VolumeView<const uint32_t>& labels, const VolumeView<const uint16_t>& grey,
+                                const std::vector<uint32_t>& ids, const GreyVolumeOptions& opt, int64_t c0, int64_t c1) {
   using grey_volume_detail::fixed;
   const Shape s = labels.shape();
   if (c0 < 0 || c1 > s.nz || c0 > c1)
@@ -98,14 +119,19 @@ std::vector<int64_t> grey_volume_sums(const VolumeView<const uint32_t>& labels, 
     frac_fixed[g] = fixed(frac[g]);
   }
   const int64_t one = fixed(1.0);
+  // Core voxels (below) at least half way from the void to the solid count
+  // toward their label's own solid level (a filled pore's dark voxels do not).
+  const double mid = 0.5 * (opt.void_grey + opt.solid_grey);
+  const uint16_t solid_from = uint16_t(std::clamp(std::ceil(mid), 1.0, 65535.0));
 
-  std::vector<std::vector<int64_t>> part(static_cast<size_t>(nt));
+  std::vector<GreyVolumeSums> part(static_cast<size_t>(nt));
 #pragma omp parallel num_threads(nt)
   {
     const int t = omp_get_thread_num();
     const int n_threads = omp_get_num_threads();
-    std::vector<int64_t>& acc = part[static_cast<size_t>(t)];
-    acc.assign(nl, 0);
+    GreyVolumeSums& mine = part[static_cast<size_t>(t)];
+    mine.resize(nl);
+    std::vector<int64_t>& acc = mine.band;
     const int64_t z0 = c0 + (c1 - c0) * t / n_threads, z1 = c0 + (c1 - c0) * (t + 1) / n_threads;
     std::array<uint32_t, 26> nb_label{};
     std::array<int, 26> nb_count{};
@@ -122,6 +148,11 @@ std::vector<int64_t> grey_volume_sums(const VolumeView<const uint32_t>& labels, 
     // this pass, the one-pass neighbour OR and the single-label shortcut
     // below took 21 % off it at 512^3, with the same integer sums.)
     std::vector<uint8_t> inner(static_cast<size_t>(s.nx));
+    // core[i]: 1 where all 26 neighbours carry the voxel's label (>= 2 voxels
+    // from its surface along every axis): the voxels whose grey tells the
+    // label's solid level (a voxel one inside the surface is dimmed by the
+    // blur, the more so the smaller the grain).
+    std::vector<uint8_t> core(static_cast<size_t>(s.nx));
     const std::vector<uint32_t> zero_row(static_cast<size_t>(s.nx), 0u);
     for (int64_t k = z0; k < z1; ++k)
       for (int64_t j = 0; j < s.ny; ++j) {
@@ -152,19 +183,43 @@ std::vector<int64_t> grey_volume_sums(const VolumeView<const uint32_t>& labels, 
         const bool edge_row = !below || !above || !before || !after;
         uint8_t* in = inner.data();
         std::fill(inner.begin(), inner.end(), uint8_t{0});  // the row's first and last voxels touch a face
-        if (!edge_row)
+        uint8_t* co = core.data();
+        std::fill(core.begin(), core.end(), uint8_t{0});
+        if (!edge_row) {
           for (int64_t i = 1; i < s.nx - 1; ++i) {
             const uint32_t l = row[i];
             in[i] = uint8_t((l != 0) & (below[i] == l) & (above[i] == l) & (before[i] == l) & (after[i] == l) &
                             (row[i - 1] == l) & (row[i + 1] == l));
+            co[i] = in[i];
           }
+          // Row by row, so that each pass vectorises: the 3 x 3 rows' labels,
+          // then their grey at least half way to solid too (not the wall of a
+          // filled pore, whose partial volume would dim a porous grain's level).
+          for (const uint32_t* r : src)
+            for (int64_t i = 1; i < s.nx - 1; ++i)
+              co[i] &= uint8_t((r[i - 1] == row[i]) & (r[i] == row[i]) & (r[i + 1] == row[i]));
+          for (int64_t dk = -1; dk <= 1; ++dk)
+            for (int64_t dj = -1; dj <= 1; ++dj) {
+              const uint16_t* r = grey.row(k + dk, j + dj).data();
+              for (int64_t i = 1; i < s.nx - 1; ++i)
+                co[i] &= uint8_t((r[i - 1] >= solid_from) & (r[i] >= solid_from) & (r[i + 1] >= solid_from));
+            }
+        }
         uint32_t last = 0;  // the label of the last labelled voxel, and its index
         int32_t last_x = -1;
         for (int64_t i = 0; i < s.nx; ++i) {
           const uint32_t l = row[i];
           if (l) {
             if (l != last) last = l, last_x = index_of(l);
-            if (last_x >= 0) acc[size_t(last_x)] += in[i] ? one : frac_fixed[grow[i]];
+            if (last_x < 0) continue;
+            const size_t x = size_t(last_x);
+            const uint16_t g = grow[i];
+            if (in[i]) {
+              mine.inner[x] += one;
+              if (co[i] && g >= solid_from) mine.solid_grey[x] += g, ++mine.solid_count[x];
+            } else {
+              acc[x] += frac_fixed[g];
+            }
             continue;
           }
           if (!near3[size_t(i)]) continue;  // no labelled neighbour
@@ -208,9 +263,10 @@ std::vector<int64_t> grey_volume_sums(const VolumeView<const uint32_t>& labels, 
       }
   }
 
-  std::vector<int64_t> sum(nl, 0);
+  GreyVolumeSums sum;
+  sum.resize(nl);
   for (const auto& p : part)  // integer sums: any order gives the same result
-    for (size_t n = 0; n < p.size(); ++n) sum[n] += p[n];
+    for (size_t n = 0; n < nl; ++n) sum.add(n, p, n);
   return sum;
 }
 

@@ -126,7 +126,8 @@ ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geo
   std::vector<uint32_t> labels;
   std::vector<LabelMoments> moments;
   std::vector<std::vector<PackedSurfaceVoxel>> surface;
-  std::unordered_map<uint32_t, int64_t> grey_sum;
+  std::unordered_map<uint32_t, size_t> grey_slot;  // label -> its row of grey_sum
+  GreyVolumeSums grey_sum;
   int64_t points = 0;
   auto slot = [&](uint32_t l) {
     auto [it, fresh] = where.emplace(l, labels.size());
@@ -192,9 +193,16 @@ ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geo
       // Every label of the window: an unlabelled core voxel gives its share
       // to the labels around it, which may lie in the margin only.
       const std::vector<uint32_t> ids = chunk_distinct_labels(L);
-      const std::vector<int64_t> s = grey_volume_sums(L.view(), G.view(), ids, go, c0 - w0, c1 - w0);
-      for (size_t n = 0; n < ids.size(); ++n)
-        if (s[n]) grey_sum[ids[n]] += s[n];
+      const GreyVolumeSums s = grey_volume_sums(L.view(), G.view(), ids, go, c0 - w0, c1 - w0);
+      for (size_t n = 0; n < ids.size(); ++n) {
+        if (!s.inner[n] && !s.band[n]) continue;
+        const auto [it, fresh] = grey_slot.try_emplace(ids[n], grey_slot.size());
+        if (fresh) {
+          grey_sum.inner.push_back(0), grey_sum.band.push_back(0);
+          grey_sum.solid_grey.push_back(0), grey_sum.solid_count.push_back(0);
+        }
+        grey_sum.add(it->second, s, n);
+      }
     }
     ++out.slabs;
     c0 = c1;
@@ -242,6 +250,8 @@ ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geo
   for (size_t n = 0; n < order.size(); ++n) order[n] = n;
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return labels[a] < labels[b]; });
   constexpr int64_t kBatchPoints = int64_t(1) << 24;  // 256 MB unpacked
+  // Volumes from the grey sums of every slab (each label's scale needs all of them).
+  const std::vector<double> grey_all = with_grey ? grey_volumes_from_sums(grey_sum, go) : std::vector<double>{};
   for (size_t first = 0; first < order.size();) {
     size_t last = first;
     int64_t batch_points = 0;
@@ -259,8 +269,8 @@ ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geo
       part.surface_offset[n - first + 1] = int64_t(part.surface.size());
       std::vector<PackedSurfaceVoxel>().swap(surface[x]);
       if (with_grey) {
-        const auto it = grey_sum.find(labels[x]);
-        grey_vox.push_back(it == grey_sum.end() ? 0.0 : double(it->second) / grey_volume_units);
+        const auto it = grey_slot.find(labels[x]);
+        grey_vox.push_back(it == grey_slot.end() ? 0.0 : grey_all[it->second]);
       }
     }
     const LabelStatsResult ls = label_stats_from_sums(std::move(part), geometry, so);

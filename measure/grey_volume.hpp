@@ -59,18 +59,21 @@
 // from void to solid: two voxels from its surface, where the blur hardly
 // dims, and off the walls of its filled pores); a label with fewer than
 // min_solid_voxels such voxels keeps the scan's level (scale 1), and the
-// scale stays within [kMinBandScale, kMaxBandScale]. Measured
+// scale stays within [kMinBandScale, kMaxBandScale]. The core is sampled
+// on every kCoreRowStride-th row of each slice (the level needs hundreds of
+// voxels, not all). Measured
 // (bench/segmentation/RESULTS.md "Local solid level"; blind_scene.py 192^3
 // R 20, seeds 1-2, median |dV/V|): cupping 0.15 / 0.3 1.3-1.4 / 2.8-3.0 % ->
-// 0.3 / 0.3-0.35 %; middle setting 0.42 / 0.47 -> 0.34 / 0.36 %; CNR 8
-// 0.35 -> 0.27 %, PSF 1.0 0.73 -> 0.62 %; but CNR 5 0.33 / 0.36 -> 0.81 /
-// 0.74 % (the histogram's solid mode sits 2.5 % of the contrast low there,
+// 0.3 / 0.31-0.34 %; middle setting 0.42 / 0.47 -> 0.33 / 0.36 %; CNR 8
+// 0.35 -> 0.29 %, PSF 1.0 0.73 -> 0.61 %; but CNR 5 0.33 / 0.36 -> 0.81 /
+// 0.77 % (the histogram's solid mode sits 2.5 % of the contrast low there,
 // which had made up for what the one-voxel band misses), PSF 1.5 1.21 / 1.22
-// -> 1.20 / 1.31 %, R 8 1.60 / 1.60 -> 1.75 / 1.56 %. A ratio to the mean of
+// -> 1.25 / 1.31 %, R 8 1.60 / 1.60 -> 1.90 / 1.58 %. A ratio to the mean of
 // all labels' cores instead of the scan's level was tried: neutral at CNR 5,
 // but a scan with some grains dimmer than the rest then moves the others
 // (two balls, one at 0.7 of the contrast: the bright one -3.7 %).
-// The core test costs ~10 % of `measure --grey` at 256^3.
+// Cost: `measure --grey` at 256^3 0.76 -> 0.78 s (the core test on every
+// row: 0.08 s).
 //
 // Determinism: each voxel's contribution is rounded to a fixed point of
 // 2^-24 voxel and summed as integers, so the volumes are bit-identical for
@@ -100,6 +103,9 @@ struct GreyVolumeOptions {
 // The band's scale is kept within these (a label whose inner solid is
 // under half the typical contrast is not solid the levels describe).
 inline constexpr double kMinBandScale = 0.5, kMaxBandScale = 2.0;
+// The core is sampled on every kCoreRowStride-th row (y) of each slice;
+// min_solid_voxels counts the core voxels those stand for.
+inline constexpr int64_t kCoreRowStride = 4;
 
 // Volume in voxels of each label of `ids` (ascending, as label_stats lists
 // them; the result is aligned with it), from the grey scan the labels were

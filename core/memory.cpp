@@ -130,13 +130,9 @@ namespace {
 // resident, until the next such request or release_idle_blocks() (256^3
 // segmentation: peak 8.49 -> 8.65 B/voxel; 512^3 7.21 -> 7.23). (Reusing
 // blocks up to 5/4 of the request, their excess pages given back, was as
-// fast and raised the 256^3 peak to 8.72.) Not under AddressSanitizer,
-// which must see every block freed.
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kCacheBlocks = false;
-#else
-constexpr bool kCacheBlocks = true;
-#endif
+// fast and raised the 256^3 peak to 8.72.) Not under AddressSanitizer
+// (memory.hpp kLargeBlockCache).
+constexpr bool kCacheBlocks = kLargeBlockCache;
 constexpr size_t kHuge = size_t(2) << 20;
 std::mutex block_mutex;
 std::unordered_map<void*, size_t> live_blocks;      // large blocks handed out: their sizes

@@ -122,6 +122,7 @@ std::vector<double> grey_volumes(const VolumeView<const uint32_t>& labels, const
 struct GreyVolumeSums {
   std::vector<int64_t> inner, band, solid_grey, solid_count;
   void resize(size_t n);                                    // n labels, all zero
+  size_t append();                                          // one more label, zero; its row
   void add(size_t to, const GreyVolumeSums& o, size_t from);  // label `from` of o into label `to`
 };
 

@@ -196,11 +196,8 @@ ChunkedMeasure measure_particles_chunked(const Shape& shape, const Geometry& geo
       const GreyVolumeSums s = grey_volume_sums(L.view(), G.view(), ids, go, c0 - w0, c1 - w0);
       for (size_t n = 0; n < ids.size(); ++n) {
         if (!s.inner[n] && !s.band[n]) continue;
-        const auto [it, fresh] = grey_slot.try_emplace(ids[n], grey_slot.size());
-        if (fresh) {
-          grey_sum.inner.push_back(0), grey_sum.band.push_back(0);
-          grey_sum.solid_grey.push_back(0), grey_sum.solid_count.push_back(0);
-        }
+        auto it = grey_slot.find(ids[n]);
+        if (it == grey_slot.end()) it = grey_slot.emplace(ids[n], grey_sum.append()).first;
         grey_sum.add(it->second, s, n);
       }
     }

@@ -66,8 +66,10 @@ function(tomograin_test name)
       PROPERTIES LABELS "unit;${T_LABELS}" ENVIRONMENT "${env}")
     # One label only: GoogleTestAddTests.cmake (CMake 3.25) flattens a list
     # value into separate arguments ("LABELS unit slow" sets no label slow).
+    # COST: ctest -j starts the costliest tests first, so that a long test
+    # declared last does not run alone at the end of the stage.
     gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 TEST_FILTER "${T_SLOW}"
-      PROPERTIES LABELS "slow" ENVIRONMENT "${env}")
+      PROPERTIES LABELS "slow" COST 20 ENVIRONMENT "${env}")
   else()
     gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60
       PROPERTIES LABELS "unit;${T_LABELS}" ENVIRONMENT "${env}")

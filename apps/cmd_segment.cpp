@@ -39,9 +39,33 @@ tg::Volume<uint16_t> to_grey(tg::AnyVolume&& v, const std::string& name, int& to
 
 namespace tg::app {
 
+// The grey 3-D datasets of an HDF5 file (not uint32): for the message when
+// the default dataset of a file holding a scan and its labels is the labels.
+std::string grey_datasets(const std::string& in) {
+  const auto [path, ds] = tg::split_dataset_spec(in);
+  if (!ds.empty() || tg::format_of(path, false) != tg::FileFormat::hdf5) return "";
+  std::string listed;
+  try {
+    const tg::H5Reader r(path);
+    for (const auto& d : r.datasets())
+      if (r.rank(d) == 3 && tg::read_volume_info(path + ":" + d).dtype != tg::DType::u32)
+        listed += (listed.empty() ? "" : ", ") + path + ":" + d;
+  } catch (const std::exception&) {
+    return "";
+  }
+  return listed;
+}
+
 Volume<uint16_t> read_grey(const std::string& in, double voxel_um, int& top) {
   tg::ReadOptions ro;
   ro.voxel_um = voxel_um;
+  // Checked before the read: the labels of a large scan take a while.
+  if (tg::read_volume_info(in, ro).dtype == tg::DType::u32) {
+    const std::string grey = grey_datasets(in);
+    if (!grey.empty())
+      throw tg::InputError(in + ": its default dataset holds uint32 labels; the grey scan is another dataset, name it: " +
+                           grey);
+  }
   return cmd_segment::to_grey(tg::read_volume(in, ro), in, top);
 }
 

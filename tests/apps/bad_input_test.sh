@@ -62,6 +62,11 @@ expect_bad "NaN/Inf in float input" "2 NaN/Inf voxel(s), first at (z,y,x)=(0,0,1
 
 "$TG" convert good.tif -o g.h5 >/dev/null
 expect_bad "missing HDF5 dataset" "g.h5:/labels: no such dataset" -- "$TG" info g.h5:/labels
+# A file holding a scan (/scan) and its labels (/labels): the default dataset
+# is the labels, so segment and measure --grey name the grey one to use.
+/usr/bin/python3 -c "import h5py, numpy as np; f = h5py.File('both.h5', 'w'); f['scan'] = np.full((4, 8, 8), 1000, np.uint16); f['labels'] = np.ones((4, 8, 8), np.uint32)"
+expect_bad "labels where a scan is expected" "both.h5: its default dataset holds uint32 labels.*name it: both.h5:/scan" -- "$TG" segment both.h5 -o out.h5
+expect_bad "labels as --grey" "both.h5: its default dataset holds uint32 labels.*both.h5:/scan" -- "$TG" measure both.h5 --grey both.h5 -o out.csv --voxel-um 10
 expect_bad "missing input" "none.tif: no such file" -- "$TG" convert none.tif -o out.h5
 expect_bad "unknown format" "unknown volume format" -- "$TG" convert good.tif -o out.xyz
 printf '{"shape_zyx":[1,1,2],"dtype":"float32"}' > f.json; printf '\x00\x00\x80\x3f\x00\x00\x00\x40' > f.raw

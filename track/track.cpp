@@ -495,9 +495,10 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
           body >= v0 - e)
         first = Event::intact, rest = Event::new_particle;
       // Pieces that the parent covers less than half of, beside a body that kept its volume
-      // within the stage's limit (track.hpp step 5): not chips, but particles first seen now.
+      // within a share of the stage's limit (track.hpp step 5): not chips, but particles first
+      // seen now.
       bool weak = std::isfinite(loss_limit) && !ev.coverage.empty() && !pr.touches_border &&
-                  1 - body / static_cast<double>(pr.volume_vox) <= loss_limit;
+                  1 - body / static_cast<double>(pr.volume_vox) <= o.weak_piece_loss_share * loss_limit;
       for (size_t n = 1; n < k.size() && weak; ++n) weak = ev.coverage[k[n]] < o.weak_piece_coverage;
       if (weak) first = Event::intact, rest = Event::new_particle;
       // A parent cut by the faces whose smaller pieces they cut too (track.hpp step 5): by count.

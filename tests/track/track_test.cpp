@@ -866,11 +866,13 @@ TEST(Track, WholeGrainLosingMoreThanTheStagesGrainsDoIsChipping) {
 
 // The weak-piece rule (track.hpp step 5): beside 40 whole grains keeping their volume (the limit
 // is then the 1.5 % floor), grain a (5 000 voxels) has a body and one small piece of 20 voxels.
-// A piece its moved parent covers less than half of (coverage 0.3) beside a body that lost 1 %
-// is a particle first seen now: a intact, the piece `new` without a parent. The same piece with
-// a body that lost 3 % (above the limit), or covered at 0.6, is a chip of a.
+// A piece its moved parent covers less than half of (coverage 0.3) beside a body that lost 0.8 %
+// (under weak_piece_loss_share 0.6 x 1.5 % = 0.9 %) is a particle first seen now: a intact, the
+// piece `new` without a parent. The same piece beside a body that lost 1 % (over 0.9 %, under
+// the limit) or 3 % (over the limit), or covered at 0.6, is a chip of a; with the share at 1
+// (the rule before) the 1 % body keeps it `new`.
 TEST(Track, PieceItsParentHardlyCoversIsNoChipWhileTheBodyKeepsItsVolume) {
-  auto classify = [](int64_t body, double coverage) {
+  auto classify = [](int64_t body, double coverage, double share = TrackOptions{}.weak_piece_loss_share) {
     const size_t n = 41;
     std::vector<LineageRow> prev(n), rows(n + 1);
     std::vector<int32_t> parent(n + 1);
@@ -885,12 +887,17 @@ TEST(Track, PieceItsParentHardlyCoversIsNoChipWhileTheBodyKeepsItsVolume) {
     ev.whole.assign(n, 1);
     ev.coverage.assign(n + 1, 1.0);
     ev.coverage[n] = coverage;
-    link_stage(prev, rows, parent, TrackOptions{}, ev);
+    TrackOptions o;
+    o.weak_piece_loss_share = share;
+    link_stage(prev, rows, parent, o, ev);
     return std::make_tuple(rows[n - 1].event, rows[n].event, rows[n].parent_label);
   };
-  EXPECT_EQ(classify(4950, 0.3), std::make_tuple(Event::intact, Event::new_particle, 0u));
+  EXPECT_EQ(TrackOptions{}.weak_piece_loss_share, 0.6);
+  EXPECT_EQ(classify(4960, 0.3), std::make_tuple(Event::intact, Event::new_particle, 0u));
+  EXPECT_EQ(classify(4950, 0.3), std::make_tuple(Event::chipping, Event::chip, 41u));
   EXPECT_EQ(classify(4850, 0.3), std::make_tuple(Event::chipping, Event::chip, 41u));
-  EXPECT_EQ(classify(4950, 0.6), std::make_tuple(Event::chipping, Event::chip, 41u));
+  EXPECT_EQ(classify(4960, 0.6), std::make_tuple(Event::chipping, Event::chip, 41u));
+  EXPECT_EQ(classify(4950, 0.3, 1.0), std::make_tuple(Event::intact, Event::new_particle, 0u));
 }
 
 // Step 5: a parent the faces cut, whose smaller piece they cut too, is split

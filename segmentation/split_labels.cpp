@@ -84,14 +84,27 @@ struct Scratch {
   std::vector<float> a, b, sm, line;    // smoothing passes; sm: the box's smoothed grey
   std::vector<int32_t> raster, order;   // the label's voxels (padded box) in box order, brightest first
   std::vector<int64_t> start;           // counting sort
-  std::vector<int32_t> parent, size;    // union-find over box-local voxels (-1: not yet flooded)
-  std::vector<float> peak, val;         // per root: its brightest voxel; per voxel: its smoothed grey
+  // Union-find over box-local voxels. A voxel's parent and smoothed grey
+  // share a cache line, and so do a root's size and peak: the flood reads
+  // them for the neighbours of each voxel in grey order, all over the box.
+  // (Four separate arrays before: the split stage's median at 320^3, R 55,
+  // 1.31 -> 1.14 s; 256^3, R 22.7, 0.192 -> 0.174 s; the same labels.)
+  struct Node {
+    int32_t parent;  // -1: not the label's, or not flooded yet
+    float val;       // smoothed grey
+  };
+  struct Root {
+    int32_t size;
+    float peak;  // its brightest voxel
+  };
+  std::vector<Node> node;
+  std::vector<Root> root;
 };
 
-int32_t find(std::vector<int32_t>& parent, int32_t x) {
-  while (parent[size_t(x)] != x) {
-    parent[size_t(x)] = parent[size_t(parent[size_t(x)])];
-    x = parent[size_t(x)];
+int32_t find(Scratch::Node* n, int32_t x) {
+  while (n[x].parent != x) {
+    n[x].parent = n[n[x].parent].parent;
+    x = n[x].parent;
   }
   return x;
 }
@@ -173,7 +186,7 @@ void smooth_box(Scratch& s, const Volume<T>& grey, const LabelBox& bx, const std
 // all; 2: every second along each axis) of its box, on the box padded by
 // one voxel (never the label's), so that the neighbours need no bounds
 // test. Returns whether significant components were kept apart; with
-// screen, at the first such event. Leaves the union-find in s.parent for
+// screen, at the first such event. Leaves the union-find in s.node for
 // the pieces (stride 1).
 bool flood_box(Scratch& s, const uint32_t* L, uint32_t l, const Shape& S, const LabelBox& bx, int64_t bz, int64_t by,
                int64_t bxn, int64_t stride, int64_t vmin, float depth, float floor_level, bool screen) {
@@ -181,9 +194,11 @@ bool flood_box(Scratch& s, const uint32_t* L, uint32_t l, const Shape& S, const 
   const float* sm = s.sm.data();  // smooth_box at this stride
   const int64_t py = gy + 2, px = gx + 2, pn = (gz + 2) * py * px;
   if (pn > int64_t(INT32_MAX)) throw std::logic_error("split_by_grey: box too large");
-  // Only `parent` needs a fill (-1: not the label's, or not flooded yet);
-  // the other per-voxel arrays are read only where the label's voxels set them.
-  s.val.resize(size_t(pn));
+  // Only the parents need a fill (-1: not the label's, or not flooded yet);
+  // the greys and the roots are read only where the label's voxels set them.
+  s.node.resize(size_t(pn));
+  for (Scratch::Node& x : s.node) x.parent = -1;
+  Scratch::Node* node = s.node.data();
   s.raster.clear();
   float hi = -1.0f, lo = 3.0e38f;
   for (int64_t k = 0; k < bz; k += stride)
@@ -193,7 +208,7 @@ bool flood_box(Scratch& s, const uint32_t* L, uint32_t l, const Shape& S, const 
         if (row[i] == l) {
           const int32_t q = int32_t(((k / stride + 1) * py + (j / stride + 1)) * px + (i / stride + 1));
           const float v = sm[((k / stride) * gy + j / stride) * gx + i / stride];
-          s.val[size_t(q)] = v;
+          node[q].val = v;
           s.raster.push_back(q);
           hi = std::max(hi, v), lo = std::min(lo, v);
         }
@@ -201,7 +216,6 @@ bool flood_box(Scratch& s, const uint32_t* L, uint32_t l, const Shape& S, const 
   // Brightest first, by a stable counting sort into levels between the
   // label's extremes (at most 4096: a few grey levels each, far below any
   // depth that matters); within a level, box order.
-  const float* val = s.val.data();
   {
     // As many levels as voxels, 256 to kBins: the fill of the counts costs
     // no more than the voxels themselves.
@@ -209,33 +223,29 @@ bool flood_box(Scratch& s, const uint32_t* L, uint32_t l, const Shape& S, const 
     const float width = std::max(hi - lo, 1e-6f) / float(bins - 1);
     auto bin = [&](float v) { return std::min<size_t>(bins - 1, size_t((hi - v) / width)); };
     s.start.assign(bins + 1, 0);
-    for (const int32_t q : s.raster) ++s.start[bin(val[q]) + 1];
+    for (const int32_t q : s.raster) ++s.start[bin(node[q].val) + 1];
     for (size_t b = 0; b < bins; ++b) s.start[b + 1] += s.start[b];
     s.order.resize(s.raster.size());
-    for (const int32_t q : s.raster) s.order[size_t(s.start[bin(val[q])]++)] = q;
+    for (const int32_t q : s.raster) s.order[size_t(s.start[bin(node[q].val)]++)] = q;
   }
   std::array<int64_t, kConn> off;
   for (size_t d = 0; d < kConn; ++d) off[d] = (int64_t(seg::kSteps[d].dz) * py + seg::kSteps[d].dy) * px + seg::kSteps[d].dx;
-  s.parent.assign(size_t(pn), -1);
-  s.size.resize(size_t(pn));
-  s.peak.resize(size_t(pn));
+  s.root.resize(size_t(pn));
   bool separated = false;
   int32_t roots[kConn];
   float reach[kConn];  // per root: its brightest voxel among this voxel's neighbours
-  int32_t* parent = s.parent.data();
-  int32_t* size = s.size.data();
-  float* peak = s.peak.data();
-  auto significant = [&](int32_t rt, float v) { return size[rt] >= vmin && peak[rt] - v >= depth; };
+  Scratch::Root* root = s.root.data();
+  auto significant = [&](int32_t rt, float v) { return root[rt].size >= vmin && root[rt].peak - v >= depth; };
   // Union by size (short finds); the root carries the larger peak.
   auto unite = [&](int32_t x, int32_t y) {
-    if (size[x] < size[y] || (size[x] == size[y] && y < x)) std::swap(x, y);
-    parent[y] = x;
-    size[x] += size[y];
-    peak[x] = std::max(peak[x], peak[y]);
+    if (root[x].size < root[y].size || (root[x].size == root[y].size && y < x)) std::swap(x, y);
+    node[y].parent = x;
+    root[x].size += root[y].size;
+    root[x].peak = std::max(root[x].peak, root[y].peak);
     return x;
   };
   for (const int32_t q : s.order) {
-    const float v = val[q];
+    const float v = node[q].val;
     // Below the floor with nothing kept apart yet: no split (a sheet darker
     // than the threshold even smoothed is void in the mask, the watershed's
     // business); the rim of every grain is not flooded for nothing.
@@ -243,19 +253,19 @@ bool flood_box(Scratch& s, const uint32_t* L, uint32_t l, const Shape& S, const 
     int nr = 0;
     for (size_t d = 0; d < kConn; ++d) {
       const int32_t nq = int32_t(q + off[d]);
-      if (parent[nq] < 0) continue;  // not the label's, or not flooded yet
-      const int32_t rt = find(s.parent, nq);
+      if (node[nq].parent < 0) continue;  // not the label's, or not flooded yet
+      const float vn = node[nq].val;
+      const int32_t rt = find(node, nq);
       const int a = int(std::find(roots, roots + nr, rt) - roots);
       if (a == nr) {
         roots[nr] = rt;
-        reach[nr++] = val[nq];
+        reach[nr++] = vn;
       } else {
-        reach[a] = std::max(reach[a], val[nq]);
+        reach[a] = std::max(reach[a], vn);
       }
     }
-    parent[q] = q;
-    size[q] = 1;
-    peak[q] = v;
+    node[q].parent = q;
+    root[q] = {1, v};
     if (nr == 0) continue;
     // The significant components this voxel touches; it goes to the one
     // of its brightest neighbour (steepest ascent, as a flood reaches it;
@@ -278,8 +288,8 @@ bool flood_box(Scratch& s, const uint32_t* L, uint32_t l, const Shape& S, const 
       into = roots[0];
       for (int a = 1; a < nr; ++a) into = unite(into, roots[a]);
     }
-    parent[q] = into;
-    size[into] += 1;
+    node[q].parent = into;
+    root[into].size += 1;
   }
   return separated;
 }
@@ -322,14 +332,14 @@ Pieces split_one(const Volume<uint32_t>& labels, const Volume<T>& grey, uint32_t
   // the label (ties: the first in box order), smaller leftovers too.
   std::vector<std::pair<int32_t, int32_t>> big;  // (root, size)
   for (const int32_t q : s.order)
-    if (s.parent[size_t(q)] == q && s.size[size_t(q)] >= vmin) big.emplace_back(q, s.size[size_t(q)]);
+    if (s.node[size_t(q)].parent == q && s.root[size_t(q)].size >= vmin) big.emplace_back(q, s.root[size_t(q)].size);
   if (big.size() < 2) return out;
   std::sort(big.begin(), big.end(), [](const auto& a, const auto& b) { return a.second > b.second || (a.second == b.second && a.first < b.first); });
   std::vector<std::pair<int32_t, int32_t>> ordinal;  // (root, piece) for pieces 1..
   for (size_t p = 1; p < big.size(); ++p) ordinal.emplace_back(big[p].first, int32_t(p));
   std::sort(ordinal.begin(), ordinal.end());
   for (const int32_t q : s.raster) {
-    const int32_t rt = find(s.parent, q);
+    const int32_t rt = find(s.node.data(), q);
     const auto it = std::lower_bound(ordinal.begin(), ordinal.end(), std::make_pair(rt, int32_t(0)));
     if (it == ordinal.end() || it->first != rt) continue;
     const int64_t k = q / (py * px) - 1, j = (q / px) % py - 1, i = q % px - 1;

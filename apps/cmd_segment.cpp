@@ -430,6 +430,11 @@ static tg::app::Registrar reg{{"segment", 30,
                   "...and at least this many noise sigmas below the solid's peak grey")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  sub->add_option("--pore-shell", o->seg.pore_shell_vox,
+                  "Dim voxels within this many voxels of a filled pore are bright (its blurred shell; left dim, "
+                  "a shell reaching the grain's surface parts the grain in the distance map); 0: off")
+      ->check(CLI::Range(0, 16))
+      ->capture_default_str();
   sub->add_flag("--no-merge", o->no_merge, "Do not merge over-segmented pieces");
   sub->add_option("--merge-ratio", o->seg.merge_ratio,
                   "Merge when the shared interface >= ratio * pi r^2 (r: smaller piece's equivalent radius)")

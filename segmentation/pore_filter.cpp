@@ -246,4 +246,50 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
   return res;
 }
 
+int64_t brighten_pore_shells(Volume<uint8_t>& mask, uint8_t pore_value, uint8_t dim_value, uint8_t bright_value,
+                             int steps) {
+  const Shape S = mask.shape();
+  const int64_t n = mask.size(), sl = S.ny * S.nx;
+  uint8_t* m = mask.data();
+  // The filled pores' voxels (slice by slice, in raster order), now bright.
+  const int nt = omp_get_max_threads();
+  std::vector<std::vector<int64_t>> part(static_cast<size_t>(nt));
+#pragma omp parallel num_threads(nt)
+  {
+    auto& mine = part[size_t(omp_get_thread_num())];
+#pragma omp for schedule(static)
+    for (int64_t k = 0; k < S.nz; ++k)
+      for (int64_t i = k * sl; i < (k + 1) * sl; ++i)
+        if (m[i] == pore_value) {
+          m[i] = bright_value;
+          mine.push_back(i);
+        }
+  }
+  std::vector<int64_t> front, next;
+  for (const auto& p : part) front.insert(front.end(), p.begin(), p.end());
+  // Layer by layer through the dim voxels (6-connected): the set reached is
+  // that of the dim voxels within `steps` of a pore along dim voxels,
+  // whatever the order within a layer.
+  int64_t changed = 0;
+  for (int t = 0; t < steps && !front.empty(); ++t) {
+    next.clear();
+    for (const int64_t i : front) {
+      const int64_t z = i / sl, y = (i / S.nx) % S.ny, x = i % S.nx;
+      auto visit = [&](bool inside, int64_t j) {
+        if (inside && m[j] == dim_value) {
+          m[j] = bright_value;
+          next.push_back(j);
+        }
+      };
+      visit(z > 0, i - sl), visit(z + 1 < S.nz, i + sl);
+      visit(y > 0, i - S.nx), visit(y + 1 < S.ny, i + S.nx);
+      visit(x > 0, i - 1), visit(x + 1 < S.nx, i + 1);
+    }
+    changed += int64_t(next.size());
+    front.swap(next);
+  }
+  (void)n;
+  return changed;
+}
+
 }  // namespace tg

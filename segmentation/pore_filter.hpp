@@ -81,4 +81,15 @@ double voxel_sphericity(int64_t volume_vox, int64_t faces);
 PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt, uint8_t solid_from = 1,
                             uint8_t fill_value = 1);
 
+// The partial-volume shells of filled pores (segment()'s graded mask):
+// voxels == pore_value (the pores just filled) become bright_value, and so
+// do the dim_value voxels within `steps` of them along dim voxels
+// (6-connected). Blur darkens the solid round a pore as it darkens a gap;
+// a shell that reaches the grain's own dim rim (a pore near the surface) is
+// no enclosed pocket, and left dim it parts the grain in the distance map.
+// Returns the dim voxels made bright. Serial over the shells (a few voxels
+// a pore); deterministic.
+int64_t brighten_pore_shells(Volume<uint8_t>& mask, uint8_t pore_value, uint8_t dim_value, uint8_t bright_value,
+                             int steps);
+
 }  // namespace tg

@@ -319,6 +319,8 @@ SegmentOptions SegmentOptions::resolved() const {
     throw UsageError("segment: the bright fraction must be in [0, 1]");
   if (!(o.bright_sigmas >= 0) || !std::isfinite(o.bright_sigmas))
     throw UsageError("segment: bright sigmas must be >= 0");
+  if (o.pore_shell_vox < 0 || o.pore_shell_vox > 16)
+    throw UsageError("segment: the pore shell must be 0..16 voxels");
   return o;
 }
 
@@ -374,9 +376,14 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   r.pore_criteria = {opt.pore_max_volume_vox, opt.pore_min_sphericity};
   // The scan's faces close the pores they cut; a slab's inner faces do not.
   r.pore_criteria.closed_faces = {!slab || slab->window.scan_bottom, !slab || slab->window.scan_top, true, true, true, true};
-  if (opt.fill_pores) r.pores = fill_pores(solid, r.pore_criteria, 1, bright);
+  // Graded: the void pores filled as 3 for a moment (their shells below).
+  if (opt.fill_pores) r.pores = fill_pores(solid, r.pore_criteria, 1, graded ? 3 : bright);
   nsolid += r.pores.filled_voxels;
   if (graded && opt.fill_pores) {
+    // The filled pores' own dim shells first (pore_filter.hpp
+    // brighten_pore_shells): a shell reaching the grain's dim rim is no
+    // enclosed pocket for the pass below.
+    r.pore_shell_voxels = brighten_pore_shells(solid, 3, 1, 2, opt.pore_shell_vox);
     // Dim pockets enclosed by bright solid (26-connected: see
     // PoreFilterOptions): a filled pore's partial-volume shell, noise
     // specks. Any shape (an enclosed pocket cannot part two
@@ -637,6 +644,8 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                         {"rule", "solid voxels with grey value <= bright_value are dim"},
                         {"dim_fraction_of_solid", r.dim_fraction},
                         {"dim_pockets_filled", r.dim_pockets.filled},
+                        {"pore_shell_vox", o.pore_shell_vox},
+                        {"pore_shell_voxels_brightened", r.pore_shell_voxels},
                         {"dim_pocket_voxels_filled", r.dim_pockets.filled_voxels}};
   j["markers"] = {{"h", r.h}, {"connectivity", o.connectivity}, {"count", r.markers}};
   j["watershed"] = {{"lines", o.watershed_lines},

@@ -53,10 +53,12 @@
 //   t_bright = t + bright_fraction * (mean solid grey - t)
 // are *dim* (the partial-volume shell of every surface, blurred gaps,
 // noise). Then
-//   * the pores are filled twice: void pores (as before, filled bright),
-//     then the dim pockets enclosed by bright solid (the partial-volume
-//     shells of the filled pores, noise specks inside grains; up to twice
-//     the pore volume, any shape), so that neither seeds a marker;
+//   * the pores are filled twice: void pores (as before, filled bright,
+//     and the dim voxels within pore_shell_vox of them: their
+//     partial-volume shell, enclosed or not), then the dim pockets
+//     enclosed by bright solid (shells of pores the first pass could not
+//     reach, noise specks inside grains; up to twice the pore volume, any
+//     shape), so that neither seeds a marker nor parts a grain;
 //   * the distance map is the distance to the nearest void *or dim* voxel:
 //     it dips to 0 in a bridged gap, so each half keeps its own maximum and
 //     marker; dim solid voxels get the lowest solid level (a component made
@@ -157,6 +159,10 @@ struct SegmentOptions {
   bool grey_evidence = true;
   double bright_fraction = 0.5;
   double bright_sigmas = 3.0;  // and t_bright <= solid peak - bright_sigmas * its noise sigma
+  // Dim voxels within this many steps (6-connected, through dim voxels) of
+  // a filled pore are bright: its partial-volume shell (pore_filter.hpp
+  // brighten_pore_shells). 0: only enclosed shells are filled.
+  int pore_shell_vox = 2;
 
   int64_t min_size_vox = 8;  // labels smaller than this become void (after merging)
 
@@ -206,6 +212,7 @@ struct SegmentResult {
   double solid_noise_sigma = 0; // graded: the solid peak's noise sigma (threshold.hpp solid_peak)
   double dim_fraction = 0;      // graded: dim voxels / solid voxels, after the pore passes
   PoreFilterResult dim_pockets; // graded: the second pore pass (dim pockets enclosed by bright solid)
+  int64_t pore_shell_voxels = 0;  // graded: dim voxels of the filled pores' shells made bright
   double h = 0;
   uint32_t markers = 0;
   double buckets_per_unit = 0;  // watershed levels per distance unit actually used (see quantise_levels)

@@ -78,6 +78,7 @@ def segment_rows(base):
         (["--no-grey-evidence"], "differs"),
         (["--bright-fraction", "0.1"], "differs"),
         (["--bright-sigmas", "0"], ("grey_evidence", "bright_sigmas", 0.0)),
+        (["--pore-shell", "0"], ("grey_evidence", "pore_shell_vox", 0)),
         (["--min-size", "5000"], "differs"),
         # Split repair: this crop's grains are whole, so the options show in the summary.
         (["--no-split"], ("split", "enabled", False)),

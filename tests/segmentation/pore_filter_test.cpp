@@ -227,5 +227,29 @@ TEST(PoreFilter, EmptyAndAllSolid) {
   EXPECT_EQ(fill_pores(f, {100, 0.5}).void_components, 0);
 }
 
+TEST(PoreFilter, APoresShellIsBrightWithinItsStepsAlongDimVoxels) {
+  // One row of a 3 x 3 x 12 mask, bright (2) round it: a filled pore (3)
+  // at x 0 (at the volume's face), dim (1) at x 1..4, bright at 5, dim at 6.
+  auto m = Volume<uint8_t>::filled(Shape{3, 3, 12}, 2);
+  m(1, 1, 0) = 3;
+  for (int64_t x = 1; x <= 4; ++x) m(1, 1, x) = 1;
+  m(1, 1, 6) = 1;
+  m(0, 0, 1) = 1;  // a dim voxel touching the pore by an edge only
+  m(2, 1, 0) = 1;  // and one by a face, off the row
+  EXPECT_EQ(brighten_pore_shells(m, 3, 1, 2, 2), 3);
+  EXPECT_EQ(m(1, 1, 0), 2) << "the pore itself";
+  EXPECT_EQ(m(1, 1, 1), 2);
+  EXPECT_EQ(m(1, 1, 2), 2) << "two steps";
+  EXPECT_EQ(m(1, 1, 3), 1) << "three";
+  EXPECT_EQ(m(1, 1, 6), 1) << "behind bright solid";
+  EXPECT_EQ(m(0, 0, 1), 1) << "6-connected steps only";
+  EXPECT_EQ(m(2, 1, 0), 2);
+  auto z = Volume<uint8_t>::filled(Shape{3, 3, 12}, 1);
+  EXPECT_EQ(brighten_pore_shells(z, 3, 1, 2, 2), 0) << "no pore";
+  z(1, 1, 5) = 3;
+  EXPECT_EQ(brighten_pore_shells(z, 3, 1, 2, 0), 0) << "0 steps: the pore alone";
+  EXPECT_EQ(z(1, 1, 5), 2);
+}
+
 }  // namespace
 }  // namespace tg

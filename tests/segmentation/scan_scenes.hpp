@@ -133,6 +133,40 @@ inline Volume<uint16_t> split_ball_scan(int64_t n, double R, double gap, int por
   return synth::to_u16(phi).volume;
 }
 
+// Balls (centre z, y, x and radius, voxels) minus spherical pores (the
+// same), 4^3 supersampled, blurred (PSF sigma psf) and noisy (CNR cnr),
+// void 10000, solid 30000.
+struct Sphere {
+  double z, y, x, r;
+};
+inline Volume<uint16_t> porous_balls_scan(const Shape& s, const std::vector<Sphere>& balls,
+                                          const std::vector<Sphere>& pores, double psf, double cnr, uint64_t seed) {
+  Volume<float> phi = Volume<float>::filled(s, 0.f);
+  auto in = [](const Sphere& b, double z, double y, double x) {
+    return (z - b.z) * (z - b.z) + (y - b.y) * (y - b.y) + (x - b.x) * (x - b.x) <= b.r * b.r;
+  };
+  for (int64_t k = 0; k < s.nz; ++k)
+    for (int64_t j = 0; j < s.ny; ++j)
+      for (int64_t i = 0; i < s.nx; ++i) {
+        int n = 0;
+        for (int a = 0; a < 4; ++a)
+          for (int b = 0; b < 4; ++b)
+            for (int e = 0; e < 4; ++e) {
+              const double z = double(k) + (a + 0.5) / 4 - 0.5, y = double(j) + (b + 0.5) / 4 - 0.5,
+                           x = double(i) + (e + 0.5) / 4 - 0.5;
+              bool solid = false;
+              for (const auto& g : balls) solid = solid || in(g, z, y, x);
+              for (const auto& p : pores) solid = solid && !in(p, z, y, x);
+              n += solid;
+            }
+        phi(k, j, i) = float(n) / 64.f;
+      }
+  synth::ImagingOptions im;
+  im.void_grey = 10000, im.solid_grey = 30000, im.psf_sigma = psf, im.noise_sigma = cnr > 0 ? 20000.0 / cnr : 0.0;
+  im.seed = seed;
+  synth::apply_imaging(phi, im);
+  return synth::to_u16(phi).volume;
+}
 
 // `grey` segmented slab by slab (segment_chunked.hpp, through readers and
 // writers over the volume in memory): cores of `core` slices, `margin`

@@ -765,6 +765,9 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
   }
   std::vector<char> whole(rows.size(), s == 0);
   std::vector<int64_t> gain(rows.size(), 0);
+  // The volume where each particle's chain of 1:1 intact steps began (its own where it starts one).
+  std::vector<int64_t> base(rows.size());
+  for (size_t q = 0; q < rows.size(); ++q) base[q] = rows[q].volume_vox;
   if (s > 0) {
     const LabelIndex ip(prev_rows_);
     std::vector<int> linked(prev_rows_.size(), 0);
@@ -775,15 +778,20 @@ Volume<uint32_t> Tracker::add_stage(Volume<uint32_t> labels, const std::string& 
       whole[q] = a >= 0 && prev_whole_[static_cast<size_t>(a)] && rows[q].event == Event::intact;
       // Not where a face cut the parent: a grain entering the field of view grows by what
       // comes in (one clear of the faces before cannot; what it gains there was glued on).
+      // The gain is counted from the chain's first volume: a piece glued on at any step of it
+      // may come apart later (the glue holds while the two are pressed together).
       if (a >= 0 && linked[static_cast<size_t>(a)] == 1 && rows[q].event == Event::intact &&
-          !prev_rows_[static_cast<size_t>(a)].touches_border)
-        gain[q] = rows[q].volume_vox - prev_rows_[static_cast<size_t>(a)].volume_vox;
+          !prev_rows_[static_cast<size_t>(a)].touches_border) {
+        base[q] = prev_base_[static_cast<size_t>(a)];
+        gain[q] = rows[q].volume_vox - base[q];
+      }
     }
   }
   lineage_.insert(lineage_.end(), rows.begin(), rows.end());
   prev_rows_ = std::move(rows);
   prev_whole_ = std::move(whole);
   prev_gain_ = std::move(gain);
+  prev_base_ = std::move(base);
   prev_origin_m_ = labels.geometry().origin_m;
   prev_grey_ = std::move(grey);
   Volume<uint32_t> spent = std::move(prev_);

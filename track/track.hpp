@@ -144,18 +144,19 @@
 //                          row says `chipping`, each small piece `chip`),
 //                          else split (2 children) or fragmentation (>= 3)
 //                          ... unless the small pieces are a piece the
-//                          segmentation had glued to a at the stage before
+//                          segmentation had glued to a at an earlier stage
 //                          (a fragment of another grain pressed on it) coming
-//                          apart again: when a's own step before was a 1:1
-//                          continuation in which it GREW by G (its parent's
-//                          volume V0, G > e V0, e = glued_volume_tolerance),
+//                          apart again: when a's steps since its last break
+//                          (or stage 0) were 1:1 intact continuations which
+//                          GREW it by G (V0 its volume where that chain
+//                          began, G > e V0, e = glued_volume_tolerance),
 //                          its pieces now total P <= G + e V0 and its body
 //                          keeps V0 (body >= V0 - e V0), a is intact and the
 //                          pieces are `new` (their own ancestry went with
 //                          the glue). A grain that really chips after such a
 //                          gain loses from its body too (body < V0 - e V0)
-//                          and stays chipping. Only where the parent was
-//                          clear of the faces at the stage before (a grain
+//                          and stays chipping. Only where a was
+//                          clear of the faces at every step of that chain (a grain
 //                          entering the field of view grows by what comes
 //                          in). Measured (bench/track/RESULTS.md,
 //                          blind_series R 12 bottom seeds 2, 3, segmented,
@@ -533,7 +534,8 @@ class Tracker {
   bool finished_ = false;
   std::vector<LineageRow> prev_rows_;
   std::vector<char> prev_whole_;  // per prev_rows_: a stage-0 grain with no break in its chain
-  std::vector<int64_t> prev_gain_;  // per prev_rows_: voxels gained in a 1:1 step from its parent (link_stage's gain)
+  std::vector<int64_t> prev_gain_;  // per prev_rows_: voxels gained over its chain of 1:1 intact steps (link_stage's gain)
+  std::vector<int64_t> prev_base_;  // per prev_rows_: the volume where that chain began
   std::vector<LineageRow> lineage_;
   std::vector<LostRow> lost_;
   std::vector<StageMap> maps_;

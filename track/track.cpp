@@ -454,6 +454,7 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
     Event first = Event::intact, rest = Event::intact;
     int64_t absorbed = 0;
     size_t glued = k.size();  // a child glued on at the stage before, coming apart: not linked
+    std::vector<char> stray;  // children of a break that are no piece of it (not linked), if any
     // The glue of a's own 1:1 step before (track.hpp step 5): G voxels gained on a volume V0, and
     // the tolerance e V0 both glued-piece rules judge it with.
     const int64_t g = o.glued_pieces && a < gain.size() ? gain[a] : 0;
@@ -506,10 +507,21 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
         first = rest = k.size() == 2 ? Event::split : Event::fragmentation;
     } else {
       first = rest = k.size() == 2 ? Event::split : Event::fragmentation;
+      // Of three or more children, those a's moved voxels cover less than half of are no piece
+      // of its break (track.hpp step 5): a neighbour's crumb beside two halves is no third piece.
+      if (k.size() >= 3 && !pr.touches_border && !ev.coverage.empty()) {
+        stray.assign(k.size(), 0);
+        size_t kept = k.size();
+        for (size_t n = 1; n < k.size(); ++n)
+          if (ev.coverage[k[n]] < o.weak_piece_coverage) stray[n] = 1, --kept;
+        if (kept < 2) stray.clear();  // the break itself is in doubt: judged as it was
+        else if (kept < k.size()) first = rest = kept == 2 ? Event::split : Event::fragmentation;
+        else stray.clear();
+      }
       // A piece glued on at the stage before coming apart beside the pieces of a's own break, or
       // beside a whole a (track.hpp step 5): the child whose volume is the gain keeps no parent,
       // and the rest are judged without it.
-      if (static_cast<double>(g) > e) {
+      if (static_cast<double>(g) > e && stray.empty()) {
         // One child only within e of G: where two are, the glue is no surer than a fragment of a.
         int matches = 0;
         for (size_t n = 0; n < k.size(); ++n)
@@ -529,7 +541,7 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
     const size_t linked = rest == Event::new_particle ? 1 : k.size();
     const size_t lead = glued == 0 ? 1 : 0;  // the row that says `first`
     for (size_t n = 0; n < linked; ++n) {
-      if (n == glued) continue;  // keeps no parent (rows start as `new`)
+      if (n == glued || (!stray.empty() && stray[n])) continue;  // keeps no parent (rows start as `new`)
       LineageRow& r = rows[k[n]];
       r.parent_label = pr.label;
       r.grain = pr.grain;

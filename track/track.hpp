@@ -182,6 +182,19 @@
 //                          G); fragmentation precision >= 0.95 at 18 of
 //                          21 points (13 before), recall unchanged but one
 //                          point (1.000 -> 0.993).
+//                          ... and of three or more children of a break (a
+//                          parent clear of the faces), one that a's moved
+//                          voxels cover less than weak_piece_coverage (half)
+//                          of is no piece of it: it keeps no parent, and the
+//                          rest are judged alone (two left: split), unless
+//                          fewer than two would be left. A neighbour's crumb
+//                          beside two halves: measured (bench/track/RESULTS.md
+//                          "A neighbour's crumb beside two halves",
+//                          segmented, eleven series), 14 of the 18 false
+//                          fragmentations were two halves and a piece of
+//                          0.2-1.6 % of the parent, 10 of them covered
+//                          0.00-0.46; the least covered piece of the 778 true
+//                          fragmentations 0.57.
 //                          ... and a piece of the break that a NEIGHBOUR's
 //                          label absorbed (a fragment pressed on the next
 //                          grain, which the segmentation joined to it)
@@ -455,8 +468,8 @@ struct LinkEvidence {
   std::vector<NeighbourTransfer> chip;
   // The same for every A particle (the absorbed-piece rule).
   std::vector<NeighbourTransfer> piece;
-  // Per A particle: the voxels it gained in its own 1:1 step from the stage before (0 when it
-  // was not one, or was cut by a face), for the glued-piece rule.
+  // Per A particle: the voxels it gained over its chain of 1:1 intact steps (from the volume
+  // where that chain began; 0 when it was in none, or a face cut it), for the glued-piece rule.
   std::vector<int64_t> gain;
   // Per A particle: still a whole stage-0 grain (no break in its chain), for the
   // volume-loss rule (empty: none is).

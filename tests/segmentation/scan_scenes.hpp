@@ -92,38 +92,22 @@ inline Volume<uint16_t> image(const Volume<uint8_t>& truth, double sigma, const 
   return g;
 }
 
-// A ball of radius R centred in an n^3 volume, cut by a plane through its
-// centre with normal (1, 0.3, 0.2) (oblique: the gap crosses voxels partly)
-// and a gap `gap` voxels wide; `pores` void balls of radius 2 inside each
-// half when gap < 0 (then no cut: an intact grain). Partial volume by 4^3
-// supersampling; imaging as data_synth's (PSF, Gaussian noise at CNR cnr).
-// offset: the cut plane's distance from the centre, in R (0: halves; 0.75:
-// a chip, the cap beyond it, 0.25 R high).
-inline Volume<uint16_t> split_ball_scan(int64_t n, double R, double gap, int pores, double psf, double cnr, uint64_t seed,
-                                        double offset = 0) {
-  const Shape s{n, n, n};
+// A scan of the solid that `solid(z, y, x)` (voxel coordinates, a voxel's
+// centre at its index) says: partial volume by 4^3 supersampling, then
+// data_synth's imaging (PSF sigma psf, Gaussian noise at CNR cnr), void
+// 10000, solid 30000.
+template <class Solid>
+Volume<uint16_t> supersampled_scan(const Shape& s, Solid&& solid, double psf, double cnr, uint64_t seed) {
   Volume<float> phi = Volume<float>::filled(s, 0.f);
-  const double c = double(n) / 2 - 0.5, nn = std::sqrt(1 + 0.09 + 0.04);
-  std::vector<std::array<double, 3>> pore;  // on a ring at R/2 around the centre
-  for (int p = 0; p < pores; ++p) {
-    const double a = 2 * M_PI * p / pores;
-    pore.push_back({0.3 * R * std::sin(2 * a), 0.5 * R * std::cos(a), 0.5 * R * std::sin(a)});
-  }
-  for (int64_t k = 0; k < n; ++k)
-    for (int64_t j = 0; j < n; ++j)
-      for (int64_t i = 0; i < n; ++i) {
+  for (int64_t k = 0; k < s.nz; ++k)
+    for (int64_t j = 0; j < s.ny; ++j)
+      for (int64_t i = 0; i < s.nx; ++i) {
         int in = 0;
         for (int a = 0; a < 4; ++a)
           for (int b = 0; b < 4; ++b)
-            for (int d = 0; d < 4; ++d) {
-              const double z = double(k) + (a + 0.5) / 4 - 0.5 - c, y = double(j) + (b + 0.5) / 4 - 0.5 - c,
-                           x = double(i) + (d + 0.5) / 4 - 0.5 - c;
-              bool solid = z * z + y * y + x * x <= R * R;
-              if (gap > 0) solid = solid && std::abs((x + 0.3 * y + 0.2 * z) / nn - offset * R) > gap / 2;
-              for (const auto& p : pore)
-                solid = solid && (z - p[0]) * (z - p[0]) + (y - p[1]) * (y - p[1]) + (x - p[2]) * (x - p[2]) > 4.0;
-              in += solid;
-            }
+            for (int d = 0; d < 4; ++d)
+              in += solid(double(k) + (a + 0.5) / 4 - 0.5, double(j) + (b + 0.5) / 4 - 0.5,
+                          double(i) + (d + 0.5) / 4 - 0.5);
         phi(k, j, i) = float(in) / 64.f;
       }
   synth::ImagingOptions im;
@@ -133,39 +117,49 @@ inline Volume<uint16_t> split_ball_scan(int64_t n, double R, double gap, int por
   return synth::to_u16(phi).volume;
 }
 
+// A ball of radius R centred in an n^3 volume, cut by a plane through its
+// centre with normal (1, 0.3, 0.2) (oblique: the gap crosses voxels partly)
+// and a gap `gap` voxels wide; `pores` void balls of radius 2 inside each
+// half when gap < 0 (then no cut: an intact grain). Partial volume by 4^3
+// supersampling; imaging as data_synth's (PSF, Gaussian noise at CNR cnr).
+// offset: the cut plane's distance from the centre, in R (0: halves; 0.75:
+// a chip, the cap beyond it, 0.25 R high).
+inline Volume<uint16_t> split_ball_scan(int64_t n, double R, double gap, int pores, double psf, double cnr, uint64_t seed,
+                                        double offset = 0) {
+  const double c = double(n) / 2 - 0.5, nn = std::sqrt(1 + 0.09 + 0.04);
+  std::vector<std::array<double, 3>> pore;  // on a ring at R/2 around the centre
+  for (int p = 0; p < pores; ++p) {
+    const double a = 2 * M_PI * p / pores;
+    pore.push_back({0.3 * R * std::sin(2 * a), 0.5 * R * std::cos(a), 0.5 * R * std::sin(a)});
+  }
+  auto solid = [&](double zv, double yv, double xv) {
+    const double z = zv - c, y = yv - c, x = xv - c;
+    bool in = z * z + y * y + x * x <= R * R;
+    if (gap > 0) in = in && std::abs((x + 0.3 * y + 0.2 * z) / nn - offset * R) > gap / 2;
+    for (const auto& p : pore)
+      in = in && (z - p[0]) * (z - p[0]) + (y - p[1]) * (y - p[1]) + (x - p[2]) * (x - p[2]) > 4.0;
+    return in;
+  };
+  return supersampled_scan(Shape{n, n, n}, solid, psf, cnr, seed);
+}
+
 // Balls (centre z, y, x and radius, voxels) minus spherical pores (the
-// same), 4^3 supersampled, blurred (PSF sigma psf) and noisy (CNR cnr),
-// void 10000, solid 30000.
+// same), imaged as supersampled_scan.
 struct Sphere {
   double z, y, x, r;
 };
 inline Volume<uint16_t> porous_balls_scan(const Shape& s, const std::vector<Sphere>& balls,
                                           const std::vector<Sphere>& pores, double psf, double cnr, uint64_t seed) {
-  Volume<float> phi = Volume<float>::filled(s, 0.f);
   auto in = [](const Sphere& b, double z, double y, double x) {
     return (z - b.z) * (z - b.z) + (y - b.y) * (y - b.y) + (x - b.x) * (x - b.x) <= b.r * b.r;
   };
-  for (int64_t k = 0; k < s.nz; ++k)
-    for (int64_t j = 0; j < s.ny; ++j)
-      for (int64_t i = 0; i < s.nx; ++i) {
-        int n = 0;
-        for (int a = 0; a < 4; ++a)
-          for (int b = 0; b < 4; ++b)
-            for (int e = 0; e < 4; ++e) {
-              const double z = double(k) + (a + 0.5) / 4 - 0.5, y = double(j) + (b + 0.5) / 4 - 0.5,
-                           x = double(i) + (e + 0.5) / 4 - 0.5;
-              bool solid = false;
-              for (const auto& g : balls) solid = solid || in(g, z, y, x);
-              for (const auto& p : pores) solid = solid && !in(p, z, y, x);
-              n += solid;
-            }
-        phi(k, j, i) = float(n) / 64.f;
-      }
-  synth::ImagingOptions im;
-  im.void_grey = 10000, im.solid_grey = 30000, im.psf_sigma = psf, im.noise_sigma = cnr > 0 ? 20000.0 / cnr : 0.0;
-  im.seed = seed;
-  synth::apply_imaging(phi, im);
-  return synth::to_u16(phi).volume;
+  auto solid = [&](double z, double y, double x) {
+    bool v = false;
+    for (const auto& g : balls) v = v || in(g, z, y, x);
+    for (const auto& p : pores) v = v && !in(p, z, y, x);
+    return v;
+  };
+  return supersampled_scan(s, solid, psf, cnr, seed);
 }
 
 // `grey` segmented slab by slab (segment_chunked.hpp, through readers and

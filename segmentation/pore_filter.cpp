@@ -249,7 +249,7 @@ PoreFilterResult fill_pores(Volume<uint8_t>& solid, const PoreFilterOptions& opt
 int64_t brighten_pore_shells(Volume<uint8_t>& mask, uint8_t pore_value, uint8_t dim_value, uint8_t bright_value,
                              int steps) {
   const Shape S = mask.shape();
-  const int64_t n = mask.size(), sl = S.ny * S.nx;
+  const int64_t sl = S.ny * S.nx;
   uint8_t* m = mask.data();
   // The filled pores' voxels (slice by slice, in raster order), now bright.
   const int nt = omp_get_max_threads();
@@ -288,7 +288,6 @@ int64_t brighten_pore_shells(Volume<uint8_t>& mask, uint8_t pore_value, uint8_t 
     changed += int64_t(next.size());
     front.swap(next);
   }
-  (void)n;
   return changed;
 }
 

@@ -453,10 +453,10 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
                                 3 * o.surface_tolerance_vox / std::max(1.0, r_eq(static_cast<double>(pr.volume_vox))));
     Event first = Event::intact, rest = Event::intact;
     int64_t absorbed = 0;
-    size_t glued = k.size();  // a child glued on at the stage before, coming apart: not linked
+    size_t glued = k.size();  // a child glued on at an earlier stage, coming apart: not linked
     std::vector<char> stray;  // children of a break that are no piece of it (not linked), if any
-    // The glue of a's own 1:1 step before (track.hpp step 5): G voxels gained on a volume V0, and
-    // the tolerance e V0 both glued-piece rules judge it with.
+    // The glue of a's chain of 1:1 intact steps (track.hpp step 5): G voxels gained on V0, its
+    // volume where the chain began, and the tolerance e V0 both glued-piece rules judge it with.
     const int64_t g = o.glued_pieces && a < gain.size() ? gain[a] : 0;
     const double v0 = static_cast<double>(pr.volume_vox - g), e = o.glued_volume_tolerance * v0;
     if (k.size() == 1) {
@@ -489,7 +489,7 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
         first = rest = Event::fragmentation;  // at least three pieces
     } else if (f1 >= o.chip_body_fraction) {
       first = Event::chipping, rest = Event::chip;
-      // A piece glued on at the stage before coming apart (track.hpp step 5): the body
+      // A piece glued on at an earlier stage coming apart (track.hpp step 5): the body
       // continues a alone and the pieces keep no parent (rows start as `new`).
       const auto body = static_cast<double>(rows[k[0]].volume_vox);
       if (static_cast<double>(g) > e && static_cast<double>(after) - body <= static_cast<double>(g) + e &&
@@ -518,7 +518,7 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
         else if (kept < k.size()) first = rest = kept == 2 ? Event::split : Event::fragmentation;
         else stray.clear();
       }
-      // A piece glued on at the stage before coming apart beside the pieces of a's own break, or
+      // A piece glued on at an earlier stage coming apart beside the pieces of a's own break, or
       // beside a whole a (track.hpp step 5): the child whose volume is the gain keeps no parent,
       // and the rest are judged without it.
       if (static_cast<double>(g) > e && stray.empty()) {

@@ -1,7 +1,9 @@
 // `tomograin dem ...`: the DEM engine's jobs (oedometer run, specimen pack).
 #include <omp.h>
 
+#include <cmath>
 #include <cstdio>
+#include <limits>
 #include <filesystem>
 
 #include "apps/command.hpp"
@@ -13,6 +15,7 @@
 #include "dem/oedometer.hpp"
 #include "dem/packing_io.hpp"
 #include "dem/pluviation.hpp"
+#include "dem/yield_stress.hpp"
 
 namespace cmd_dem {
 struct Opts {
@@ -22,6 +25,8 @@ struct Opts {
   std::string crush_model;
   tg::dem::calibration::CalibrateOptions calib;
   std::string calib_config, calib_target;
+  std::string curve;
+  double floor_mpa = 0.1;
   bool no_plot = false;
 };
 
@@ -39,7 +44,8 @@ static tg::app::Registrar reg{{"dem", 60,
       "  pack       pluviate a specimen and write it as CSV (x_m,y_m,z_m,r_m)\n"
       "  oedometer  compress a specimen at constant platen speed; writes a run folder\n"
       "  crush      single-grain crushing test with the breakage model (history CSV)\n"
-      "  calibrate  fit sigma_t0 and lambda to a stress-strain curve (and yield, broken fraction)\n\n"
+      "  calibrate  fit sigma_t0 and lambda to a stress-strain curve (and yield, broken fraction)\n"
+      "  yield      the yield stress of a stress-strain curve (a run's history.csv or an experiment's)\n\n"
       "Every parameter is a key of one TOML config (SI units, defaults from the\n"
       "reference study); see dem/examples/oedometer.toml for all keys, documented.\n\n"
       "Examples:\n"
@@ -157,7 +163,41 @@ static tg::app::Registrar reg{{"dem", 60,
   cal->add_option("--threads-per-run", o->calib.threads_per_run, "OpenMP threads of each run (default 1)");
   cal->add_option("--python", o->calib.python, "Python with matplotlib for the plot (default /usr/bin/python3)");
   cal->add_flag("--no-plot", o->no_plot, "No objective_surface.png (the data files are written all the same)");
-  return [o, oed, pack, crush, cal] {
+  CLI::App* yld = sub->add_subcommand(
+      "yield",
+      "Yield stress of an oedometer curve, by the rule the report and `dem calibrate` use: strain\n"
+      "against log10(stress) over the points above --floor-mpa, up to each new peak (drops and unloading\n"
+      "left out), fitted by two straight lines split where they leave the least residual; the yield is\n"
+      "where they cross (dem/yield_stress.hpp). Strain stands in for the void ratio: e = e0 - (1 + e0)\n"
+      "strain while the solids keep their volume (a DEM run's porosity column also counts the volume\n"
+      "its fragments lose, which is not the specimen's compression).\n"
+      "CURVE: CSV with columns strain and stress_Pa (or top_stress_Pa: a run's history.csv), strain\n"
+      "increasing. Prints one line: yield_MPa, the strain where the curve first reaches it, the points\n"
+      "fitted; yield_MPa nan when the curve has fewer than 6 points above the floor or no knee in them.\n\n"
+      "Example:\n  tomograin dem yield runs/a/history.csv");
+  yld->add_option("curve", o->curve, "Stress-strain CSV (columns strain, stress_Pa or top_stress_Pa)")->required();
+  yld->add_option("--floor-mpa", o->floor_mpa, "Points at or below this stress are left out, MPa (default 0.1)")
+      ->check(CLI::PositiveNumber);
+  return [o, oed, pack, crush, cal, yld] {
+    if (yld->parsed()) {
+      if (std::filesystem::path(o->curve).extension() != ".csv")
+        throw tg::InputError(o->curve + ": not a .csv curve (columns strain, stress_Pa or top_stress_Pa)");
+      if (!std::filesystem::exists(o->curve)) throw tg::InputError(o->curve + ": curve file not found");
+      const tg::dem::calibration::Target t = tg::dem::calibration::read_target(o->curve);
+      std::vector<double> mpa;
+      for (double s : t.curve_stress_Pa) mpa.push_back(s / 1e6);
+      const double y = tg::dem::yield_stress_mpa(t.curve_strain, mpa, o->floor_mpa);
+      double at = std::numeric_limits<double>::quiet_NaN();
+      int fitted = 0;
+      double peak = 0;
+      for (size_t i = 0; i < mpa.size(); ++i) {
+        if (std::isnan(at) && mpa[i] >= y) at = t.curve_strain[i];
+        if (mpa[i] > o->floor_mpa && mpa[i] > peak) ++fitted, peak = mpa[i];
+      }
+      std::printf("yield_MPa %.4f strain_pct %.3f points %d (bilinear strain-log10 stress above %g MPa): %s\n", y,
+                  100 * at, fitted, o->floor_mpa, o->curve.c_str());
+      return 0;
+    }
     if (cal->parsed()) {
       namespace cal_ns = tg::dem::calibration;
       o->calib.config = o->calib_config;

@@ -5,12 +5,10 @@ Usage: breakage_analysis.py RUNDIR [N_GRAINS]
 
 Reads RUNDIR/history.csv, RUNDIR/splits.csv and RUNDIR/run.json (written by
 `tomograin dem oedometer`). Rules (stated, not tuned):
-  * yield stress: the e-log(sigma) curve (void ratio e = n/(1-n) from the
-    history's porosity, sigma = top-platen stress) from 0.05 MPa to the end is
-    fitted by two straight lines (least squares, breakpoint chosen to minimise
-    the total squared residual: the recompression and the normal-compression
-    line); the yield stress is where the two lines cross (Casagrande-like
-    bilinear rule).
+  * yield stress: `tomograin dem yield RUNDIR/history.csv` (dem/yield_stress.hpp, the rule
+    of the report and of `dem calibrate`): strain against log10(stress) above 0.1 MPa,
+    two least-squares lines split where they leave the least residual, crossing at the
+    yield. The binary is $TOMOGRAIN, else build/release/apps/tomograin of this checkout.
   * "at 4 MPa": the first history row with sigma_top >= 4 MPa.
   * breakage vs height: generation-0 splits (grains broken), binned by the
     grain centre's height at the split divided by the platen height then
@@ -19,6 +17,8 @@ Reads RUNDIR/history.csv, RUNDIR/splits.csv and RUNDIR/run.json (written by
 import csv
 import json
 import math
+import os
+import subprocess
 import sys
 
 
@@ -28,36 +28,14 @@ def read_csv(path):
     return {k: [float(r[k]) for r in rows] for k in rows[0]} if rows else {}
 
 
-def line_fit(x, y):
-    n = len(x)
-    mx, my = sum(x) / n, sum(y) / n
-    sxx = sum((a - mx) ** 2 for a in x)
-    sxy = sum((a - mx) * (b - my) for a, b in zip(x, y))
-    b = sxy / sxx if sxx > 0 else 0.0
-    a = my - b * mx
-    sse = sum((yy - a - b * xx) ** 2 for xx, yy in zip(x, y))
-    return a, b, sse
-
-
-def yield_stress(sig, por, lo=0.05e6):
-    pts = [(math.log10(s), n / (1 - n)) for s, n in zip(sig, por) if s >= lo]
-    # keep the loading envelope only (sigma non-decreasing), so unloading
-    # wiggles after a collapse do not enter the fit twice
-    env, smax = [], -1e300
-    for x, y in pts:
-        if x >= smax:
-            env.append((x, y))
-            smax = x
-    best = None
-    for k in range(5, len(env) - 5):
-        a1, b1, s1 = line_fit([p[0] for p in env[:k]], [p[1] for p in env[:k]])
-        a2, b2, s2 = line_fit([p[0] for p in env[k:]], [p[1] for p in env[k:]])
-        if best is None or s1 + s2 < best[0]:
-            best = (s1 + s2, a1, b1, a2, b2)
-    if best is None or best[2] == best[4]:
-        return float("nan")
-    _, a1, b1, a2, b2 = best
-    return 10 ** ((a2 - a1) / (b1 - b2))
+def yield_stress_mpa(run):
+    """The yield of a run in MPa (nan: none), by the product's one rule."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    exe = os.environ.get("TOMOGRAIN", os.path.join(here, "..", "..", "build", "release", "apps", "tomograin"))
+    out = subprocess.run([exe, "dem", "yield", os.path.join(run, "history.csv")], capture_output=True, text=True)
+    if out.returncode != 0:
+        sys.exit(f"{exe} dem yield {run}/history.csv: {out.stderr.strip()}")
+    return float(out.stdout.split()[1])
 
 
 def main():
@@ -66,8 +44,8 @@ def main():
     info = json.load(open(f"{run}/run.json"))
     n0 = int(sys.argv[2]) if len(sys.argv) > 2 else int(info["spheres"])
     h0 = info["initial_height_m"]
-    sig, por = h["top_stress_Pa"], h["porosity"]
-    sy = yield_stress(sig, por)
+    sig = h["top_stress_Pa"]
+    sy = yield_stress_mpa(run) * 1e6
 
     def at(cond):
         for i in range(len(sig)):
@@ -87,7 +65,7 @@ def main():
                 f"spheres {int(h['spheres'][i])}, fines removed {int(h['fines_removed'][i])}")
 
     print(f"run {run}: {n0} grains, H0 {1e3*h0:.3f} mm, initial porosity {100*info['initial_porosity']:.2f} %")
-    print(f"yield stress (bilinear e-log sigma): {sy/1e6:.2f} MPa   [study ~2 MPa]")
+    print(f"yield stress (bilinear strain-log sigma, tomograin dem yield): {sy/1e6:.2f} MPa   [study ~2 MPa]")
     print(f"at yield: {row(i_y)}   [study: 20 grains / 300 bonds]")
     print(f"at 4 MPa: {row(i_4)}   [study: 280 grains / 10 000 bonds]")
     print(f"at end:   {row(last)}")

@@ -9,6 +9,7 @@
 # (tens of minutes): run under `nice -n 10` on a shared machine.
 set -euo pipefail
 BIN=$(realpath "${1:?path to the tomograin binary}")
+export TOMOGRAIN="$BIN"  # breakage_analysis.py asks it for the yield
 RUN=${2:?run folder}
 THREADS=${3:-2}
 TARGET=${4:-0.1548}

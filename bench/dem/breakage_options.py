@@ -21,8 +21,8 @@ history every 1000 steps. Every run: 1 thread, `nice`, two at a time at most
 (`-j`, default 2); wall and CPU time from /usr/bin/time.
 
 Figures (rules stated, not tuned):
-  * yield: breakage_analysis.yield_stress (bilinear e-log sigma) above 0.1 MPa,
-    the issue's rule;
+  * yield: `tomograin dem yield` (bilinear strain-log sigma above 0.1 MPa, the
+    issue's rule and the report's; breakage_analysis.yield_stress_mpa);
   * sigma at 10 / 15.48 %: top-platen stress, mean of the history rows within
     +-0.25 % strain (the small cell's sigma is noisy);
   * grains / bonds broken at yield, at 4 MPa (first row >= 4 MPa) and at the end;
@@ -46,7 +46,7 @@ from concurrent.futures import ThreadPoolExecutor
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
 sys.path.insert(0, HERE)
-from breakage_analysis import read_csv, yield_stress  # noqa: E402  (one rule for the yield)
+from breakage_analysis import read_csv, yield_stress_mpa  # noqa: E402  (the product's rule for the yield)
 
 FRICTIONLESS = {"walls.platen_friction": 0.0, "walls.cylinder_friction": 0.0}
 TOTAL07 = {"contact.local_damping": 0.7, "contact.local_damping_scope": '"total"'}
@@ -163,7 +163,7 @@ def figures(outdir, name, kind):
     info = json.load(open(f"{run}/run.json"))
     n0, h0 = int(info["spheres"]), info["initial_height_m"]
     sig, eps = h["top_stress_Pa"], h["strain"]
-    sy = yield_stress(sig, h["porosity"], lo=0.1e6)
+    sy = yield_stress_mpa(run) * 1e6
 
     def first(cond):
         return next((i for i in range(len(sig)) if cond(i)), None)
@@ -277,6 +277,7 @@ def main():
     if args and args[0].startswith("-j"):
         jobs, args = int(args[0][2:]), args[1:]
     binary, outdir = os.path.abspath(args[0]), args[1]
+    os.environ.setdefault("TOMOGRAIN", binary)  # the yield of the figures: the same binary's rule
     if kind == "small":
         packing, names = os.path.join(ROOT, "tests/apps/data/crash_pack.csv"), args[2:] or list(VARIANTS)
     elif kind == "full":

@@ -23,6 +23,7 @@
 # JOBS (default 2): runs of the table at a time.
 set -euo pipefail
 BIN=$(realpath "${1:?path to the tomograin binary}")
+export TOMOGRAIN="$BIN"  # breakage_analysis.py asks it for the yield
 OUT=${2:?output folder}
 STEP=${3:-all}
 HERE=$(cd "$(dirname "$0")" && pwd)

@@ -19,6 +19,7 @@ Usage: flags_test.py TOMOGRAIN
 import csv
 import hashlib
 import json
+import math
 import os
 import shutil
 import subprocess
@@ -329,6 +330,22 @@ def main():
         check(abs(strength(r) / strength(rm) - 2) < 2e-3, f"dem crush --model CONFIG --d0 2e-3: the option wins ({strength(r)} MPa)")
         r = run(["dem", "crush", "-o", "crm3.csv", "--model", "missing.toml"], ok=False)
         check(r.returncode == 2 and not os.path.exists("crm3.csv"), "dem crush --model missing.toml: exit 2, nothing written")
+        # dem yield: a curve whose two lines (0.01 and 0.15 strain per decade of stress) meet at
+        # exactly 2 MPa; a floor of 1 MPa leaves fewer points, the same yield.
+        stresses = [0.12 * 10 ** (0.05 * k) for k in range(40)]  # MPa, 0.12 .. 10.4
+        with open("curve.csv", "w") as f:
+            f.write("strain,stress_Pa\n")
+            for sp in stresses:
+                e = 0.01 * math.log10(sp / 0.1) if sp <= 2 else 0.01 * math.log10(20) + 0.15 * math.log10(sp / 2)
+                f.write(f"{e!r},{sp * 1e6!r}\n")
+        y = run(["dem", "yield", "curve.csv"]).stdout.split()
+        check(abs(float(y[1]) - 2.0) < 1e-6 and int(y[5]) == 40, f"dem yield: {y[1]} MPa from {y[5]} points, the lines meet at 2 MPa")
+        y = run(["dem", "yield", "curve.csv", "--floor-mpa", "1"]).stdout.split()
+        above = sum(sp > 1 for sp in stresses)
+        check(abs(float(y[1]) - 2.0) < 1e-6 and int(y[5]) == above,
+              f"dem yield --floor-mpa 1: {y[1]} MPa from {y[5]} points ({above} above 1 MPa)")
+        r = run(["dem", "yield", "o.toml"], ok=False)
+        check(r.returncode == 2 and "o.toml" in r.stderr, f"dem yield o.toml: exit {r.returncode}, the file named")
 
 
 main()

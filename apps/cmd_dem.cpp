@@ -299,6 +299,15 @@ static tg::app::Registrar reg{{"dem", 60,
                   static_cast<long long>(r.breakage.grains_broken), static_cast<long long>(r.breakage.bonds_broken),
                   static_cast<long long>(r.breakage.spheres), static_cast<long long>(r.breakage.particles),
                   r.breakage.volume_lost_m3 * 1e9);
+    // The whole history (a restarted run's too): the yield by the report's rule.
+    const tg::Table h = tg::read_csv(fs::path(o->out) / "history.csv");
+    std::vector<double> mpa;
+    for (double x : h.num("top_stress_Pa")) mpa.push_back(x / 1e6);
+    const double y = tg::dem::yield_stress_mpa(h.num("strain"), mpa);
+    if (std::isnan(y))
+      std::printf("  yield: none (fewer than 6 rows above 0.1 MPa, or no knee; `tomograin dem yield --help`)\n");
+    else
+      std::printf("  yield %.3g MPa (`tomograin dem yield %s/history.csv` says how)\n", y, o->out.c_str());
     return 0;
   };
 }}};

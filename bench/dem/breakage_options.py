@@ -82,7 +82,7 @@ VARIANTS = {
 # knobs, sigma_t0 and lambda calibrated), so that its remedies and seeds are rows: e.g.
 # 'calibrated,breakage.seed=2,breakage.birth_overlap="none"'.
 VARIANTS["calibrated"] = {**VARIANTS["study"], "breakage.min_time_step_s": "5.0e-8", "run.neighbour_skin_m": "1.0e-4",
-                          "breakage.sigma_t0_Pa": "17.3e6", "breakage.bond_radius_multiplier": "1.35"}
+                          "breakage.sigma_t0_Pa": "10.3e6", "breakage.bond_radius_multiplier": "2.40"}
 
 
 def variant_keys(name):

@@ -167,13 +167,15 @@ static tg::app::Registrar reg{{"dem", 60,
       "yield",
       "Yield stress of an oedometer curve, by the rule the report and `dem calibrate` use: strain\n"
       "against log10(stress) over the points above --floor-mpa, up to each new peak (drops and unloading\n"
-      "left out), fitted by two straight lines split where they leave the least residual; the yield is\n"
-      "where they cross (dem/yield_stress.hpp). Strain stands in for the void ratio: e = e0 - (1 + e0)\n"
-      "strain while the solids keep their volume (a DEM run's porosity column also counts the volume\n"
-      "its fragments lose, which is not the specimen's compression).\n"
+      "left out), fitted by two straight lines split where they leave the least residual, the second at\n"
+      "least 1.5 times as steep as the first (a knee); the yield is where they cross (dem/yield_stress.hpp).\n"
+      "Strain stands in for the void ratio: e = e0 - (1 + e0) strain while the solids keep their volume\n"
+      "(a DEM run's porosity column also counts the volume its fragments lose, which is not the\n"
+      "specimen's compression).\n"
       "CURVE: CSV with columns strain and stress_Pa (or top_stress_Pa: a run's history.csv), strain\n"
       "increasing. Prints one line: yield_MPa, the strain where the curve first reaches it, the points\n"
-      "fitted; yield_MPa nan when the curve has fewer than 6 points above the floor or no knee in them.\n\n"
+      "fitted; yield_MPa nan when the curve has fewer than 6 points above the floor or no knee in them\n"
+      "(a straight line, a curve that only stiffens).\n\n"
       "Example:\n  tomograin dem yield runs/a/history.csv");
   yld->add_option("curve", o->curve, "Stress-strain CSV (columns strain, stress_Pa or top_stress_Pa)")->required();
   yld->add_option("--floor-mpa", o->floor_mpa, "Points at or below this stress are left out, MPa (default 0.1)")

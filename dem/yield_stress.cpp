@@ -29,6 +29,10 @@ Line fit(const std::vector<double>& x, const std::vector<double>& y, size_t i0, 
 
 }  // namespace yield_detail
 
+// Oedometer curves of crushable sands steepen 3-10 times past yield
+// (compression over recompression index; the DEM runs of bench/dem 7-10).
+constexpr double kKneeRatio = 1.5;
+
 double yield_stress_mpa(const std::vector<double>& strain, const std::vector<double>& stress_mpa, double floor_mpa) {
   using yield_detail::fit;
   using yield_detail::Line;
@@ -45,7 +49,11 @@ double yield_stress_mpa(const std::vector<double>& strain, const std::vector<dou
   double best = std::numeric_limits<double>::infinity(), yield = nan;
   for (size_t k = 3; k + 3 <= x.size(); ++k) {
     const Line a = fit(x, y, 0, k), b = fit(x, y, k, x.size());
-    if (!(a.sse + b.sse < best) || b.b == a.b) continue;
+    // A knee of compression: the soft branch steeper than the stiff one by
+    // kKneeRatio at least. Without it a straight line (no yield) still gave
+    // a "yield" where two fits of equal slope happened to cross, and a curve
+    // that stiffens gave one where it stiffens.
+    if (!(a.sse + b.sse < best) || !(b.b > 0) || !(b.b >= kKneeRatio * a.b)) continue;
     // Two lines that meet outside the fitted stresses describe no yield.
     const double meet = (a.a - b.a) / (b.b - a.b);
     if (meet < x.front() || meet > x.back()) continue;

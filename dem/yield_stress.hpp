@@ -11,10 +11,12 @@ namespace tg::dem {
 
 // The intersection of two straight lines fitted (least squares) to strain
 // against log10(stress) over the points above `floor_mpa`, split where the two
-// fits leave the least residual (each side at least 3 points); only the curve
-// up to each new peak counts (unloading and drops are left out). NaN when
-// fewer than 6 points qualify or no split's lines meet within the fitted
-// stresses. Stresses in MPa.
+// fits leave the least residual (each side at least 3 points) among the
+// splits where the second line is at least 1.5 times as steep as the first
+// (a knee: compression steepens past yield); only the curve up to each new
+// peak counts (unloading and drops are left out). NaN when fewer than 6
+// points qualify, or no such split's lines meet within the fitted stresses
+// (a straight line, a curve that only stiffens). Stresses in MPa.
 double yield_stress_mpa(const std::vector<double>& strain, const std::vector<double>& stress_mpa,
                         double floor_mpa = 0.1);
 

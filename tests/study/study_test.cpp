@@ -207,6 +207,18 @@ TEST(Study, YieldOfABilinearCurve) {
     s1.push_back(std::pow(10.0, ls));
     e1.push_back(0.02 * ls + 1e-4 * std::sin(40 * ls));
   }
-  const double y1 = yield_stress_mpa(e1, s1);
-  EXPECT_TRUE(std::isnan(y1) || (y1 >= s1.front() && y1 <= s1.back())) << y1;
+  EXPECT_TRUE(std::isnan(yield_stress_mpa(e1, s1))) << "a straight line has no knee";
+  // A curve that stiffens (0.15 strain per decade, then 0.01: the first
+  // curve's branches the other way round) has no yield either.
+  std::vector<double> e2;
+  for (double x : s) e2.push_back(x <= 2.0 ? 0.15 * std::log10(x / 0.1) : 0.15 * std::log10(20.0) + 0.01 * std::log10(x / 2.0));
+  EXPECT_TRUE(std::isnan(yield_stress_mpa(e2, s))) << yield_stress_mpa(e2, s);
+  // A soft branch 1.6 times as steep as the stiff one is a knee; 1.4 times is not.
+  for (const double ratio : {1.6, 1.4}) {
+    std::vector<double> e3;
+    for (double x : s) e3.push_back(x <= 2.0 ? 0.01 * std::log10(x / 0.1) : ey + ratio * 0.01 * std::log10(x / 2.0));
+    const double y3 = yield_stress_mpa(e3, s);
+    if (ratio > 1.5) EXPECT_NEAR(y3, 2.0, 1e-6);
+    else EXPECT_TRUE(std::isnan(y3)) << y3;
+  }
 }

@@ -196,7 +196,7 @@ static tg::app::Registrar reg{{"dem", 60,
         if (std::isnan(at) && mpa[i] >= y) at = t.curve_strain[i];
         if (mpa[i] > o->floor_mpa && mpa[i] > peak) ++fitted, peak = mpa[i];
       }
-      std::printf("yield_MPa %.4f strain_pct %.3f points %d (bilinear strain-log10 stress above %g MPa): %s\n", y,
+      std::printf("yield_MPa %.6g strain_pct %.4g points %d (bilinear strain-log10 stress above %g MPa): %s\n", y,
                   100 * at, fitted, o->floor_mpa, o->curve.c_str());
       return 0;
     }

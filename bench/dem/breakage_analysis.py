@@ -7,8 +7,8 @@ Reads RUNDIR/history.csv, RUNDIR/splits.csv and RUNDIR/run.json (written by
 `tomograin dem oedometer`). Rules (stated, not tuned):
   * yield stress: `tomograin dem yield RUNDIR/history.csv` (dem/yield_stress.hpp, the rule
     of the report and of `dem calibrate`): strain against log10(stress) above 0.1 MPa,
-    two least-squares lines split where they leave the least residual, crossing at the
-    yield. The binary is $TOMOGRAIN, else build/release/apps/tomograin of this checkout.
+    two least-squares lines split where they leave the least residual (the second at
+    least 1.5 times as steep: a knee), crossing at the yield. The binary is $TOMOGRAIN, else build/release/apps/tomograin of this checkout.
   * "at 4 MPa": the first history row with sigma_top >= 4 MPa.
   * breakage vs height: generation-0 splits (grains broken), binned by the
     grain centre's height at the split divided by the platen height then

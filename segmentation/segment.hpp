@@ -218,7 +218,10 @@ struct SegmentResult {
   double buckets_per_unit = 0;  // watershed levels per distance unit actually used (see quantise_levels)
   MergeResult merge;
   bool split_used = false;        // the split repair ran (a grey scan, a global threshold, split on)
-  double smoothed_noise_sigma = 0;// the smoothed solid's noise sigma, grey levels (split_labels.hpp)
+  double smoothed_noise_sigma = 0;// the smoothed grey's noise sigma the depth is from, grey levels (split_labels.hpp)
+  double smoothed_solid_sigma = 0, smoothed_void_sigma = 0;  // the two peaks' (0: not measured)
+  bool split_noise_from_void = false;  // the solid's peak too wide to be noise (kWideSolidPeak): the void's
+  int64_t smoothed_solid_samples = 0;
   double split_smoothing_vox = 0; // the Gaussian sigma the split repair read the grey with (chosen or given)
   double split_depth = 0;         // grey levels
   GreyCode split_code;
@@ -269,6 +272,11 @@ struct GreyDecisions {
   double smoothed_sigma = 0;
   double split_depth = 0;
   double split_smoothing = 0;  // sigma_s, voxels, that smoothed_sigma and split_depth are for
+  // The smoothed solid's and void's peak sigmas; noise_from_void: the
+  // solid's peak was too wide to be noise (segment.cpp, kWideSolidPeak).
+  double smoothed_solid_sigma = 0, smoothed_void_sigma = 0;
+  bool noise_from_void = false;
+  int64_t smoothed_solid_samples = 0;  // voxels above the threshold in the smoothed sample slices
   GreyCode split_code;  // the one-byte grey it reads (0.1th..99.9th percentile of the histogram)
   double solid_level = 0;  // the solid's grey peak (split repair on): the face-cap repair's dip
   // Noise specks: the test in grey levels (sigma 0: off); it reads the same code.
@@ -292,6 +300,15 @@ struct GreyDecisions {
 // (59 -> 44 of 61, seed 2), where the rule keeps 1.0.
 inline constexpr double kSplitSmoothingLadder[] = {0.7, 1.0};
 inline constexpr double kSplitDepthShare = 0.5;
+// The split repair's noise when the solid's grey peak is wider than noise
+// (grains of different brightness; segment.cpp threshold_from_histogram):
+// the smoothed void's sigma replaces the smoothed solid's when the latter is
+// over kWideSolidPeak times as large, and the voxels at or under the
+// threshold are at least kVoidPeakShare of the scan's (a void phase, not
+// the partial-volume rims of a pre-masked scan).
+inline constexpr double kWideSolidPeak = 1.5;
+inline constexpr double kVoidPeakShare = 0.15;
+inline constexpr int64_t kWideSolidMinSamples = 2000;
 // The sigmas whose smoothed sample histograms decide_grey needs: the given
 // one, or the ladder.
 std::vector<double> split_smoothing_candidates(const SegmentOptions& opt);

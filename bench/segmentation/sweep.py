@@ -17,6 +17,9 @@ drift 0. Factor levels (each varied alone around the middle):
   angular {0, 0.15, 0.3}: every grain cut by 12 random facet planes at
   r0 (1 - A U(0,1)) from its centre (blind_scene.py --angularity; crushed,
   faceted sand; looser packings, as faceting removes solid)
+  contrast {1-1, 0.85-1, 0.7-1}: each grain's contrast over the void drawn
+  in that range of the solid's (blind_scene.py --grain-contrast; grains of
+  different density)
   R {8, 12, 20, 40, 60} at sizes {96, 128, 192, 320, 448}^3 (>= ~40-60
   whole grains each; run once, not per --sizes entry)
 Seeds are 1..--seeds (or --seed-list); these were the development seeds;
@@ -59,11 +62,11 @@ REF = "/work/shared/peers/skimage/ref_pipeline.py"
 PY = "/usr/bin/python3"
 TMP = "/tmp"
 MIDDLE = {"gap": 1.0, "psf": 0.7, "cnr": 13.0, "pores": "1,3", "cupping": 0.0, "drift": 0.0, "corr": 0.0, "elong": 1.0,
-          "angular": 0.0}
+          "angular": 0.0, "contrast": "1,1"}
 FACTORS = {"gap": [0.5, 1.0, 1.5, 2.5], "psf": [0.5, 0.7, 1.0, 1.5], "cnr": [5.0, 8.0, 13.0, 30.0],
            "pores": ["1,2", "2,4", "3,5"], "cupping": [0.0, 0.15, 0.3], "drift": [0.0, 2.0],
            "corr": [0.0, 0.7, 1.5], "elong": [1.0, 1.6, 2.0],
-           "angular": [0.0, 0.15, 0.3]}
+           "angular": [0.0, 0.15, 0.3], "contrast": ["1,1", "0.85,1", "0.7,1"]}
 SHORT = {"tomograin": "tg", "skimage": "sk"}
 R_SIZES = {8: 96, 12: 128, 20: 192, 40: 320, 60: 448}
 METRICS = ["f1", "halves_recovered", "halves", "over_segmented", "under_segmenting", "under_one_grain", "median_abs_dv",
@@ -87,7 +90,8 @@ def scene_name(size, R, s, seed):
     return (f"n{size}_r{R:g}_g{s['gap']:g}_p{s['psf']:g}_c{s['cnr']:g}_po{s['pores'].replace(',', '-')}"
             f"_cu{s['cupping']:g}_d{s['drift']:g}" + (f"_nc{s['corr']:g}" if s["corr"] else "")
             + (f"_e{s['elong']:g}" if s["elong"] != 1.0 else "")
-            + (f"_a{s['angular']:g}" if s["angular"] != 0.0 else "") + f"_s{seed}")
+            + (f"_a{s['angular']:g}" if s["angular"] != 0.0 else "")
+            + (f"_gc{s['contrast'].split(',')[0]}" if s["contrast"] != "1,1" else "") + f"_s{seed}")
 
 
 def make_scene(a, prefix, size, R, s, seed):
@@ -96,7 +100,7 @@ def make_scene(a, prefix, size, R, s, seed):
     cmd = [PY, os.path.join(HERE, "blind_scene.py"), "-o", prefix, "--size", str(size), "--radius", str(R),
            "--gap", str(s["gap"]), "--psf", str(s["psf"]), "--cnr", str(s["cnr"]), "--pores", s["pores"],
            "--cupping", str(s["cupping"]), "--drift", str(s["drift"]), "--noise-corr", str(s["corr"]), "--elongation", str(s["elong"]),
-           "--angularity", str(s["angular"]), "--seed", str(seed)]
+           "--angularity", str(s["angular"]), "--grain-contrast", s["contrast"], "--seed", str(seed)]
     if a.skimage:
         cmd.append("--tif")
     wall, cpu, _, _ = run(cmd)
@@ -266,7 +270,7 @@ def main():
     ap.add_argument("--seed-list", help="explicit seeds, e.g. 1,2 (overrides --seeds)")
     ap.add_argument("--big-seeds", type=int, default=2, help="seeds used for scenes larger than 256^3 (2)")
     ap.add_argument("--sizes", default="192:20", help="middle scenes SIZE:R[,SIZE:R...] (192:20)")
-    ap.add_argument("--factors", help="only these factors, comma separated (gap,psf,cnr,pores,cupping,drift,corr,elong,angular,R)")
+    ap.add_argument("--factors", help="only these factors, comma separated (gap,psf,cnr,pores,cupping,drift,corr,elong,angular,contrast,R)")
     ap.add_argument("--quick", action="store_true", help="middle setting only")
     ap.add_argument("--reuse", action="store_true", help="do not regenerate scenes that exist")
     ap.add_argument("--md-only", action="store_true", help="rewrite DIR/sweep.md from DIR/sweep.csv and the scenes, run nothing")

@@ -242,7 +242,7 @@ def main(argv=None):
                                if all(side * (pc @ nn - off) > 0 for nn, off, side in p["cuts"])]
                 parts.append(piece)
                 keys.append((gi, pi))
-        solid, truth, _ = bs.render(parts, shape, a.supersample)
+        solid, truth, _, _ = bs.render(parts, shape, a.supersample)
         present = np.bincount(truth.ravel(), minlength=len(parts) + 1)
         perm = rng.permutation(int((present[1:] > 0).sum())) + 1
         lut = np.zeros(len(parts) + 1, np.uint32)

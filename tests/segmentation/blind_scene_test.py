@@ -15,6 +15,8 @@
   * the packing's solid fraction is that of a sand (0.5-0.62); the truth
     table's volumes equal the label counts; labels are 1..n; a parent has at
     most two halves; halves and chips exist
+  * --grain-contrast: a grain's deep voxels read its own contrast, one per
+    grain (its fragments alike), within the range asked for
 
 usage: blind_scene_test.py [WORKDIR]     (~10 s)
 """
@@ -47,7 +49,7 @@ def single_grain():
     g = bs.make_grain(1, np.array([16.3, 15.8, 16.1]), shapes, 0)
     p = bs.Particle(g, "intact", [], np.zeros(3))
     p.pores = [(np.array([3.0, 0, 0]), 2.0), (np.array([-3.0, 1.0, 0]), 1.5), (np.array([0, -4.0, 2.0]), 1.0)]
-    solid, truth, _ = bs.render([p], (32, 32, 32), 3)
+    solid, truth, _, _ = bs.render([p], (32, 32, 32), 3)
     # volume of the star-shaped body: (1/3) integral of r(u)^3 over the sphere
     n = 20000
     k = np.arange(n) + 0.5
@@ -68,6 +70,32 @@ def scene(work, gap, psf, cnr, seed):
     bs.main(["-o", prefix, "--size", "96", "--radius", "12", "--gap", str(gap), "--psf", str(psf),
              "--cnr", str(cnr), "--seed", str(seed)])
     return prefix, json.load(open(prefix + ".json"))
+
+
+def grain_contrast(work):
+    """--grain-contrast 0.7,1: noiseless and unblurred, a grain's deep voxels
+    (fully solid, two voxels inside its truth) read void + f x contrast, one f
+    per grain (its fragments alike) in [0.7, 1]."""
+    import h5py
+    from scipy import ndimage
+    prefix = os.path.join(work, "contrast")
+    bs.main(["-o", prefix, "--size", "96", "--radius", "12", "--psf", "0", "--cnr", "0", "--seed", "9",
+             "--grain-contrast", "0.7,1.0", "--no-measure"])
+    with h5py.File(prefix + ".h5", "r") as f:
+        scan = f["scan"][...].astype(np.float64)
+        truth = f["labels"][...]
+    rows = {int(r["label"]): r for r in csv.DictReader(open(prefix + "_truth.csv"))}
+    by_grain = {}
+    for lab, r in rows.items():
+        deep = ndimage.binary_erosion(truth == lab, iterations=2)
+        vals = (scan[deep] - bs.VOID) / (bs.SOLID - bs.VOID)
+        vals = vals[vals > 0.5]  # pores are void: out
+        if vals.size >= 20:
+            by_grain.setdefault(r["parent"], []).append(float(np.median(vals)))
+    f = [v for vs in by_grain.values() for v in vs]
+    one = all(max(vs) - min(vs) < 1e-3 for vs in by_grain.values())
+    check(len(by_grain) >= 20 and min(f) >= 0.7 - 1e-3 and max(f) <= 1.0 + 1e-3 and max(f) - min(f) > 0.2 and one,
+          f"grain contrast 0.7-1: {len(by_grain)} grains, f {min(f):.3f}..{max(f):.3f}, one f per grain: {one}")
 
 
 def main():
@@ -97,6 +125,7 @@ def main():
     _, info2 = scene(work, 2.0, 0.0, 0, 8)
     gap = info2["measured_gap_vox"]
     check(gap["n"] >= 5 and abs(gap["median"] - 2.0) < 0.06, f"gap 2.0: measured {gap}")
+    grain_contrast(work)
     if FAILS:
         sys.exit("FAIL: " + "; ".join(FAILS))
     print("OK")

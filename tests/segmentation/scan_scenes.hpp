@@ -95,20 +95,21 @@ inline Volume<uint16_t> image(const Volume<uint8_t>& truth, double sigma, const 
 // A scan of the solid that `solid(z, y, x)` (voxel coordinates, a voxel's
 // centre at its index) says: partial volume by 4^3 supersampling, then
 // data_synth's imaging (PSF sigma psf, Gaussian noise at CNR cnr), void
-// 10000, solid 30000.
+// 10000, solid 30000. solid may also return a number in [0, 1]: the point's
+// contrast as a share of the solid's (grains of different brightness).
 template <class Solid>
 Volume<uint16_t> supersampled_scan(const Shape& s, Solid&& solid, double psf, double cnr, uint64_t seed) {
   Volume<float> phi = Volume<float>::filled(s, 0.f);
   for (int64_t k = 0; k < s.nz; ++k)
     for (int64_t j = 0; j < s.ny; ++j)
       for (int64_t i = 0; i < s.nx; ++i) {
-        int in = 0;
+        double in = 0;
         for (int a = 0; a < 4; ++a)
           for (int b = 0; b < 4; ++b)
             for (int d = 0; d < 4; ++d)
-              in += solid(double(k) + (a + 0.5) / 4 - 0.5, double(j) + (b + 0.5) / 4 - 0.5,
-                          double(i) + (d + 0.5) / 4 - 0.5);
-        phi(k, j, i) = float(in) / 64.f;
+              in += double(solid(double(k) + (a + 0.5) / 4 - 0.5, double(j) + (b + 0.5) / 4 - 0.5,
+                                 double(i) + (d + 0.5) / 4 - 0.5));
+        phi(k, j, i) = float(in / 64.0);
       }
   synth::ImagingOptions im;
   im.void_grey = 10000, im.solid_grey = 30000, im.psf_sigma = psf, im.noise_sigma = cnr > 0 ? 20000.0 / cnr : 0.0;

@@ -56,7 +56,8 @@ void validate(const SegmentOptions& o) {
 // of view (the local threshold's blocks need the volume: run_from_grey);
 // the split repair's depth from the smoothed sample slices' histogram.
 void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
-                              const std::vector<std::vector<int64_t>>& smoothed, const SegmentOptions& o) {
+                              const std::vector<std::vector<int64_t>>& smoothed,
+                              const std::vector<std::vector<int64_t>>& pairs, const SegmentOptions& o) {
   d.levels = screen_levels(hist, o.saturation_level);
   bool any = false;
   for (const int64_t c : hist) any = any || c > 0;
@@ -102,27 +103,24 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
     // (blind_scene.py --grain-contrast 0.7,1: 17 400 grey levels, no label
     // split, a third of the split halves lost). The split repair compares a
     // label's cores with the sheet between them, inside one grain, so it
-    // needs the noise alone: the smoothed void's, from its lower side (the
-    // scanner's noise is the same in both phases), when the solid's is over
-    // kWideSolidPeak times as wide and the void is a real phase of the scan
-    // (kVoidPeakShare: not a pre-masked scan's partial-volume rims).
+    // needs what varies inside a grain: noise, and texture where the grains
+    // have it (the void's noise alone split textured grains into dozens:
+    // --grain-texture 0.1, F1 0.39). That sigma comes from pairs of pixels
+    // inside one body (split_labels.hpp within_grain_sigma); it replaces the
+    // solid peak's when that is over kWideSolidPeak times as wide.
     const SolidPeak raw = solid_peak(hist, d.t.value);
     const double height = std::max(0.0, raw.mode - double(d.t.value));
     d.solid_level = raw.mode;
-    int64_t n_void = 0, n_all = 0;
-    for (size_t g = 1; g < hist.size(); ++g) (g <= d.t.value ? n_void : n_all) += hist[g];
-    n_all += n_void;
-    const bool void_phase = n_all > 0 && double(n_void) >= kVoidPeakShare * double(n_all);
     for (size_t k = 0; k < sigmas.size(); ++k) {
       if (smoothed[k].size() != hist.size()) break;
       SolidPeak sm = solid_peak(smoothed[k], d.t.value);
       d.smoothed_solid_sigma = sm.sigma;
-      d.smoothed_void_sigma = void_phase ? phase_levels(smoothed[k]).void_sigma : 0.0;
-      d.smoothed_solid_samples = 0;
-      for (size_t g = size_t(d.t.value) + 1; g < smoothed[k].size(); ++g) d.smoothed_solid_samples += smoothed[k][g];
-      d.noise_from_void = d.smoothed_void_sigma > 0 && d.smoothed_solid_samples >= kWideSolidMinSamples &&
-                          sm.sigma > kWideSolidPeak * d.smoothed_void_sigma;
-      if (d.noise_from_void) sm.sigma = d.smoothed_void_sigma;
+      const WithinGrain within =
+          k < pairs.size() ? within_grain_sigma(pairs[k], d.t.value, kWideSolidMinPairs) : WithinGrain{};
+      d.within_grain_sigma = within.sigma;
+      d.within_grain_pairs = within.pairs;
+      d.noise_within_grains = within.sigma > 0 && sm.sigma > kWideSolidPeak * within.sigma;
+      if (d.noise_within_grains) sm.sigma = within.sigma;
       d.split_smoothing = sigmas[k];
       d.smoothed_sigma = sm.sigma;
       d.split_depth = std::max(o.split_depth_sigmas * sm.sigma, o.split_min_depth_contrast * height);
@@ -151,11 +149,11 @@ GreyDecisions choose_threshold(const Volume<uint16_t>& grey, const SegmentOption
   GreyDecisions d;
   d.fov = find_field_of_view(grey, o.fov);
   auto hist = histogram_in_fov(grey, d.fov);
-  std::vector<std::vector<int64_t>> smoothed;
+  std::vector<std::vector<int64_t>> smoothed, pairs;
   if (o.split && o.threshold != ThresholdMethod::local)
     for (const double s : split_smoothing_candidates(o))
-      smoothed_sample_histogram(grey, 0, grey.shape().nz, d.fov, s, smoothed.emplace_back());
-  threshold_from_histogram(d, hist, smoothed, o);
+      smoothed_sample_histogram(grey, 0, grey.shape().nz, d.fov, s, smoothed.emplace_back(), &pairs.emplace_back());
+  threshold_from_histogram(d, hist, smoothed, pairs, o);
   if (o.threshold == ThresholdMethod::local) {
     d.t.method = ThresholdMethod::local;
     const int64_t w = o.local_window_vox > 0 ? o.local_window_vox : default_local_window(o.grain_radius_vox);
@@ -258,9 +256,9 @@ void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& o
   r.solid_noise_sigma = d.noise_sigma;
   r.smoothed_noise_sigma = d.smoothed_sigma;
   r.smoothed_solid_sigma = d.smoothed_solid_sigma;
-  r.smoothed_void_sigma = d.smoothed_void_sigma;
-  r.split_noise_from_void = d.noise_from_void;
-  r.smoothed_solid_samples = d.smoothed_solid_samples;
+  r.within_grain_sigma = d.within_grain_sigma;
+  r.within_grain_pairs = d.within_grain_pairs;
+  r.split_noise_within_grains = d.noise_within_grains;
   r.split_smoothing_vox = d.split_smoothing;
   r.split_depth = r.split_used ? d.split_depth : 0.0;
   r.split_code = d.split_code;
@@ -270,11 +268,11 @@ void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& o
     r.notes.push_back(t.method == ThresholdMethod::local
                           ? "split repair off: it needs one global threshold (not --threshold local)"
                           : "split repair off: no smoothed solid peak to set its depth");
-  if (r.split_used && d.noise_from_void)
+  if (r.split_used && d.noise_within_grains)
     r.notes.push_back(fmt::format(
-        "the smoothed solid's grey peak is {:.1f} times as wide as the void's (grains of different brightness, "
-        "or brightness drifting over the scan): the split repair's depth is from the void's noise",
-        d.smoothed_solid_sigma / d.smoothed_void_sigma));
+        "the smoothed solid's grey peak is {:.1f} times as wide as the grey varies inside a grain (grains of "
+        "different brightness, or brightness drifting over the scan): the split repair's depth is from the latter",
+        d.smoothed_solid_sigma / d.within_grain_sigma));
   if (opt.grey_evidence && t.method != ThresholdMethod::local && !d.graded)
     r.notes.push_back("grey evidence off: the solid's grey spread (sigma " + std::to_string(long(d.noise_sigma)) +
                       " grey levels: noise, and grains of different brightness) leaves no dim band between the "
@@ -307,14 +305,15 @@ std::vector<double> split_smoothing_candidates(const SegmentOptions& opt) {
 }
 
 GreyDecisions decide_grey(FieldOfView fov, std::vector<int64_t> hist,
-                          const std::vector<std::vector<int64_t>>& smoothed_hist, const SegmentOptions& opt) {
+                          const std::vector<std::vector<int64_t>>& smoothed_hist, const SegmentOptions& opt,
+                          const std::vector<std::vector<int64_t>>& pair_hists) {
   validate(opt);
   if (opt.threshold == ThresholdMethod::local)
     throw UsageError("segment: --threshold local needs the whole volume at once (its blocks' thresholds); it does not "
                      "run slab by slab under --memory-limit");
   GreyDecisions d;
   d.fov = std::move(fov);
-  threshold_from_histogram(d, hist, smoothed_hist, opt);
+  threshold_from_histogram(d, hist, smoothed_hist, pair_hists, opt);
   return d;
 }
 
@@ -695,12 +694,12 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                                                      fmt::join(kSplitSmoothingLadder, ", "), kSplitDepthShare)},
                 {"smoothed_noise_sigma", r.smoothed_noise_sigma},
                 {"smoothed_solid_sigma", r.smoothed_solid_sigma},
-                {"smoothed_void_sigma", r.smoothed_void_sigma},
-                {"smoothed_solid_samples", r.smoothed_solid_samples},
-                {"noise_from", r.split_noise_from_void ? "void: the solid's peak is over " +
-                                                             fmt::format("{}", kWideSolidPeak) +
-                                                             " times as wide (grains of different brightness)"
-                                                       : std::string("solid")},
+                {"within_grain_sigma", r.within_grain_sigma},
+                {"within_grain_pairs", r.within_grain_pairs},
+                {"noise_from", r.split_noise_within_grains
+                                   ? fmt::format("within grains: the solid's peak is over {} times as wide "
+                                                 "(grains of different brightness)", kWideSolidPeak)
+                                   : std::string("solid peak")},
                 {"depth_sigmas", o.split_depth_sigmas},
                 {"min_depth_contrast", o.split_min_depth_contrast},
                 {"depth", r.split_depth},

@@ -219,9 +219,10 @@ struct SegmentResult {
   MergeResult merge;
   bool split_used = false;        // the split repair ran (a grey scan, a global threshold, split on)
   double smoothed_noise_sigma = 0;// the smoothed grey's noise sigma the depth is from, grey levels (split_labels.hpp)
-  double smoothed_solid_sigma = 0, smoothed_void_sigma = 0;  // the two peaks' (0: not measured)
-  bool split_noise_from_void = false;  // the solid's peak too wide to be noise (kWideSolidPeak): the void's
-  int64_t smoothed_solid_samples = 0;
+  double smoothed_solid_sigma = 0;     // the smoothed solid peak's sigma
+  double within_grain_sigma = 0;       // the smoothed grey's inside grains (0: too few pairs)
+  int64_t within_grain_pairs = 0;
+  bool split_noise_within_grains = false;  // the solid's peak too wide (kWideSolidPeak): the depth from the latter
   double split_smoothing_vox = 0; // the Gaussian sigma the split repair read the grey with (chosen or given)
   double split_depth = 0;         // grey levels
   GreyCode split_code;
@@ -272,11 +273,12 @@ struct GreyDecisions {
   double smoothed_sigma = 0;
   double split_depth = 0;
   double split_smoothing = 0;  // sigma_s, voxels, that smoothed_sigma and split_depth are for
-  // The smoothed solid's and void's peak sigmas; noise_from_void: the
-  // solid's peak was too wide to be noise (segment.cpp, kWideSolidPeak).
-  double smoothed_solid_sigma = 0, smoothed_void_sigma = 0;
-  bool noise_from_void = false;
-  int64_t smoothed_solid_samples = 0;  // voxels above the threshold in the smoothed sample slices
+  // The smoothed solid peak's sigma and the smoothed grey's inside grains
+  // (split_labels.hpp within_grain_sigma); noise_within_grains: the peak
+  // was too wide to be what varies inside a grain (kWideSolidPeak).
+  double smoothed_solid_sigma = 0, within_grain_sigma = 0;
+  int64_t within_grain_pairs = 0;
+  bool noise_within_grains = false;
   GreyCode split_code;  // the one-byte grey it reads (0.1th..99.9th percentile of the histogram)
   double solid_level = 0;  // the solid's grey peak (split repair on): the face-cap repair's dip
   // Noise specks: the test in grey levels (sigma 0: off); it reads the same code.
@@ -300,15 +302,13 @@ struct GreyDecisions {
 // (59 -> 44 of 61, seed 2), where the rule keeps 1.0.
 inline constexpr double kSplitSmoothingLadder[] = {0.7, 1.0};
 inline constexpr double kSplitDepthShare = 0.5;
-// The split repair's noise when the solid's grey peak is wider than noise
-// (grains of different brightness; segment.cpp threshold_from_histogram):
-// the smoothed void's sigma replaces the smoothed solid's when the latter is
-// over kWideSolidPeak times as large, and the voxels at or under the
-// threshold are at least kVoidPeakShare of the scan's (a void phase, not
-// the partial-volume rims of a pre-masked scan).
+// The split repair's noise when the solid's grey peak is wider than what
+// varies inside a grain (grains of different brightness; segment.cpp
+// threshold_from_histogram): the smoothed grey's sigma inside grains
+// replaces the smoothed solid peak's when the latter is over kWideSolidPeak
+// times as large and at least kWideSolidMinPairs pairs measured it.
 inline constexpr double kWideSolidPeak = 1.5;
-inline constexpr double kVoidPeakShare = 0.15;
-inline constexpr int64_t kWideSolidMinSamples = 2000;
+inline constexpr int64_t kWideSolidMinPairs = 500;
 // The sigmas whose smoothed sample histograms decide_grey needs: the given
 // one, or the ladder.
 std::vector<double> split_smoothing_candidates(const SegmentOptions& opt);
@@ -317,11 +317,12 @@ std::vector<double> split_smoothing_candidates(const SegmentOptions& opt);
 // histogram of the voxels inside it (histogram_in_fov, summed over slabs),
 // and those of the smoothed sample slices (smoothed_sample_histogram), one
 // per split_smoothing_candidates(opt) in that order (empty when opt.split
-// is off).
+// is off), with their pairs (none: the solid peak's sigma is the noise).
 // UsageError for ThresholdMethod::local; InputError for an empty histogram
 // or a saturated scan, as segment().
 GreyDecisions decide_grey(FieldOfView fov, std::vector<int64_t> hist,
-                          const std::vector<std::vector<int64_t>>& smoothed_hists, const SegmentOptions& opt);
+                          const std::vector<std::vector<int64_t>>& smoothed_hists, const SegmentOptions& opt,
+                          const std::vector<std::vector<int64_t>>& pair_hists = {});
 
 // Puts the decisions into a result: threshold, bright level, field of
 // view, level screen, and their notes (segment() does the same).

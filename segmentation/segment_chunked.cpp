@@ -96,7 +96,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
   FovScan scan(shape.ny, shape.nx);
   std::vector<int64_t> hist(65536, 0);
   const std::vector<double> sigmas = split_smoothing_candidates(opt);
-  std::vector<std::vector<int64_t>> smoothed(opt.split ? sigmas.size() : 0);
+  std::vector<std::vector<int64_t>> smoothed(opt.split ? sigmas.size() : 0), pairs(smoothed.size());
   // The slabs start at multiples of 16 slices (step is one), so the
   // smoothed sample slices find their neighbours in the slab
   // (split_labels.hpp smoothed_sample_histogram): the same histograms as
@@ -105,7 +105,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
     const auto h = histogram_in_fov(g, fov);
     for (size_t b = 0; b < hist.size(); ++b) hist[b] += h[b];
     for (size_t k = 0; k < smoothed.size(); ++k)
-      smoothed_sample_histogram(g, z0, shape.nz, fov, sigmas[k], smoothed[k]);
+      smoothed_sample_histogram(g, z0, shape.nz, fov, sigmas[k], smoothed[k], &pairs[k]);
   };
   for (int64_t z0 = 0; z0 < shape.nz; z0 += step) {
     const Volume<uint16_t> g = read(z0, std::min(step, shape.nz - z0));
@@ -118,10 +118,11 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
       cr.pass1_reads = 2;
       std::fill(hist.begin(), hist.end(), 0);
       for (auto& h : smoothed) std::fill(h.begin(), h.end(), 0);
+      for (auto& h : pairs) std::fill(h.begin(), h.end(), 0);
       for (int64_t z0 = 0; z0 < shape.nz; z0 += step) add_hist(read(z0, std::min(step, shape.nz - z0)), z0);
     }
   }
-  GreyDecisions d = decide_grey(std::move(fov), std::move(hist), smoothed, opt);
+  GreyDecisions d = decide_grey(std::move(fov), std::move(hist), smoothed, opt, pairs);
   cr.pass1_seconds = seconds_since(t1);
   if (talk)
     std::fprintf(stderr, "chunked: pass 1 (field of view, histogram, threshold %d) %.1f s; %lld slabs of %lld core + 2 x %lld margin slices\n",

@@ -449,8 +449,9 @@ Volume<uint8_t> quantise_grey(const Volume<uint16_t>& grey, const GreyCode& code
 }
 
 void smoothed_sample_histogram(const Volume<uint16_t>& slab, int64_t z0, int64_t nz_scan, const FieldOfView& fov,
-                               double smoothing_sigma_vox, std::vector<int64_t>& hist) {
+                               double smoothing_sigma_vox, std::vector<int64_t>& hist, std::vector<int64_t>* pairs) {
   if (hist.size() != 65536) hist.assign(65536, 0);
+  if (pairs && pairs->size() != kPairLevelBins * kPairDiffBins) pairs->assign(kPairLevelBins * kPairDiffBins, 0);
   const std::vector<float> w = gaussian_kernel(smoothing_sigma_vox);
   const int64_t r = int64_t(w.size() / 2);
   const Shape S = slab.shape();
@@ -466,6 +467,9 @@ void smoothed_sample_histogram(const Volume<uint16_t>& slab, int64_t z0, int64_t
   // fresh 65536-bin table a thread and a slice, and their sums in a
   // critical section, cost more than the slices' smoothing at 256^3).
   std::vector<std::vector<int64_t>> part(static_cast<size_t>(omp_get_max_threads()), std::vector<int64_t>(65536, 0));
+  std::vector<std::vector<int64_t>> pair_part(pairs ? part.size() : 0,
+                                              std::vector<int64_t>(kPairLevelBins * kPairDiffBins, 0));
+  std::vector<float> c(pairs ? static_cast<size_t>(plane) : 0);  // the smoothed slice, for the pairs
   const uint16_t* G = slab.data();
   for (const int64_t z : zs) {
     // z pass: the slice's neighbours, the scan's end faces repeated.
@@ -497,12 +501,67 @@ void smoothed_sample_histogram(const Volume<uint16_t>& slab, int64_t z0, int64_t
           float acc = 0;
           for (int64_t t = -r; t <= r; ++t) acc += w[size_t(t + r)] * b[size_t(j * S.nx + clampi(i + t, 0, S.nx - 1))];
           ++hl[size_t(clampi(std::lround(acc), 0, 65535))];
+          if (pairs) c[size_t(j * S.nx + i)] = acc;
+        }
+      }
+    }
+    if (!pairs) continue;
+    // The pairs: rows 2 in from the slice's edges, pixels 2 in from the
+    // field of view's ends in the row.
+    constexpr int64_t m = 2, d = kPairStepVox;
+    // The raw grey 2 slices below and above: a pixel of a slice that cuts a
+    // body near its top or bottom is partial volume too.
+    const uint16_t* below = G + (clampi(z - m, 0, nz_scan - 1) - z0) * plane;
+    const uint16_t* above = G + (clampi(z + m, 0, nz_scan - 1) - z0) * plane;
+#pragma omp parallel
+    {
+      std::vector<int64_t>& pl = pair_part[size_t(omp_get_thread_num())];
+      std::vector<float> low(static_cast<size_t>(S.nx));
+#pragma omp for schedule(static) nowait
+      for (int64_t j = m; j < S.ny - m; ++j) {
+        const int64_t lo = fov.active ? std::max(fov.x0[size_t(j - m)], fov.x0[size_t(j + m)]) : 0;
+        const int64_t hi = fov.active ? std::min(fov.x1[size_t(j - m)], fov.x1[size_t(j + m)]) : S.nx;
+        const float* row = &c[size_t(j * S.nx)];
+        for (int64_t i = lo; i < hi; ++i)
+          low[size_t(i)] = std::min({row[i], row[i - m * S.nx], row[i + m * S.nx], float(below[j * S.nx + i]),
+                                     float(above[j * S.nx + i])});
+        for (int64_t i = lo + m; i + d + m < hi; i += 2) {  // every other pixel: enough pairs at half the cost
+          float level = row[i - m];
+          for (int64_t q = i - m + 1; q <= i + d + m; ++q) level = std::min(level, row[q]);
+          level = std::min({level, low[size_t(i)], low[size_t(i + d)]});
+          const double diff = std::abs(double(row[i + d]) - double(row[i]));
+          const size_t lb = size_t(clampi(std::lround(level), 0, 65535)) >> kPairLevelShift;
+          ++pl[lb * kPairDiffBins + size_t(std::min<double>(double(kPairDiffBins - 1), diff / kPairDiffStep))];
         }
       }
     }
   }
   for (const auto& hl : part)
     for (size_t g = 0; g < hl.size(); ++g) hist[g] += hl[g];
+  for (const auto& pl : pair_part)
+    for (size_t g = 0; g < pl.size(); ++g) (*pairs)[g] += pl[g];
+}
+
+WithinGrain within_grain_sigma(const std::vector<int64_t>& pairs, uint16_t t, int64_t min_pairs) {
+  WithinGrain r;
+  if (pairs.size() != kPairLevelBins * kPairDiffBins) return r;
+  // Level bins wholly above t: both pixels of the pair two voxels inside a body.
+  const size_t first = (size_t(t) >> kPairLevelShift) + 1;
+  std::vector<int64_t> diff(kPairDiffBins, 0);
+  for (size_t lb = first; lb < kPairLevelBins; ++lb)
+    for (size_t k = 0; k < kPairDiffBins; ++k) diff[k] += pairs[lb * kPairDiffBins + k];
+  for (const int64_t n : diff) r.pairs += n;
+  if (r.pairs < std::max<int64_t>(min_pairs, 1)) return r;
+  int64_t c = 0;
+  for (size_t k = 0; k < kPairDiffBins; ++k) {
+    if (2 * (c + diff[k]) >= r.pairs) {  // the median inside bin k, linearly
+      const double frac = diff[k] ? (0.5 * double(r.pairs) - double(c)) / double(diff[k]) : 0.0;
+      r.sigma = (double(k) + std::clamp(frac, 0.0, 1.0)) * kPairDiffStep / (0.6745 * std::sqrt(2.0));
+      break;
+    }
+    c += diff[k];
+  }
+  return r;
 }
 
 namespace {

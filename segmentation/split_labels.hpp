@@ -261,7 +261,29 @@ Volume<uint8_t> quantise_grey(const Volume<uint16_t>& grey, const GreyCode& code
 // slices and ending at one or at the scan's end holds them (a chunked
 // run's pass 1 reads such slabs), so the histogram is the same read whole
 // or by slabs. solid_peak() of it gives the smoothed solid's noise sigma.
+// With `pairs`, also the grey's variation inside the grains: for pixels i
+// (every other one) and i + kPairStepVox of a sample row, the difference of their smoothed
+// greys, counted by the least smoothed grey of the pixels from i - 2 to
+// i + kPairStepVox + 2 in the row, 2 rows above and below either one, and
+// of the raw grey 2 slices below and above either one (the pair's "level":
+// above the threshold, both lie two voxels inside one solid body).
+// within_grain_sigma() reads it.
+inline constexpr int64_t kPairStepVox = 5;  // past the smoothed noise's correlation (correlated noise 1.5 voxels included)
+inline constexpr size_t kPairLevelBins = 64, kPairDiffBins = 1024;  // level: grey / 1024; |difference|: 16 grey a bin
+inline constexpr int kPairLevelShift = 10;
+inline constexpr double kPairDiffStep = 16;
 void smoothed_sample_histogram(const Volume<uint16_t>& slab, int64_t z0, int64_t nz_scan, const FieldOfView& fov,
-                               double smoothing_sigma_vox, std::vector<int64_t>& hist);
+                               double smoothing_sigma_vox, std::vector<int64_t>& hist,
+                               std::vector<int64_t>* pairs = nullptr);
+
+// The smoothed grey's sigma inside the grains: the median |difference| of
+// the pairs whose level is above t, / (0.6745 sqrt 2) (two independent
+// draws); what a solid's grey peak holds beyond it is the spread between
+// grains (of different brightness). {0, n} when fewer than min_pairs pairs.
+struct WithinGrain {
+  double sigma = 0;
+  int64_t pairs = 0;
+};
+WithinGrain within_grain_sigma(const std::vector<int64_t>& pairs, uint16_t t, int64_t min_pairs);
 
 }  // namespace tg

@@ -57,7 +57,10 @@ Method
      attenuation: its solid fraction counts U(LO, HI) times (a natural sand's
      grains differ in density and mineralogy; where two grains' voxels
      overlap, the cover-weighted mean); drawn from seed + 2000, so scenes
-     without the option are unchanged. Gaussian blur
+     without the option are unchanged. With --grain-texture A the solid's
+     attenuation varies inside the grains too (microporosity, inclusions):
+     times 1 + A g, g a unit-variance Gaussian field correlated over
+     --texture-length voxels (white noise smoothed, seed + 3000). Gaussian blur
      with scipy.ndimage (mode nearest at the faces). Rounded, clipped to
      uint16.
 
@@ -460,6 +463,10 @@ def main(argv=None):
     ap.add_argument("--grain-contrast", type=parse_range, default=(1.0, 1.0),
                     help="LO,HI: each grain's contrast over the void is U(LO,HI) of the solid's (grains of "
                          "different density; default 1,1: all alike)")
+    ap.add_argument("--grain-texture", type=float, default=0.0,
+                    help="relative amplitude (sd) of the attenuation's variation inside the grains (0: none)")
+    ap.add_argument("--texture-length", type=float, default=2.0,
+                    help="correlation length of that variation, voxels (2)")
     ap.add_argument("--cupping", type=float, default=0.0,
                     help="fraction of the contrast lost at the scan's axis relative to its border, radial (0)")
     ap.add_argument("--supersample", type=int, default=3, help="samples per axis for partial volume, near surfaces (3)")
@@ -500,6 +507,11 @@ def main(argv=None):
     # imaging
     contrast = SOLID - VOID
     seen_solid = solid if dens is None else dens  # what the beam sees: each grain's own attenuation
+    if a.grain_texture > 0:
+        trng = np.random.default_rng(a.seed + 3000)
+        tex = ndimage.gaussian_filter(trng.normal(0, 1, size=shape).astype(np.float32), a.texture_length, mode="wrap")
+        tex /= tex.std()
+        seen_solid = seen_solid * np.maximum(0, 1 + a.grain_texture * tex)
     img = ndimage.gaussian_filter(seen_solid, a.psf, mode="nearest") if a.psf > 0 else seen_solid.copy()
     if a.cupping > 0:
         ny, nx = shape[1], shape[2]

@@ -5,11 +5,13 @@
 // result with 1 and 2 threads, and read whole or by slabs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <omp.h>
 #include <random>
 #include <set>
+#include <string>
 
 #include "scan_scenes.hpp"
 #include "segmentation/segment.hpp"
@@ -89,27 +91,36 @@ TEST(SplitLabels, SegmentSplitsWhatTheGreyEvidenceJoined) {
   }
 }
 
-// Eight balls of radius 11 (2 x 2 x 2, 3 voxels apart), each cut through
-// its centre by an oblique 1-voxel gap, PSF 0.7, CNR 13; ball b's contrast
-// over the void is contrast[b] of the solid's (grains of one sand differ in
-// density). Truth: the half each voxel's centre lies in (0: void or gap).
+// 27 balls of radius 9 (3 x 3 x 3, 3 voxels apart), PSF 0.7, CNR 13; ball
+// b's contrast over the void is 0.7 + 0.3 ((7 b) mod 27) / 26 of the
+// solid's (grains of one sand differ in density), or the solid's for all
+// with `alike`. Six of them are cut through their centres by an oblique
+// 1-voxel gap. Truth: 1..27 the balls, the second halves of the split ones
+// 28..33 (0: void or gap).
 struct BrightnessScene {
   Volume<uint16_t> grey;
   Volume<uint32_t> truth;
 };
-BrightnessScene balls_of_different_brightness(const std::array<double, 8>& contrast, uint64_t seed) {
-  const int64_t n = 56;
-  const double R = 11, step = 2 * R + 3, c0 = (double(n) - step) / 2 - 0.5, nn = std::sqrt(1 + 0.09 + 0.04);
-  auto at = [&](double z, double y, double x, int* half) {
-    for (int b = 0; b < 8; ++b) {
-      const double dz = z - (c0 + step * (b >> 2)), dy = y - (c0 + step * ((b >> 1) & 1)), dx = x - (c0 + step * (b & 1));
-      if (dz * dz + dy * dy + dx * dx > R * R) continue;
+BrightnessScene balls_of_different_brightness(bool alike, uint64_t seed) {
+  constexpr int64_t cell = 21, pad = 3, n = 3 * cell + 2 * pad;
+  constexpr double R = 9;
+  const std::array<int, 6> split = {0, 5, 10, 13, 20, 25};
+  const double nn = std::sqrt(1 + 0.09 + 0.04);
+  // The one ball a point can lie in is its cell's.
+  auto at = [&](double z, double y, double x, uint32_t* label) {
+    auto cell_of = [&](double v) { return std::clamp(int(std::floor((v - double(pad)) / cell)), 0, 2); };
+    const int cz = cell_of(z), cy = cell_of(y), cx = cell_of(x), b = 9 * cz + 3 * cy + cx;
+    auto centre = [&](int c) { return double(pad) + cell * c + 0.5 * cell - 0.5; };
+    const double dz = z - centre(cz), dy = y - centre(cy), dx = x - centre(cx);
+    if (dz * dz + dy * dy + dx * dx > R * R) return 0.0;
+    uint32_t l = uint32_t(b + 1);
+    if (const auto it = std::find(split.begin(), split.end(), b); it != split.end()) {
       const double u = (dx + 0.3 * dy + 0.2 * dz) / nn;
       if (std::abs(u) <= 0.5) return 0.0;  // the gap
-      if (half) *half = 2 * b + (u > 0 ? 2 : 1);
-      return contrast[size_t(b)];
+      if (u > 0) l = uint32_t(28 + (it - split.begin()));
     }
-    return 0.0;
+    if (label) *label = l;
+    return alike ? 1.0 : 0.7 + 0.3 * double((7 * b) % 27) / 26.0;
   };
   BrightnessScene s;
   s.grey = test::supersampled_scan(Shape{n, n, n}, [&](double z, double y, double x) { return at(z, y, x, nullptr); },
@@ -118,8 +129,8 @@ BrightnessScene balls_of_different_brightness(const std::array<double, 8>& contr
   for (int64_t k = 0; k < n; ++k)
     for (int64_t j = 0; j < n; ++j)
       for (int64_t i = 0; i < n; ++i) {
-        int half = 0;
-        if (at(double(k), double(j), double(i), &half) > 0) s.truth(k, j, i) = uint32_t(half);
+        uint32_t l = 0;
+        if (at(double(k), double(j), double(i), &l) > 0) s.truth(k, j, i) = l;
       }
   return s;
 }
@@ -127,25 +138,28 @@ BrightnessScene balls_of_different_brightness(const std::array<double, 8>& contr
 // Where the grains differ in brightness the solid's grey peak is as wide as
 // the spread of their levels; a split depth of 6 such sigmas was deeper than
 // any gap (blind_scene.py --grain-contrast 0.7,1: no label split, a third of
-// the halves glued). The void's noise sets it instead (segment.hpp
-// kWideSolidPeak). Seeds 1-2 were looked at while writing this; the
-// assertions run on 31-32.
+// the halves glued). The grey's variation inside grains sets it instead
+// (segment.hpp kWideSolidPeak). Seeds 1-2 were looked at while writing this;
+// the assertions run on 31-32.
 TEST(SplitLabels, GrainsOfDifferentBrightnessComeApart) {
   for (uint64_t seed : {31u, 32u}) {
-    const auto s = balls_of_different_brightness({0.7, 1.0, 0.8, 0.95, 0.75, 0.9, 0.85, 0.72}, seed);
     SegmentOptions o;
-    o.grain_radius_vox = 11;
-    const SegmentResult r = segment(s.grey, o);
-    EXPECT_TRUE(r.split_noise_from_void) << "seed " << seed << ": " << r.smoothed_solid_samples << " samples";
-    EXPECT_GT(r.smoothed_solid_sigma, kWideSolidPeak * r.smoothed_void_sigma) << "seed " << seed;
-    EXPECT_EQ(r.count, 16u) << "seed " << seed;
-    for (uint32_t h = 1; h <= 16; ++h) EXPECT_GT(test::best_iou(s.truth, r.labels, h), 0.7) << "seed " << seed << " half " << h;
-    // All alike: the solid's own peak is the noise, as before.
-    const auto same = balls_of_different_brightness({1, 1, 1, 1, 1, 1, 1, 1}, seed);
-    const SegmentResult u = segment(same.grey, o);
-    EXPECT_FALSE(u.split_noise_from_void) << "seed " << seed;
-    EXPECT_LT(u.smoothed_solid_sigma, 1.3 * u.smoothed_void_sigma) << "seed " << seed;
-    EXPECT_EQ(u.count, 16u) << "seed " << seed;
+    o.grain_radius_vox = 9;
+    for (const bool alike : {false, true}) {
+      const auto s = balls_of_different_brightness(alike, seed);
+      const SegmentResult r = segment(s.grey, o);
+      const std::string what = std::string(alike ? "alike" : "different") + ", seed " + std::to_string(seed) + ": " +
+                               std::to_string(r.within_grain_pairs) + " pairs";
+      // Different: the solid's peak far wider than the grey inside grains;
+      // alike: as wide (the rule leaves the scans it was not for alone).
+      EXPECT_EQ(r.split_noise_within_grains, !alike) << what;
+      if (alike)
+        EXPECT_LT(r.smoothed_solid_sigma, 1.2 * r.within_grain_sigma) << what;
+      else
+        EXPECT_GT(r.smoothed_solid_sigma, 2 * kWideSolidPeak * r.within_grain_sigma) << what;
+      EXPECT_EQ(r.count, 33u) << what;
+      for (uint32_t l = 1; l <= 33; ++l) EXPECT_GT(test::best_iou(s.truth, r.labels, l), 0.7) << what << ", truth " << l;
+    }
   }
 }
 
@@ -228,8 +242,8 @@ TEST(SplitLabels, SmoothedNoiseMatchesTheKernel) {
   std::mt19937_64 rng(5);
   std::normal_distribution<double> nd(30000, 1500);
   for (auto& v : g.span()) v = uint16_t(std::lround(nd(rng)));
-  std::vector<int64_t> h;
-  smoothed_sample_histogram(g, 0, s.nz, FieldOfView{}, 1.0, h);
+  std::vector<int64_t> h, pairs;
+  smoothed_sample_histogram(g, 0, s.nz, FieldOfView{}, 1.0, h, &pairs);
   int64_t total = 0;
   for (auto c : h) total += c;
   EXPECT_EQ(total, 4 * 64 * 64);  // sample slices 8, 24, 40, 56
@@ -238,6 +252,14 @@ TEST(SplitLabels, SmoothedNoiseMatchesTheKernel) {
   for (int k = -3; k <= 3; ++k) w2 += std::pow(std::exp(-0.5 * k * k) / sum, 2);
   const double want = 1500 * std::pow(w2, 1.5);
   EXPECT_NEAR(solid_peak(h, 20000).sigma, want, 0.06 * want);
+  // Inside a grain (here: everywhere) the pairs 5 voxels apart are two
+  // independent draws (the smoothed noise's correlation there: e^(-25/4)):
+  // the same sigma. Pairs: rows 2..61 of each slice, i = 2, 4, .. while
+  // i + 5 + 2 < 64: 28 a row.
+  const WithinGrain in = within_grain_sigma(pairs, 20000, 500);
+  EXPECT_EQ(in.pairs, 4 * 60 * 28);
+  EXPECT_NEAR(in.sigma, want, 0.06 * want);
+  EXPECT_EQ(within_grain_sigma(pairs, 20000, 4 * 60 * 28 + 1).sigma, 0.0);  // too few pairs: none
 }
 
 TEST(SplitLabels, SampleHistogramIsTheSameBySlabs) {
@@ -246,16 +268,17 @@ TEST(SplitLabels, SampleHistogramIsTheSameBySlabs) {
   std::mt19937_64 rng(7);
   std::uniform_int_distribution<int> u(0, 60000);
   for (auto& v : g.span()) v = uint16_t(u(rng));
-  std::vector<int64_t> whole, parts;
-  smoothed_sample_histogram(g, 0, s.nz, FieldOfView{}, 1.0, whole);
+  std::vector<int64_t> whole, parts, whole_pairs, part_pairs;
+  smoothed_sample_histogram(g, 0, s.nz, FieldOfView{}, 1.0, whole, &whole_pairs);
   const int64_t sl = s.slice_voxels();
   for (int64_t z0 = 0; z0 < s.nz; z0 += 48) {  // slabs of 48 slices (a multiple of 16), the last one short
     const int64_t nz = std::min<int64_t>(48, s.nz - z0);
     Volume<uint16_t> slab(Shape{nz, s.ny, s.nx});
     std::copy(g.data() + z0 * sl, g.data() + (z0 + nz) * sl, slab.data());
-    smoothed_sample_histogram(slab, z0, s.nz, FieldOfView{}, 1.0, parts);
+    smoothed_sample_histogram(slab, z0, s.nz, FieldOfView{}, 1.0, parts, &part_pairs);
   }
   EXPECT_EQ(whole, parts);
+  EXPECT_EQ(whole_pairs, part_pairs);
   // A volume of 5 slices: the middle one is the sample.
   std::vector<int64_t> small;
   Volume<uint16_t> thin(Shape{5, 20, 24});

@@ -175,6 +175,9 @@ def main(argv=None):
     ap.add_argument("--pores", type=bs.parse_range, default=(1.0, 3.0), help="pore radius range, voxels (1,3)")
     ap.add_argument("--psf", type=float, default=0.7, help="Gaussian PSF sigma, voxels (0.7)")
     ap.add_argument("--cnr", type=float, default=13.0, help="contrast-to-noise ratio (13)")
+    ap.add_argument("--grain-contrast", type=bs.parse_range, default=(1.0, 1.0),
+                    help="LO,HI: each grain's contrast over the void, U(LO,HI) of the solid's, kept by its fragments "
+                         "at every stage (blind_scene.py's; default 1,1: all alike)")
     ap.add_argument("--supersample", type=int, default=3, help="samples per axis near surfaces (3)")
     ap.add_argument("--seed", type=int, default=1, help="random seed (1)")
     a = ap.parse_args(argv)
@@ -205,6 +208,11 @@ def main(argv=None):
         walk = np.cumsum([np.zeros(3)] + [rng.normal(size=3) * math.sqrt((a.strains[s] - a.strains[s - 1]) / emax)
                                           for s in range(1, n)], axis=0) * a.jitter * a.radius
         grains.append({"g": g, "pieces": pieces, "axis": axis, "walk": walk})
+    grain_contrast = None  # grain id -> contrast factor, drawn apart (seed + 2000): series without it unchanged
+    if tuple(a.grain_contrast) != (1.0, 1.0):
+        crng = np.random.default_rng(a.seed + 2000)
+        grain_contrast = {G["g"]["id"]: float(f) for G, f in
+                          zip(grains, crng.uniform(*a.grain_contrast, size=len(grains)))}
 
     lineage = []
     G_axis = [np.asarray(G["axis"], float) for G in grains]
@@ -242,7 +250,7 @@ def main(argv=None):
                                if all(side * (pc @ nn - off) > 0 for nn, off, side in p["cuts"])]
                 parts.append(piece)
                 keys.append((gi, pi))
-        solid, truth, _, _ = bs.render(parts, shape, a.supersample)
+        solid, truth, _, dens = bs.render(parts, shape, a.supersample, grain_contrast)
         present = np.bincount(truth.ravel(), minlength=len(parts) + 1)
         perm = rng.permutation(int((present[1:] > 0).sum())) + 1
         lut = np.zeros(len(parts) + 1, np.uint32)
@@ -289,7 +297,8 @@ def main(argv=None):
         prev_label, prev_grain = labels_now, grain_now
         # imaging (blind_scene's)
         contrast = bs.SOLID - bs.VOID
-        img = ndimage.gaussian_filter(solid, a.psf, mode="nearest") if a.psf > 0 else solid
+        seen = solid if dens is None else dens  # each grain's own attenuation
+        img = ndimage.gaussian_filter(seen, a.psf, mode="nearest") if a.psf > 0 else seen
         img = img * contrast + bs.VOID
         if a.cnr > 0:
             img += (contrast / a.cnr) * rng.normal(0, 1, size=shape).astype(np.float32)

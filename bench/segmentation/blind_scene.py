@@ -60,7 +60,11 @@ Method
      without the option are unchanged. With --grain-texture A the solid's
      attenuation varies inside the grains too (microporosity, inclusions):
      times 1 + A g, g a unit-variance Gaussian field correlated over
-     --texture-length voxels (white noise smoothed, seed + 3000). Gaussian blur
+     --texture-length voxels (white noise smoothed, seed + 3000). With
+     --rings A,P ring artefacts (a detector element off in every projection):
+     each whole radius from the slices' centre gets, with probability P, an
+     offset N(0, A x contrast), the same on every slice, added after the
+     blur (seed + 4000). Gaussian blur
      with scipy.ndimage (mode nearest at the faces). Rounded, clipped to
      uint16.
 
@@ -467,6 +471,8 @@ def main(argv=None):
                     help="relative amplitude (sd) of the attenuation's variation inside the grains (0: none)")
     ap.add_argument("--texture-length", type=float, default=2.0,
                     help="correlation length of that variation, voxels (2)")
+    ap.add_argument("--rings", type=lambda v: tuple(float(x) for x in v.split(",")), default=(0.0, 0.0),
+                    help="A,P: ring artefacts, offset sd A x contrast on a share P of the radii (default none)")
     ap.add_argument("--cupping", type=float, default=0.0,
                     help="fraction of the contrast lost at the scan's axis relative to its border, radial (0)")
     ap.add_argument("--supersample", type=int, default=3, help="samples per axis for partial volume, near surfaces (3)")
@@ -521,6 +527,13 @@ def main(argv=None):
         prof = (1 - a.cupping * (1 - np.minimum(rho, 1) ** 2)).astype(np.float32)
         img *= prof[None, :, :]
     img = img * contrast + VOID
+    if a.rings[0] > 0:
+        rrng = np.random.default_rng(a.seed + 4000)
+        ny, nx = shape[1], shape[2]
+        rad = np.sqrt((np.arange(ny) + 0.5 - ny / 2)[:, None] ** 2 + (np.arange(nx) + 0.5 - nx / 2)[None, :] ** 2)
+        rad = rad.astype(int)
+        off = np.where(rrng.random(rad.max() + 1) < a.rings[1], rrng.normal(0, a.rings[0] * contrast, rad.max() + 1), 0)
+        img += off[rad].astype(np.float32)[None, :, :]
     sigma = contrast / a.cnr if a.cnr > 0 else 0.0
     if sigma > 0:
         noise = rng.normal(0, 1, size=shape).astype(np.float32)

@@ -113,6 +113,13 @@ def parse_size(s):
     return tuple(p)
 
 
+def parse_rings(s):
+    p = [float(v) for v in s.split(",")]
+    if len(p) != 2 or p[0] < 0 or not 0 <= p[1] <= 1:
+        raise argparse.ArgumentTypeError("--rings is A,P: amplitude >= 0 (x contrast), share of radii in 0..1")
+    return tuple(p)
+
+
 def parse_range(s):
     a, b = (float(v) for v in s.split(","))
     if not 0 < a <= b:
@@ -471,7 +478,7 @@ def main(argv=None):
                     help="relative amplitude (sd) of the attenuation's variation inside the grains (0: none)")
     ap.add_argument("--texture-length", type=float, default=2.0,
                     help="correlation length of that variation, voxels (2)")
-    ap.add_argument("--rings", type=lambda v: tuple(float(x) for x in v.split(",")), default=(0.0, 0.0),
+    ap.add_argument("--rings", type=parse_rings, default=(0.0, 0.0),
                     help="A,P: ring artefacts, offset sd A x contrast on a share P of the radii (default none)")
     ap.add_argument("--cupping", type=float, default=0.0,
                     help="fraction of the contrast lost at the scan's axis relative to its border, radial (0)")

@@ -511,8 +511,11 @@ void smoothed_sample_histogram(const Volume<uint16_t>& slab, int64_t z0, int64_t
     constexpr int64_t m = 2, d = kPairStepVox;
     // The raw grey 2 slices below and above: a pixel of a slice that cuts a
     // body near its top or bottom is partial volume too.
-    const uint16_t* below = G + (clampi(z - m, 0, nz_scan - 1) - z0) * plane;
-    const uint16_t* above = G + (clampi(z + m, 0, nz_scan - 1) - z0) * plane;
+    const int64_t zb = clampi(z - m, 0, nz_scan - 1) - z0, za = clampi(z + m, 0, nz_scan - 1) - z0;
+    if (zb < 0 || za >= S.nz)
+      throw std::logic_error("smoothed_sample_histogram: a sample slice's pair check lies outside the slab");
+    const uint16_t* below = G + zb * plane;
+    const uint16_t* above = G + za * plane;
 #pragma omp parallel
     {
       std::vector<int64_t>& pl = pair_part[size_t(omp_get_thread_num())];

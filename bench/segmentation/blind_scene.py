@@ -113,6 +113,16 @@ def parse_size(s):
     return tuple(p)
 
 
+def draw_grain_contrast(ids, lohi, seed):
+    """Grain id -> its contrast factor, U(lohi) (--grain-contrast), from its own
+    generator (seed + 2000) so that scenes and series without it are unchanged;
+    None when all grains are alike (1, 1)."""
+    if tuple(lohi) == (1.0, 1.0):
+        return None
+    ids = sorted(ids)
+    return dict(zip(ids, np.random.default_rng(seed + 2000).uniform(*lohi, size=len(ids)).tolist()))
+
+
 def parse_rings(s):
     p = [float(v) for v in s.split(",")]
     if len(p) != 2 or p[0] < 0 or not 0 <= p[1] <= 1:
@@ -495,11 +505,7 @@ def main(argv=None):
     shape = a.size
     particles, pstats = build(rng, a, shape)
     t_pack = time.perf_counter() - t0
-    contrast = None
-    if a.grain_contrast != (1.0, 1.0):
-        crng = np.random.default_rng(a.seed + 2000)
-        ids = sorted({p.g["id"] for p in particles})
-        contrast = dict(zip(ids, crng.uniform(*a.grain_contrast, size=len(ids)).tolist()))
+    contrast = draw_grain_contrast({p.g["id"] for p in particles}, a.grain_contrast, a.seed)
     solid, truth, overlap, dens = render(particles, shape, a.supersample, contrast)
     t_render = time.perf_counter() - t0 - t_pack
 

@@ -208,11 +208,7 @@ def main(argv=None):
         walk = np.cumsum([np.zeros(3)] + [rng.normal(size=3) * math.sqrt((a.strains[s] - a.strains[s - 1]) / emax)
                                           for s in range(1, n)], axis=0) * a.jitter * a.radius
         grains.append({"g": g, "pieces": pieces, "axis": axis, "walk": walk})
-    grain_contrast = None  # grain id -> contrast factor, drawn apart (seed + 2000): series without it unchanged
-    if tuple(a.grain_contrast) != (1.0, 1.0):
-        crng = np.random.default_rng(a.seed + 2000)
-        grain_contrast = {G["g"]["id"]: float(f) for G, f in
-                          zip(grains, crng.uniform(*a.grain_contrast, size=len(grains)))}
+    grain_contrast = bs.draw_grain_contrast([G["g"]["id"] for G in grains], a.grain_contrast, a.seed)
 
     lineage = []
     G_axis = [np.asarray(G["axis"], float) for G in grains]

@@ -73,7 +73,7 @@ Outputs
                 voxel_size_m (1e-5, nominal: everything is in voxels) and
                 blind_scene (the JSON below)
   PREFIX_truth.csv  label, volume_vox (truth voxels), parent (grain id),
-                kind (intact | half | chipped | chip), touches_border (0/1),
+                kind (intact | half | chipped | chip | shell), touches_border (0/1),
                 pores (count), radius_vox (grain's r0), cz, cy, cx (centre of
                 the grain, voxels)
   PREFIX.json   parameters, counts by kind, solid fraction, measured CNR,
@@ -261,6 +261,7 @@ class Particle:
         self.cuts = [(np.asarray(n, np.float32), np.float32(o), np.float32(s), np.float32(h)) for n, o, s, h in cuts]
         self.shift = shift      # rigid translation of this piece (drift)
         self.pores = []         # (centre relative to grain centre, radius)
+        self.wall = 0.0         # > 0: a shell, the body hollowed to this thickness (voxels)
         self.label = 0
 
     def centre(self):
@@ -281,6 +282,8 @@ class Particle:
         d = d2 * inv - g["r0"] * bump * np.sqrt(d2 / q)
         if len(g["fh"]):
             d = np.maximum(d, facet_distance(g, x))
+        if self.wall > 0:  # hollow: only what lies within `wall` of the body's surface
+            d = np.maximum(d, -(d + self.wall))
         for n, off, side, half_gap in self.cuts:
             d = np.maximum(d, half_gap - side * (x @ n - off))
         return d.reshape(v.shape[:-1])
@@ -332,6 +335,7 @@ def build(rng, a, shape):
     hi = np.array(shape, float)
     particles = []
     gid = 0
+    srng = np.random.default_rng(a.seed + 5000)  # shells: their own draws, scenes without them unchanged
     for k in range(centres.shape[0]):
         c, r0 = centres[k], shapes["r0"][k]
         bound = shapes["rmax"][k] + split_pad + 1
@@ -362,6 +366,14 @@ def build(rng, a, shape):
                 chip = Particle(g, "chip", [(n, off, 1.0, hg)], np.zeros(3))
                 chip.pores = [(pc, pr) for pc, pr in pores if pc @ n > off]
                 particles.append(chip)
+        elif a.shell_frac > 0 and srng.random() < a.shell_frac / max(1e-12, 1 - a.split_frac - a.chip_frac):
+            # an open shell: the body hollowed to a wall U(--shell-wall) voxels thick, the cap beyond a
+            # plane at U(-0.3, 0.3) r0 from the centre removed so that the hollow opens onto the void
+            n = random_unit(srng)
+            p = Particle(g, "shell", [(n, srng.uniform(-0.3, 0.3) * r0, -1.0, 0.0)], np.zeros(3))
+            p.wall = float(srng.uniform(*a.shell_wall))
+            place_pores(rng, g, [], a)  # drawn and dropped (a wall has none): the other grains' pores as without shells
+            particles.append(p)
         else:
             p = Particle(g, "intact", [], np.zeros(3))
             p.pores = place_pores(rng, g, [], a)
@@ -473,6 +485,11 @@ def main(argv=None):
     ap.add_argument("--chip-frac", type=float, default=0.05, help="fraction of grains with a cap chipped off (0.05)")
     ap.add_argument("--chip-mode", choices=("keep", "remove"), default="keep",
                     help="keep the chip as a separate particle a gap away, or remove it (keep)")
+    ap.add_argument("--shell-frac", type=float, default=0.0,
+                    help="fraction of the grains that are open shells (bioclasts: a hollow body, its wall "
+                         "--shell-wall thick, opened by a plane cut; 0: none)")
+    ap.add_argument("--shell-wall", type=parse_range, default=(2.0, 4.0),
+                    help="min,max wall thickness of the shells, voxels (2,4)")
     ap.add_argument("--pores", type=parse_range, default=(1.0, 3.0),
                     help="min,max radius of the 2-5 internal spherical pores per grain, voxels (1,3)")
     ap.add_argument("--psf", type=float, default=0.7, help="Gaussian PSF sigma, voxels (0.7; 0 = none)")
@@ -497,8 +514,8 @@ def main(argv=None):
     ap.add_argument("--tif", action="store_true", help="also write PREFIX.tif (the scan; scikit-image peer input)")
     ap.add_argument("--no-measure", action="store_true", help="skip the CNR and gap measurements")
     a = ap.parse_args(argv)
-    if not 0 < a.gap or a.split_frac + a.chip_frac > 1 or a.supersample < 1 or not 0 <= a.angularity <= 0.6:
-        ap.error("need gap > 0, split-frac + chip-frac <= 1, supersample >= 1, 0 <= angularity <= 0.6")
+    if not 0 < a.gap or a.split_frac + a.chip_frac + a.shell_frac > 1 or not 0 < a.shell_wall[0] or a.supersample < 1 or not 0 <= a.angularity <= 0.6:
+        ap.error("need gap > 0, split-frac + chip-frac + shell-frac <= 1, shell walls > 0, supersample >= 1, 0 <= angularity <= 0.6")
     import h5py
     t0 = time.perf_counter()
     rng = np.random.default_rng(a.seed)
@@ -567,7 +584,7 @@ def main(argv=None):
             "overlap_fraction": overlap,
             "particles": len(present),
             "grains": len({p.g["id"] for p in present}),
-            "by_kind": {k: sum(1 for p in present if p.kind == k) for k in ("intact", "half", "chipped", "chip")},
+            "by_kind": {k: sum(1 for p in present if p.kind == k) for k in ("intact", "half", "chipped", "chip", "shell")},
             "touching_border": len(border - {0})}
     if not a.no_measure:
         sd = ndimage.binary_erosion(solid >= 1.0, iterations=2)

@@ -17,6 +17,10 @@
     median_abs_dv_reported, on the same matched pairs
   * pore over-segmentation: INTACT grains (every one has 2-5 pores) that are
     over-segmented, the count
+  * shells (blind_scene.py --shell-frac, walls 2-4 voxels thick): how many
+    are matched (shells_recovered), and the share of their truth voxels
+    left unlabelled (shell_unlabelled: the threshold's partial-volume skin,
+    watershed lines, gaps between pieces)
 Differences from accuracy.py (data_synth truth): 20 % instead of 10 % for
 the over/under pieces, and halves counted one by one instead of pairs.
 
@@ -107,6 +111,9 @@ def evaluate(truth, pred, table, reported=None):
     same = int(np.sum(pmin[under] == pmax[under]))
     halves = [lab for lab, kd in kinds.items() if kd == "half" and lab < st.size and st[lab] > 0]
     intact = [lab for lab, kd in kinds.items() if kd == "intact" and lab < st.size and st[lab] > 0]
+    shells = [lab for lab, kd in kinds.items() if kd == "shell" and lab < st.size and st[lab] > 0]
+    shell_vox = int(st[shells].sum()) if shells else 0
+    shell_labelled = int(np.isin(t[both], shells).sum()) if shells else 0
     tp = len(match)
     return {"n_true": n_true, "n_pred": n_pred, "matched": tp,
             "f1": 2 * tp / (n_true + n_pred) if n_true + n_pred else 1.0,
@@ -117,7 +124,9 @@ def evaluate(truth, pred, table, reported=None):
             "median_abs_dv": float(np.median(vol_err)) if tp else None,
             "median_abs_dv_reported": float(np.median(rep_err)) if tp and rep_err is not None else None,
             "intact": len(intact),
-            "pore_over_segmented_intact": sum(1 for i in intact if pieces_t[i] >= 2)}
+            "pore_over_segmented_intact": sum(1 for i in intact if pieces_t[i] >= 2),
+            "shells": len(shells), "shells_recovered": sum(1 for h in shells if h in match),
+            "shell_unlabelled": 1 - shell_labelled / shell_vox if shell_vox else None}
 
 
 def main():

@@ -20,6 +20,9 @@ drift 0. Factor levels (each varied alone around the middle):
   contrast {1-1, 0.85-1, 0.7-1}: each grain's contrast over the void drawn
   in that range of the solid's (blind_scene.py --grain-contrast; grains of
   different density)
+  shells {0, 0.15, 0.3}: that share of the grains drawn as open shells, walls
+  2-4 voxels thick (blind_scene.py --shell-frac; bioclasts of a carbonate
+  sand: issue 19's real scan)
   R {8, 12, 20, 40, 60} at sizes {96, 128, 192, 320, 448}^3 (>= ~40-60
   whole grains each; run once, not per --sizes entry)
 Seeds are 1..--seeds (or --seed-list); these were the development seeds;
@@ -62,14 +65,14 @@ REF = "/work/shared/peers/skimage/ref_pipeline.py"
 PY = "/usr/bin/python3"
 TMP = "/tmp"
 MIDDLE = {"gap": 1.0, "psf": 0.7, "cnr": 13.0, "pores": "1,3", "cupping": 0.0, "drift": 0.0, "corr": 0.0, "elong": 1.0,
-          "angular": 0.0, "contrast": "1,1"}
+          "angular": 0.0, "contrast": "1,1", "shells": 0.0}
 FACTORS = {"gap": [0.5, 1.0, 1.5, 2.5], "psf": [0.5, 0.7, 1.0, 1.5], "cnr": [5.0, 8.0, 13.0, 30.0],
            "pores": ["1,2", "2,4", "3,5"], "cupping": [0.0, 0.15, 0.3], "drift": [0.0, 2.0],
            "corr": [0.0, 0.7, 1.5], "elong": [1.0, 1.6, 2.0],
-           "angular": [0.0, 0.15, 0.3], "contrast": ["1,1", "0.85,1", "0.7,1"]}
+           "angular": [0.0, 0.15, 0.3], "contrast": ["1,1", "0.85,1", "0.7,1"], "shells": [0.0, 0.15, 0.3]}
 SHORT = {"tomograin": "tg", "skimage": "sk"}
 R_SIZES = {8: 96, 12: 128, 20: 192, 40: 320, 60: 448}
-METRICS = ["f1", "halves_recovered", "halves", "over_segmented", "under_segmenting", "under_one_grain", "median_abs_dv",
+METRICS = ["f1", "halves_recovered", "halves", "shells_recovered", "shells", "shell_unlabelled", "over_segmented", "under_segmenting", "under_one_grain", "median_abs_dv",
            "median_abs_dv_reported", "pore_over_segmented_intact", "n_true", "n_pred", "segment_s", "peak_b_per_vox"]
 
 
@@ -91,7 +94,8 @@ def scene_name(size, R, s, seed):
             f"_cu{s['cupping']:g}_d{s['drift']:g}" + (f"_nc{s['corr']:g}" if s["corr"] else "")
             + (f"_e{s['elong']:g}" if s["elong"] != 1.0 else "")
             + (f"_a{s['angular']:g}" if s["angular"] != 0.0 else "")
-            + (f"_gc{s['contrast'].split(',')[0]}" if s["contrast"] != "1,1" else "") + f"_s{seed}")
+            + (f"_gc{s['contrast'].split(',')[0]}" if s["contrast"] != "1,1" else "")
+            + (f"_sh{s['shells']:g}" if s["shells"] else "") + f"_s{seed}")
 
 
 def make_scene(a, prefix, size, R, s, seed):
@@ -100,7 +104,8 @@ def make_scene(a, prefix, size, R, s, seed):
     cmd = [PY, os.path.join(HERE, "blind_scene.py"), "-o", prefix, "--size", str(size), "--radius", str(R),
            "--gap", str(s["gap"]), "--psf", str(s["psf"]), "--cnr", str(s["cnr"]), "--pores", s["pores"],
            "--cupping", str(s["cupping"]), "--drift", str(s["drift"]), "--noise-corr", str(s["corr"]), "--elongation", str(s["elong"]),
-           "--angularity", str(s["angular"]), "--grain-contrast", s["contrast"], "--seed", str(seed)]
+           "--angularity", str(s["angular"]), "--grain-contrast", s["contrast"], "--shell-frac", str(s["shells"]),
+           "--seed", str(seed)]
     if a.skimage:
         cmd.append("--tif")
     wall, cpu, _, _ = run(cmd)
@@ -163,7 +168,7 @@ def plan(a):
 def fmt(v, key):
     if v is None:
         return "-"
-    if key in ("median_abs_dv", "median_abs_dv_reported"):
+    if key in ("median_abs_dv", "median_abs_dv_reported", "shell_unlabelled"):
         return f"{100 * v:.2f} %"
     if key in ("f1",):
         return f"{v:.3f}"
@@ -180,7 +185,8 @@ def write_md(a, rows, header):
     for r in rows:
         groups.setdefault((r["factor"], str(r["level"])), {}).setdefault(r["pipeline"], []).append(r)
     lines = [header, ""]
-    cols = [("F1", "f1"), ("halves rec.", "halves_frac"), ("over", "over_segmented"), ("under", "under_segmenting"),
+    cols = [("F1", "f1"), ("halves rec.", "halves_frac"), ("shells rec.", "shells_frac"),
+            ("shell unlabelled", "shell_unlabelled"), ("over", "over_segmented"), ("under", "under_segmenting"),
             ("med. abs dV/V", "median_abs_dv"), ("med. abs dV/V reported", "median_abs_dv_reported"),
             ("pore-over intact", "pore_over_segmented_intact"),
             ("segment s", "segment_s"), ("peak B/vox", "peak_b_per_vox")]
@@ -193,11 +199,12 @@ def write_md(a, rows, header):
         for _, key in cols:
             for p in pipes:
                 rs = by.get(p, [])
-                if key == "halves_frac":
-                    h = sum(r["halves"] for r in rs)
-                    v = f"{100 * sum(r['halves_recovered'] for r in rs) / h:.0f} % of {int(h)}" if h else "-"
+                if key in ("halves_frac", "shells_frac"):
+                    what = key.split("_")[0]
+                    h = sum(r.get(what) or 0 for r in rs)
+                    v = f"{100 * sum(r[what + '_recovered'] for r in rs) / h:.0f} % of {int(h)}" if h else "-"
                 else:
-                    vals = [r[key] for r in rs if r[key] is not None]
+                    vals = [r[key] for r in rs if r.get(key) is not None]
                     v = fmt(sum(vals) / len(vals), key) if vals else "-"
                 line += f" {v} |"
         lines.append(line)
@@ -270,7 +277,7 @@ def main():
     ap.add_argument("--seed-list", help="explicit seeds, e.g. 1,2 (overrides --seeds)")
     ap.add_argument("--big-seeds", type=int, default=2, help="seeds used for scenes larger than 256^3 (2)")
     ap.add_argument("--sizes", default="192:20", help="middle scenes SIZE:R[,SIZE:R...] (192:20)")
-    ap.add_argument("--factors", help="only these factors, comma separated (gap,psf,cnr,pores,cupping,drift,corr,elong,angular,contrast,R)")
+    ap.add_argument("--factors", help="only these factors, comma separated (gap,psf,cnr,pores,cupping,drift,corr,elong,angular,contrast,shells,R)")
     ap.add_argument("--quick", action="store_true", help="middle setting only")
     ap.add_argument("--reuse", action="store_true", help="do not regenerate scenes that exist")
     ap.add_argument("--md-only", action="store_true", help="rewrite DIR/sweep.md from DIR/sweep.csv and the scenes, run nothing")

@@ -17,6 +17,10 @@
     most two halves; halves and chips exist
   * --grain-contrast: a grain's deep voxels read its own contrast, one per
     grain (its fragments alike), within the range asked for
+  * --shell-frac: the shells' truth is a wall as thick as asked (its deepest
+    voxel, by the exact distance map, within half the wall + 1 voxel), open
+    (no void enclosed by it alone), and the rest of the scene is the scene
+    without the option (same particles but the shells, voxel for voxel)
 
 usage: blind_scene_test.py [WORKDIR]     (~10 s)
 """
@@ -98,6 +102,39 @@ def grain_contrast(work):
           f"grain contrast 0.7-1: {len(by_grain)} grains, f {min(f):.3f}..{max(f):.3f}, one f per grain: {one}")
 
 
+def shells(work):
+    """--shell-frac 0.3 --shell-wall 2,4: walls 2-4 voxels thick, open; the
+    other grains as without the option."""
+    import h5py
+    from scipy import ndimage
+    pre, plain = os.path.join(work, "shells"), os.path.join(work, "noshells")
+    common = ["--size", "96", "--radius", "14", "--seed", "5", "--psf", "0", "--cnr", "0", "--no-measure"]
+    bs.main(["-o", pre, "--shell-frac", "0.3", "--shell-wall", "2,4"] + common)
+    bs.main(["-o", plain] + common)
+    with h5py.File(pre + ".h5", "r") as f:
+        truth = f["labels"][...]
+    with h5py.File(plain + ".h5", "r") as f:
+        truth0 = f["labels"][...]
+    rows = list(csv.DictReader(open(pre + "_truth.csv")))
+    kinds = {int(r["label"]): r["kind"] for r in rows}
+    shell = [l for l, k in kinds.items() if k == "shell"]
+    deep, closed = [], 0
+    for l in shell:
+        m = truth == l
+        if m.sum() < 200:
+            continue
+        deep.append(float(ndimage.distance_transform_edt(np.pad(m, 1)).max()))
+        holes = ndimage.binary_fill_holes(np.pad(m, 1)) & ~np.pad(m, 1)
+        closed += int(holes.sum() > 10)
+    check(len(deep) >= 5 and max(deep) <= 4 / 2 + 1 and closed == 0,
+          f"shells: {len(shell)}, deepest voxel {min(deep):.2f}..{max(deep):.2f} (wall <= 4), closed {closed}")
+    # Without the shells the same packing and pores: every non-shell particle's voxels are a particle's
+    # there, but where a lens of overlap beside a shell went to the other grain (ownership by cover).
+    near = ndimage.binary_dilation(np.isin(truth, shell), iterations=1)
+    same = (truth == 0) | np.isin(truth, shell) | (truth0 > 0) | near
+    check(same.all() and len(shell) > 0, f"non-shell particles as without the option: {same.mean():.6f}")
+
+
 def main():
     work = sys.argv[1] if len(sys.argv) > 1 else tempfile.mkdtemp(prefix="tg_blind_scene_")
     os.makedirs(work, exist_ok=True)
@@ -126,6 +163,7 @@ def main():
     gap = info2["measured_gap_vox"]
     check(gap["n"] >= 5 and abs(gap["median"] - 2.0) < 0.06, f"gap 2.0: measured {gap}")
     grain_contrast(work)
+    shells(work)
     if FAILS:
         sys.exit("FAIL: " + "; ".join(FAILS))
     print("OK")

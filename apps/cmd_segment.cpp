@@ -330,8 +330,9 @@ static tg::app::Registrar reg{{"segment", 30,
     "sheet at least 6 sigmas of the smoothed solid's noise deeper, or where the grains differ in\n"
     "brightness, 6 sigmas of the grey's variation inside a grain: the summary's split.noise_from); thin\n"
     "pieces: a chip pressed on a grain (thinner than the ball of radius max(3, 0.15 R) whose\n"
-    "opening keeps the grain, touching it by a small contact) gets its own label\n"
-    "(--no-thin-pieces); face caps: a grain cut by a face of the scan that shows only a thin\n"
+    "opening keeps the grain, touching it by a small contact) gets its own label, and labels\n"
+    "that thin throughout meeting across an interface as bright as solid are put back together\n"
+    "(the wall of a shell, cut by the watershed where grains touch it) (--no-thin-pieces); face caps: a grain cut by a face of the scan that shows only a thin\n"
     "cap, given by the watershed to the grain it touches, gets its own label when its section on\n"
     "the face is a second disc and the contact between them is dim, or when the label goes on\n"
     "behind the cap, past a dim layer, into a grain whose pole it is pressed on (--no-face-caps);\n"
@@ -451,8 +452,8 @@ static tg::app::Registrar reg{{"segment", 30,
                 "label goes on behind the cap past a dim layer into a grain); runs with the split repair");
   sub->add_flag("--no-thin-pieces", o->no_thin_pieces,
                 "Do not give a label of their own to thin pieces pressed on a grain (a chip: thinner than twice the "
-                "opening radius, touching the rest of its label by under a fifth of its voxels); runs with the split "
-                "repair");
+                "opening radius, touching the rest of its label by under a fifth of its voxels), nor put back "
+                "together the pieces of thin walls (shells) the watershed cut; runs with the split repair");
   sub->add_option("--thin-piece-radius-vox", o->seg.thin_piece_radius_vox,
                   "Radius of the ball whose opening keeps a grain's body and drops thin pieces, voxels (0: max(3, "
                   "0.15 x the grain radius))")

@@ -5,6 +5,7 @@
 #include <map>
 #include <numbers>
 #include <unordered_map>
+#include <stdexcept>
 #include <vector>
 
 #include <omp.h>
@@ -197,6 +198,86 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
   }
 #pragma omp parallel for schedule(static)
   for (int64_t i = 0; i < n; ++i) L[i] = root[L[i]];
+  return res;
+}
+
+WallMergeResult merge_thin_walls(Volume<uint32_t>& labels, const Volume<uint8_t>& grey,
+                                 const std::vector<uint8_t>& thin, const WallMergeOptions& opt) {
+  if (!(labels.shape() == grey.shape())) throw std::logic_error("merge_thin_walls: labels and grey differ in shape");
+  WallMergeResult res;
+  for (const uint8_t t : thin) res.thin_labels += t;
+  if (res.thin_labels < 2) return res;
+  const Shape s = labels.shape();
+  uint32_t* L = labels.data();
+  const uint8_t* G = grey.data();
+  const size_t nl = thin.size();
+  auto is_thin = [&](uint32_t l) { return l != 0 && size_t(l) < nl && thin[l]; };
+  const seg::Neighbourhood nb(s, 26);
+  const int nthreads = omp_get_max_threads();
+  std::unordered_map<uint64_t, Area> iface;
+  std::vector<std::vector<std::pair<int64_t, uint64_t>>> two{static_cast<size_t>(nthreads)};
+#pragma omp parallel num_threads(nthreads)
+  {
+    std::unordered_map<uint64_t, Area> mine;
+    auto& my_two = two[size_t(omp_get_thread_num())];
+    const int64_t sy = s.nx, sz = s.slice_voxels();
+#pragma omp for schedule(static)
+    for (int64_t k = 0; k < s.nz; ++k)
+      for (int64_t j = 0; j < s.ny; ++j)
+        for (int64_t i = 0; i < s.nx; ++i) {
+          const int64_t idx = s.index(k, j, i);
+          const uint32_t a = L[idx];
+          if (a == 0) {
+            if (G[idx] < opt.floor) continue;
+            uint32_t ls[3];
+            if (neighbour_labels(labels, nb, k, j, i, idx, ls) != 2 || !is_thin(ls[0]) || !is_thin(ls[1])) continue;
+            const uint64_t key = pair_key(ls[0], ls[1]);
+            Area& ar = mine[key];
+            ++ar.all;
+            ar.bright += G[idx] >= opt.bright;
+            my_two.emplace_back(idx, key);
+          } else if (is_thin(a)) {
+            // Forward faces to another thin label (a face is bright when both voxels are).
+            const int64_t fwd[3] = {i + 1 < s.nx ? idx + 1 : -1, j + 1 < s.ny ? idx + sy : -1,
+                                    k + 1 < s.nz ? idx + sz : -1};
+            for (const int64_t w : fwd) {
+              if (w < 0 || L[w] == a || !is_thin(L[w])) continue;
+              Area& ar = mine[pair_key(a, L[w])];
+              ++ar.all;
+              ar.bright += G[idx] >= opt.bright && G[w] >= opt.bright;
+            }
+          }
+        }
+#pragma omp critical
+    for (const auto& [key, area] : mine) iface[key] += area;
+  }
+  res.touching_pairs = int64_t(iface.size());
+  std::vector<uint32_t> parent(nl);
+  for (size_t l = 0; l < nl; ++l) parent[l] = uint32_t(l);
+  auto find = [&](uint32_t a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  };
+  const std::map<uint64_t, Area> ordered(iface.begin(), iface.end());  // deterministic order
+  for (const auto& [key, area] : ordered) {
+    if (area.bright < opt.min_area || double(area.bright) < opt.min_bright_share * double(area.all)) continue;
+    const uint32_t ra = find(uint32_t(key >> 32)), rb = find(uint32_t(key & 0xffffffffu));
+    if (ra == rb) continue;
+    parent[std::max(ra, rb)] = std::min(ra, rb);
+    ++res.merges;
+  }
+  if (res.merges == 0) return res;
+  std::vector<uint32_t> root(nl);
+  for (size_t l = 0; l < nl; ++l) root[l] = find(uint32_t(l));
+  for (const auto& list : two)
+    for (const auto& [idx, key] : list) {
+      const uint32_t r = root[uint32_t(key >> 32)];
+      if (root[uint32_t(key & 0xffffffffu)] == r) L[idx] = r;
+    }
+  const int64_t n = labels.size();
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < n; ++i)
+    if (L[i] && size_t(L[i]) < nl) L[i] = root[L[i]];
   return res;
 }
 

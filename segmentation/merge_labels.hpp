@@ -77,4 +77,33 @@ struct MergeResult {
 // computed on (solid voxels with label 0 are line voxels).
 MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>& solid, const MergeOptions& opt = {});
 
+// Thin walls put back together (a shell, a bioclast: walls 2-4 voxels
+// thick). Where a wall touches a grain, the grain's marker floods into it
+// (the wall's ridge is no deeper than the contact), and the thin-piece
+// repair then cuts out the parts the grains took: one wall ends as a chain
+// of thin labels parted by watershed lines (issue 19's real scan: "chains
+// of short labels with unlabelled gaps"). Two labels that are both thin
+// throughout (`thin`, from split_thin_pieces) and meet across an interface
+// as bright as solid (line voxels between exactly the two of them, or
+// faces) are one wall cut by the watershed: two pieces a gap or a contact
+// parts meet across dim partial-volume voxels. A pair merges when its
+// bright interface is at least min_area voxels and min_bright_share of the
+// interface; chains merge whole (every passing pair is joined: a wall has
+// no neck a third grain could hold). The line voxels between merged labels
+// join them. Labels keep the smallest number of their group; the caller
+// renumbers. Deterministic (integer counts, pairs joined in key order).
+struct WallMergeOptions {
+  double floor = 0;               // grey at or above which a line voxel is solid (the threshold)
+  double bright = 0;              // grey at or above which an interface voxel is bright
+  double min_bright_share = 0.5;
+  int64_t min_area = 9;           // bright interface voxels: a cut across a wall t thick is >= t x t
+};
+struct WallMergeResult {
+  int64_t thin_labels = 0;     // labels thin throughout
+  int64_t touching_pairs = 0;  // pairs of them sharing an interface
+  int64_t merges = 0;          // unions made
+};
+WallMergeResult merge_thin_walls(Volume<uint32_t>& labels, const Volume<uint8_t>& grey,
+                                 const std::vector<uint8_t>& thin, const WallMergeOptions& opt);
+
 }  // namespace tg

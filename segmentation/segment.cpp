@@ -569,6 +569,16 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
       r.thin_piece_radius_vox = to.radius_vox;
       r.thin_pieces = split_thin_pieces(lab, &count, to);
       clock.lap("thin_pieces");
+      // Thin walls cut by the watershed into a chain (merge_labels.hpp
+      // merge_thin_walls): bright means past halfway from the threshold
+      // to the solid, as the dim band's first bound.
+      WallMergeOptions wo;
+      wo.floor = split_floor;
+      wo.bright = split_floor + 0.5 * (solid_level - split_floor);
+      wo.min_area = int64_t(std::lround(to.radius_vox * to.radius_vox));
+      r.thin_walls = merge_thin_walls(lab, *grey_code, r.thin_pieces.thin, wo);
+      r.thin_pieces.thin = {};
+      clock.lap("thin_walls");
     }
     if (opt.face_caps) {
       // Face caps (split_labels.hpp split_face_caps): the scan's faces only
@@ -585,8 +595,8 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   }
   // (Grown or joined slivers may start earlier in raster order, or leave a
   // number unused.)
-  if (r.split.pieces_added + r.thin_pieces.pieces_added + r.face_caps.pieces_added + r.face_slivers.slivers_joined +
-          r.face_slivers.voxels_added > 0 ||
+  if (r.split.pieces_added + r.thin_pieces.pieces_added + r.thin_walls.merges + r.face_caps.pieces_added +
+          r.face_slivers.slivers_joined + r.face_slivers.voxels_added > 0 ||
       floor_deferred) {
     rl = relabel_consecutive(lab, opt.min_size_vox);
     r.count = rl.count;
@@ -727,7 +737,19 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                       {"labels_tested", r.thin_pieces.tested},
                       {"labels_tested_in_full", r.thin_pieces.screened_in},
                       {"labels_split", r.thin_pieces.split},
-                      {"pieces_added", r.thin_pieces.pieces_added}};
+                      {"pieces_added", r.thin_pieces.pieces_added},
+                      {"walls", {{"rule", [] {
+                                    const WallMergeOptions d;
+                                    return fmt::format(
+                                        "two labels thin throughout (no voxel deeper than radius_vox: the pieces above, "
+                                        "and labels so thin) merge where they meet across >= radius_vox^2 voxels of "
+                                        "interface at least halfway from the threshold to the solid's grey, >= {} of "
+                                        "it (a wall the watershed cut; merge_labels.hpp merge_thin_walls)",
+                                        d.min_bright_share);
+                                  }()},
+                                 {"thin_labels", r.thin_walls.thin_labels},
+                                 {"pairs_touching", r.thin_walls.touching_pairs},
+                                 {"merges", r.thin_walls.merges}}}};
   j["face_caps"] = {{"enabled", r.face_caps_used},
                     {"rule", [] {
                        const FaceCapOptions d;  // the values segment() runs with

@@ -230,6 +230,7 @@ struct SegmentResult {
   bool thin_pieces_used = false;     // the thin-piece repair ran (with the split repair, thin_pieces on)
   double thin_piece_radius_vox = 0;  // the opening's radius it used
   ThinPieceResult thin_pieces;
+  WallMergeResult thin_walls;      // with the thin-piece repair: walls put back together (merge_thin_walls)
   bool face_caps_used = false;  // the face-cap repair ran (with the split repair, face_caps on)
   FaceCapResult face_caps;
   bool face_slivers_used = false;  // the face-sliver step ran

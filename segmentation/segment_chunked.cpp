@@ -285,6 +285,7 @@ std::string summary_json(const ChunkedResult& cr, const SegmentOptions& opt) {
   for (const char* k : {"labels_tested", "labels_split", "pieces_added", "labels_too_large_to_test"}) j["split"][k] = nullptr;
   for (const char* k : {"candidates", "labels_split", "pieces_added"}) j["face_caps"][k] = nullptr;
   for (const char* k : {"labels_tested", "labels_tested_in_full", "labels_split", "pieces_added"}) j["thin_pieces"][k] = nullptr;
+  for (const char* k : {"thin_labels", "pairs_touching", "merges"}) j["thin_pieces"]["walls"][k] = nullptr;
   for (const char* k : {"slivers_joined", "labels_grown", "voxels_added"}) j["face_slivers"][k] = nullptr;
   for (const char* k : {"mu0", "s0", "labels_tested", "labels_dropped", "voxels_dropped"}) j["noise_specks"][k] = nullptr;
   json slabs = json::array();

@@ -300,6 +300,7 @@ struct Pieces {
   std::vector<int64_t> voxel;  // global indices of the voxels that leave the label
   std::vector<int32_t> piece;  // their piece ordinal, 1..n-1
   int32_t count = 1;
+  bool no_core = false;        // thin_pieces_one: no voxel of the label deeper than the radius
 };
 
 template <class T>
@@ -863,39 +864,71 @@ struct ThinPass {
   bool screen = false;  // stop at the first piece (its voxels are not listed)
 };
 
+// Label l's voxels at every st-th voxel along each axis of its box, the box
+// padded by one sample where the volume allows (a shell of void around the
+// label, nearer to each of its voxels than anything beyond: the map
+// measures within the label), and their distance to the void. Sample
+// (k, j, i) is voxel (z0 + st k, y0 + st j, x0 + st i).
+struct LabelSample {
+  int64_t z0 = 0, y0 = 0, x0 = 0, st = 1;
+  Shape B;
+  Volume<uint8_t> mask;
+  Volume<float> depth;
+};
+LabelSample sample_label(const Volume<uint32_t>& labels, uint32_t l, const LabelBox& bx,
+                         const std::array<double, 3>& spacing, int64_t st) {
+  LabelSample o;
+  const Shape S = labels.shape();
+  const uint32_t* L = labels.data();
+  o.st = st;
+  o.z0 = std::max<int64_t>(bx.z0 - st, 0), o.y0 = std::max<int64_t>(bx.y0 - st, 0),
+  o.x0 = std::max<int64_t>(bx.x0 - st, 0);
+  const int64_t z1 = std::min(bx.z1 + st, S.nz - 1), y1 = std::min(bx.y1 + st, S.ny - 1),
+                x1 = std::min(bx.x1 + st, S.nx - 1);
+  o.B = Shape{(z1 - o.z0) / st + 1, (y1 - o.y0) / st + 1, (x1 - o.x0) / st + 1};
+  o.mask = Volume<uint8_t>(o.B);
+  uint8_t* V = o.mask.data();
+  for (int64_t k = 0; k < o.B.nz; ++k)
+    for (int64_t j = 0; j < o.B.ny; ++j) {
+      const uint32_t* row = L + S.index(o.z0 + st * k, o.y0 + st * j, o.x0);
+      uint8_t* v = V + o.B.index(k, j, 0);
+      for (int64_t i = 0; i < o.B.nx; ++i) v[i] = row[st * i] == l;
+    }
+  EdtOptions eo;
+  for (size_t a = 0; a < 3; ++a) eo.spacing[a] = spacing[a] * double(st);
+  distance_transform(o.mask, o.depth, eo);
+  return o;
+}
+
+// Whether label l is thinner than 2 r throughout: no voxel deeper than r
+// (merge_thin_walls takes such labels for pieces of a wall).
+bool thin_throughout(const Volume<uint32_t>& labels, uint32_t l, const LabelBox& bx,
+                     const std::array<double, 3>& spacing, double r) {
+  const LabelSample ls = sample_label(labels, l, bx, spacing, 1);
+  const float* D = ls.depth.data();
+  for (int64_t q = 0; q < ls.B.voxels(); ++q)
+    if (D[q] > r) return false;
+  return true;
+}
+
 // Steps 1-2 of split_thin_pieces (header) for label l: the voxels that
 // leave it, with their piece ordinal 1.. (with pass.screen: count 2 at the
-// first piece found, no voxels).
+// first piece found, no voxels; no_core where no voxel is deeper than the
+// radius).
 Pieces thin_pieces_one(const Volume<uint32_t>& labels, uint32_t l, const LabelBox& bx, const ThinPieceOptions& opt,
                        const ThinPass& pass) {
   Pieces out;
   const Shape S = labels.shape();
-  const uint32_t* L = labels.data();
   const int64_t st = pass.stride;
   const double r = pass.radius;
-  // The box padded by one sample where the volume allows: a shell of void
-  // around the label, nearer to each of its voxels than anything beyond
-  // (both maps measure within the label). Sample (k, j, i) is voxel
-  // (z0 + st k, y0 + st j, x0 + st i).
-  const int64_t pad = st;
-  const int64_t z0 = std::max<int64_t>(bx.z0 - pad, 0), y0 = std::max<int64_t>(bx.y0 - pad, 0),
-                x0 = std::max<int64_t>(bx.x0 - pad, 0);
-  const int64_t z1 = std::min(bx.z1 + pad, S.nz - 1), y1 = std::min(bx.y1 + pad, S.ny - 1),
-                x1 = std::min(bx.x1 + pad, S.nx - 1);
-  const Shape B{(z1 - z0) / st + 1, (y1 - y0) / st + 1, (x1 - x0) / st + 1};
+  LabelSample ls = sample_label(labels, l, bx, opt.spacing, st);
+  const int64_t z0 = ls.z0, y0 = ls.y0, x0 = ls.x0;
+  const Shape B = ls.B;
   const int64_t nb = B.voxels();
-  Volume<uint8_t> mask(B);
-  uint8_t* V = mask.data();
-  for (int64_t k = 0; k < B.nz; ++k)
-    for (int64_t j = 0; j < B.ny; ++j) {
-      const uint32_t* row = L + S.index(z0 + st * k, y0 + st * j, x0);
-      uint8_t* v = V + B.index(k, j, 0);
-      for (int64_t i = 0; i < B.nx; ++i) v[i] = row[st * i] == l;
-    }
+  uint8_t* V = ls.mask.data();
   EdtOptions eo;
   for (size_t a = 0; a < 3; ++a) eo.spacing[a] = opt.spacing[a] * double(st);
-  Volume<float> depth;
-  distance_transform(mask, depth, eo);
+  const Volume<float>& depth = ls.depth;
   // Step 1: the core (deeper than r) is void for the second map, which
   // then gives every other voxel its distance to the core.
   Volume<uint8_t> off_core(B);
@@ -907,7 +940,10 @@ Pieces thin_pieces_one(const Volume<uint32_t>& labels, uint32_t l, const LabelBo
     C[q] = !c;
     core += c;
   }
-  if (core == 0) return out;  // no part of the label deeper than r: nothing to hold a piece
+  if (core == 0) {  // no part of the label deeper than r: nothing to hold a piece
+    out.no_core = true;
+    return out;
+  }
   Volume<float> to_core;
   distance_transform(off_core, to_core, eo);
   const float* T = to_core.data();
@@ -973,6 +1009,7 @@ ThinPieceResult split_thin_pieces(Volume<uint32_t>& labels, uint32_t* count, con
   if (n == 0 || labels.shape().empty()) return res;
   const std::vector<LabelBox> box = label_boxes(labels, n);
   std::vector<Pieces> pieces(size_t(n) + 1);
+  std::vector<uint8_t> wall(size_t(n) + 1, 0);
   int64_t tested = 0, passed = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : tested, passed)
   for (int64_t l = 1; l <= int64_t(n); ++l) {
@@ -994,16 +1031,25 @@ ThinPieceResult split_thin_pieces(Volume<uint32_t>& labels, uint32_t* count, con
     ThinPass screen;
     screen.stride = 2, screen.radius = opt.radius_vox + 1, screen.screen = true;
     screen.min_size = std::max(4.0, double(vmin) / 24), screen.max_share = 0.5, screen.max_contact = 0.5;
-    if (thin_pieces_one(labels, uint32_t(l), b, opt, screen).count < 2) continue;
-    ++passed;
+    const Pieces sc = thin_pieces_one(labels, uint32_t(l), b, opt, screen);
     ThinPass full;
     full.radius = opt.radius_vox, full.min_size = double(vmin), full.max_share = opt.max_share,
     full.max_contact = opt.max_contact;
+    if (sc.no_core) {  // thin throughout on the coarse grid: on the full one?
+      wall[size_t(l)] = thin_throughout(labels, uint32_t(l), b, opt.spacing, opt.radius_vox);
+      continue;
+    }
+    if (sc.count < 2) continue;
+    ++passed;
     pieces[size_t(l)] = thin_pieces_one(labels, uint32_t(l), b, opt, full);
   }
   res.tested = tested;
   res.screened_in = passed;
   apply_pieces(labels.data(), pieces, n, count, "thin-piece repair", &res.split, &res.pieces_added);
+  // The pieces are thinner than 2 r by construction (the opening left them).
+  res.thin.assign(size_t(*count) + 1, 1);
+  res.thin[0] = 0;
+  for (uint32_t l = 1; l <= n; ++l) res.thin[l] = wall[l];
   return res;
 }
 

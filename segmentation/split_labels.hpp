@@ -237,6 +237,10 @@ struct ThinPieceResult {
   int64_t screened_in = 0;   // of those, the ones the screen (every second voxel) sent to the full test
   int64_t split = 0;         // labels a thin piece left
   int64_t pieces_added = 0;  // new labels
+  // Per label after the step (0..*count): 1 where no voxel lies deeper than
+  // the radius (a piece, or a label thin throughout: a shell's wall, a
+  // chip); merge_thin_walls reads it.
+  std::vector<uint8_t> thin;
 };
 
 ThinPieceResult split_thin_pieces(Volume<uint32_t>& labels, uint32_t* count, const ThinPieceOptions& opt);

@@ -202,7 +202,8 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
 }
 
 WallMergeResult merge_thin_walls(Volume<uint32_t>& labels, const Volume<uint8_t>& grey,
-                                 const std::vector<uint8_t>& thin, const WallMergeOptions& opt) {
+                                 const std::vector<uint8_t>& thin, const std::vector<Box>& thin_boxes,
+                                 const WallMergeOptions& opt) {
   if (!(labels.shape() == grey.shape())) throw std::logic_error("merge_thin_walls: labels and grey differ in shape");
   WallMergeResult res;
   for (const uint8_t t : thin) res.thin_labels += t;
@@ -212,6 +213,15 @@ WallMergeResult merge_thin_walls(Volume<uint32_t>& labels, const Volume<uint8_t>
   const uint8_t* G = grey.data();
   const size_t nl = thin.size();
   auto is_thin = [&](uint32_t l) { return l != 0 && size_t(l) < nl && thin[l]; };
+  // Each row's stretch of x that the thin labels' boxes, grown by one, cover.
+  std::vector<int64_t> x_lo(size_t(s.nz * s.ny), s.nx), x_hi(size_t(s.nz * s.ny), -1);
+  for (const Box& b : thin_boxes)
+    for (int64_t k = std::max<int64_t>(b.z0 - 1, 0); k <= std::min(b.z0 + b.size.nz, s.nz - 1); ++k)
+      for (int64_t j = std::max<int64_t>(b.y0 - 1, 0); j <= std::min(b.y0 + b.size.ny, s.ny - 1); ++j) {
+        const size_t row = size_t(k * s.ny + j);
+        x_lo[row] = std::min(x_lo[row], std::max<int64_t>(b.x0 - 1, 0));
+        x_hi[row] = std::max(x_hi[row], std::min(b.x0 + b.size.nx, s.nx - 1));
+      }
   const seg::Neighbourhood nb(s, 26);
   const int nthreads = omp_get_max_threads();
   std::unordered_map<uint64_t, Area> iface;
@@ -224,7 +234,7 @@ WallMergeResult merge_thin_walls(Volume<uint32_t>& labels, const Volume<uint8_t>
 #pragma omp for schedule(static)
     for (int64_t k = 0; k < s.nz; ++k)
       for (int64_t j = 0; j < s.ny; ++j)
-        for (int64_t i = 0; i < s.nx; ++i) {
+        for (int64_t i = x_lo[size_t(k * s.ny + j)]; i <= x_hi[size_t(k * s.ny + j)]; ++i) {
           const int64_t idx = s.index(k, j, i);
           const uint32_t a = L[idx];
           if (a == 0) {

@@ -103,7 +103,11 @@ struct WallMergeResult {
   int64_t touching_pairs = 0;  // pairs of them sharing an interface
   int64_t merges = 0;          // unions made
 };
+// thin_boxes: the boxes of the thin labels (only their voxels, grown by
+// one, are looked at: at 256^3 a pass over the whole volume cost 3 % of a
+// segmentation that had no wall).
 WallMergeResult merge_thin_walls(Volume<uint32_t>& labels, const Volume<uint8_t>& grey,
-                                 const std::vector<uint8_t>& thin, const WallMergeOptions& opt);
+                                 const std::vector<uint8_t>& thin, const std::vector<Box>& thin_boxes,
+                                 const WallMergeOptions& opt);
 
 }  // namespace tg

@@ -576,8 +576,9 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
       wo.floor = split_floor;
       wo.bright = split_floor + 0.5 * (solid_level - split_floor);
       wo.min_area = int64_t(std::lround(to.radius_vox * to.radius_vox));
-      r.thin_walls = merge_thin_walls(lab, *grey_code, r.thin_pieces.thin, wo);
+      r.thin_walls = merge_thin_walls(lab, *grey_code, r.thin_pieces.thin, r.thin_pieces.thin_boxes, wo);
       r.thin_pieces.thin = {};
+      r.thin_pieces.thin_boxes = {};
       clock.lap("thin_walls");
     }
     if (opt.face_caps) {

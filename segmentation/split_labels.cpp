@@ -1049,7 +1049,27 @@ ThinPieceResult split_thin_pieces(Volume<uint32_t>& labels, uint32_t* count, con
   // The pieces are thinner than 2 r by construction (the opening left them).
   res.thin.assign(size_t(*count) + 1, 1);
   res.thin[0] = 0;
-  for (uint32_t l = 1; l <= n; ++l) res.thin[l] = wall[l];
+  auto as_box = [](const LabelBox& b) {
+    return Box{b.z0, b.y0, b.x0, Shape{b.z1 - b.z0 + 1, b.y1 - b.y0 + 1, b.x1 - b.x0 + 1}};
+  };
+  for (uint32_t l = 1; l <= n; ++l) {
+    res.thin[l] = wall[l];
+    if (wall[l]) res.thin_boxes.push_back(as_box(box[l]));
+  }
+  // The pieces' boxes from their voxels, numbered as apply_pieces did.
+  const Shape S = labels.shape();
+  std::vector<LabelBox> added(size_t(*count - n) + 1);
+  uint32_t next = n;
+  for (uint32_t l = 1; l <= n; ++l) {
+    const Pieces& p = pieces[l];
+    if (p.count < 2) continue;
+    for (size_t v = 0; v < p.voxel.size(); ++v) {
+      const auto c = S.coords(p.voxel[v]);
+      added[size_t(next - n) + size_t(p.piece[v])].add_run(c[0], c[1], c[2], c[2]);
+    }
+    next += uint32_t(p.count - 1);
+  }
+  for (size_t a = 1; a < added.size(); ++a) res.thin_boxes.push_back(as_box(added[a]));
   return res;
 }
 

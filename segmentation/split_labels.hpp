@@ -239,8 +239,9 @@ struct ThinPieceResult {
   int64_t pieces_added = 0;  // new labels
   // Per label after the step (0..*count): 1 where no voxel lies deeper than
   // the radius (a piece, or a label thin throughout: a shell's wall, a
-  // chip); merge_thin_walls reads it.
+  // chip); merge_thin_walls reads it, and looks only inside their boxes.
   std::vector<uint8_t> thin;
+  std::vector<Box> thin_boxes;
 };
 
 ThinPieceResult split_thin_pieces(Volume<uint32_t>& labels, uint32_t* count, const ThinPieceOptions& opt);

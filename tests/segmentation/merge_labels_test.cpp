@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <climits>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -84,6 +87,23 @@ TEST(MergeLabels, ShapeMismatch) {
 // partial volume), and a ball (thick) meeting piece 2 across a bright
 // line. Grey: void 10000, wall and lines 30000 unless said; threshold
 // 20000, bright from 25000.
+Box whole(const Shape& s) { return Box{0, 0, 0, s}; }
+
+// The bounding boxes of labels 1..4 (the thin ones of Walls).
+std::vector<Box> boxes_of_walls(const Volume<uint32_t>& lab) {
+  std::vector<std::array<int64_t, 6>> b(5, {INT64_MAX, INT64_MAX, INT64_MAX, -1, -1, -1});
+  for (int64_t i = 0; i < lab.size(); ++i) {
+    const uint32_t l = lab[i];
+    if (l < 1 || l > 4) continue;
+    const auto c = lab.shape().coords(i);
+    for (int a = 0; a < 3; ++a) b[l][a] = std::min(b[l][a], c[a]), b[l][a + 3] = std::max(b[l][a + 3], c[a]);
+  }
+  std::vector<Box> out;
+  for (uint32_t l = 1; l <= 4; ++l)
+    out.push_back(Box{b[l][0], b[l][1], b[l][2], Shape{b[l][3] - b[l][0] + 1, b[l][4] - b[l][1] + 1, b[l][5] - b[l][2] + 1}});
+  return out;
+}
+
 struct Walls {
   Shape s{40, 40, 48};
   Volume<uint32_t> lab = Volume<uint32_t>::filled(s, 0u);
@@ -134,7 +154,7 @@ TEST(MergeThinWalls, AWallCutByTheWatershedIsOneLabelAgain) {
   const std::vector<uint8_t> thin = {0, 1, 1, 1, 1, 0};  // the ball is not thin
   WallMergeOptions o;
   o.floor = 100, o.bright = 125;  // grey 20000 and 25000 in the code's units
-  const auto r = merge_thin_walls(w.lab, w.grey, thin, o);
+  const auto r = merge_thin_walls(w.lab, w.grey, thin, {whole(w.s)}, o);
   EXPECT_EQ(r.thin_labels, 4);
   EXPECT_EQ(r.merges, 2);  // the three sectors, chained
   std::vector<int64_t> after(6, 0);
@@ -146,6 +166,12 @@ TEST(MergeThinWalls, AWallCutByTheWatershedIsOneLabelAgain) {
   EXPECT_GE(after[1], vol[1] + vol[2] + vol[3] + w.bowl_lines - 8) << w.bowl_lines << " line voxels";
   EXPECT_EQ(after[4], vol[4]) << "the wall beyond a dim contact stays apart";
   EXPECT_EQ(after[5], vol[5]) << "the ball stays apart (not thin)";
+  // Looking only inside the thin labels' boxes (as segment() does) changes nothing.
+  Walls w2;
+  const auto r2 = merge_thin_walls(w2.lab, w2.grey, thin, boxes_of_walls(w2.lab), o);
+  EXPECT_EQ(r2.merges, r.merges);
+  EXPECT_EQ(r2.touching_pairs, r.touching_pairs);
+  EXPECT_TRUE(std::equal(w2.lab.data(), w2.lab.data() + w2.lab.size(), w.lab.data()));
 }
 
 TEST(MergeThinWalls, ADimInterfaceOrTooSmallABrightOneKeepsPiecesApart) {
@@ -153,12 +179,12 @@ TEST(MergeThinWalls, ADimInterfaceOrTooSmallABrightOneKeepsPiecesApart) {
   const std::vector<uint8_t> thin = {0, 1, 1, 1, 1, 0};
   WallMergeOptions o;
   o.floor = 100, o.bright = 160;  // nothing is bright: no merge
-  EXPECT_EQ(merge_thin_walls(w.lab, w.grey, thin, o).merges, 0);
+  EXPECT_EQ(merge_thin_walls(w.lab, w.grey, thin, {whole(w.s)}, o).merges, 0);
   o.bright = 125, o.min_area = 1000;  // the cuts are ~3 x 8 voxels
-  EXPECT_EQ(merge_thin_walls(w.lab, w.grey, thin, o).merges, 0);
+  EXPECT_EQ(merge_thin_walls(w.lab, w.grey, thin, {whole(w.s)}, o).merges, 0);
   const std::vector<uint8_t> none = {0, 0, 0, 0, 0, 0};
   o.min_area = 9;
-  EXPECT_EQ(merge_thin_walls(w.lab, w.grey, none, o).merges, 0);
+  EXPECT_EQ(merge_thin_walls(w.lab, w.grey, none, {whole(w.s)}, o).merges, 0);
 }
 
 }  // namespace

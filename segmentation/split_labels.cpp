@@ -861,6 +861,7 @@ namespace {
 struct ThinPass {
   int64_t stride = 1;
   double radius = 3, min_size = 27, max_share = 0.2, max_contact = 0.2;
+  double min_size_at_face = 216;  // a piece touching a scan face: at least this many samples
   bool screen = false;  // stop at the first piece (its voxels are not listed)
 };
 
@@ -985,7 +986,7 @@ Pieces thin_pieces_one(const Volume<uint32_t>& labels, uint32_t l, const LabelBo
       contact += touches;
     }
     const double size = double(comp.size());
-    if (at_face || size < pass.min_size || size > pass.max_share * double(voxels) ||
+    if ((at_face && size < pass.min_size_at_face) || size < pass.min_size || size > pass.max_share * double(voxels) ||
         double(contact) >= pass.max_contact * size)
       continue;
     ++pieces;
@@ -1010,6 +1011,7 @@ ThinPieceResult split_thin_pieces(Volume<uint32_t>& labels, uint32_t* count, con
   const std::vector<LabelBox> box = label_boxes(labels, n);
   std::vector<Pieces> pieces(size_t(n) + 1);
   std::vector<uint8_t> wall(size_t(n) + 1, 0);
+  const double face_floor = 8 * opt.radius_vox * opt.radius_vox * opt.radius_vox;  // (2 r)^3
   int64_t tested = 0, passed = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : tested, passed)
   for (int64_t l = 1; l <= int64_t(n); ++l) {
@@ -1031,8 +1033,10 @@ ThinPieceResult split_thin_pieces(Volume<uint32_t>& labels, uint32_t* count, con
     ThinPass screen;
     screen.stride = 2, screen.radius = opt.radius_vox + 1, screen.screen = true;
     screen.min_size = std::max(4.0, double(vmin) / 24), screen.max_share = 0.5, screen.max_contact = 0.5;
+    screen.min_size_at_face = face_floor / 24;
     const Pieces sc = thin_pieces_one(labels, uint32_t(l), b, opt, screen);
     ThinPass full;
+    full.min_size_at_face = face_floor;
     full.radius = opt.radius_vox, full.min_size = double(vmin), full.max_share = opt.max_share,
     full.max_contact = opt.max_contact;
     if (sc.no_core) {  // thin throughout on the coarse grid: on the full one?

@@ -470,6 +470,39 @@ TEST(ThinPieces, AShellPressedOnTwoGrainsIsOneParticle) {
   }
 }
 
+TEST(ThinPieces, AWallTheFaceCutsIsCutOutWhenLargerThanASliver) {
+  // A ball (radius 12, centre x 20) and a plate 3 voxels thick (x 32..34)
+  // pressed on its apex and running out through the volume's face (y 47):
+  // one label, as a shell's wall the watershed gave to a grain. 1 428
+  // voxels, over (2 r)^3 = 216: it leaves the ball though it touches the
+  // face (a grain the face cuts thin leaves slivers of 70-90 voxels there,
+  // which stay: GrainsWithEdgesAndCutsStayWhole).
+  const int64_t n = 48;
+  auto lab = Volume<uint32_t>::filled(Shape{n, n, n}, 0u);
+  int64_t plate = 0;
+  for (int64_t k = 0; k < n; ++k)
+    for (int64_t j = 0; j < n; ++j)
+      for (int64_t i = 0; i < n; ++i) {
+        const double dz = double(k) - 24, dy = double(j) - 24, dx = double(i) - 20;
+        const bool in_plate = i >= 32 && i <= 34 && k >= 16 && k <= 32 && j >= 20;
+        if (dz * dz + dy * dy + dx * dx <= 144 || in_plate) lab(k, j, i) = 1;
+        plate += in_plate;
+      }
+  uint32_t count = 1;
+  const ThinPieceResult r = split_thin_pieces(lab, &count, ThinPieceOptions{});
+  EXPECT_EQ(r.split, 1);
+  ASSERT_EQ(count, 2u);
+  int64_t piece = 0, piece_in_plate = 0;
+  for (int64_t k = 0; k < n; ++k)
+    for (int64_t j = 0; j < n; ++j)
+      for (int64_t i = 0; i < n; ++i) {
+        piece += lab(k, j, i) == 2;
+        piece_in_plate += lab(k, j, i) == 2 && i >= 32;
+      }
+  EXPECT_EQ(piece, piece_in_plate);
+  EXPECT_GT(double(piece) / double(plate), 0.9) << piece << " of " << plate;
+}
+
 TEST(ThinPieces, BadRadiusIsAUsageError) {
   auto lab = ball_and_chip(48);
   uint32_t count = 1;

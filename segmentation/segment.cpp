@@ -731,7 +731,7 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                              "a label's voxels left by its opening with a ball of radius_vox (those within radius_vox "
                              "of a voxel deeper than radius_vox) form a thin piece, given a label of its own, where a "
                              "6-connected component holds >= max({}, min_piece_fraction x the label) voxels, <= {} of "
-                             "the label, touches no scan face unless it holds >= (2 radius_vox)^3 voxels, and < {} "
+                             "the label, touches no scan face unless it holds >= (3 radius_vox)^3 voxels, and < {} "
                              "of its voxels touch the opening "
                              "(split_labels.hpp split_thin_pieces)",
                              d.min_piece_vox, d.max_share, d.max_contact);

@@ -1011,7 +1011,7 @@ ThinPieceResult split_thin_pieces(Volume<uint32_t>& labels, uint32_t* count, con
   const std::vector<LabelBox> box = label_boxes(labels, n);
   std::vector<Pieces> pieces(size_t(n) + 1);
   std::vector<uint8_t> wall(size_t(n) + 1, 0);
-  const double face_floor = 8 * opt.radius_vox * opt.radius_vox * opt.radius_vox;  // (2 r)^3
+  const double face_floor = 27 * opt.radius_vox * opt.radius_vox * opt.radius_vox;  // (3 r)^3
   int64_t tested = 0, passed = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : tested, passed)
   for (int64_t l = 1; l <= int64_t(n); ++l) {

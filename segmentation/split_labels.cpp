@@ -861,7 +861,7 @@ namespace {
 struct ThinPass {
   int64_t stride = 1;
   double radius = 3, min_size = 27, max_share = 0.2, max_contact = 0.2;
-  double min_size_at_face = 216;  // a piece touching a scan face: at least this many samples
+  double min_size_at_face = 729;  // a piece touching a scan face: at least this many samples ((3 r)^3, set from r)
   bool screen = false;  // stop at the first piece (its voxels are not listed)
 };
 

@@ -432,7 +432,8 @@ static tg::app::Registrar reg{{"segment", 30,
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   sub->add_option("--bright-sigmas", o->seg.bright_sigmas,
-                  "...and at least this many noise sigmas below the solid's peak grey")
+                  "...and at least this many noise sigmas below the solid's peak grey (the merge repair keeps "
+                  "the first bound: it weighs a whole interface, which noise cannot dim)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   sub->add_option("--pore-shell", o->seg.pore_shell_vox,

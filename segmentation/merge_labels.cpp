@@ -19,9 +19,9 @@ namespace {
 // An interface's size in units (line voxels or faces): all of it, and its
 // bright part (grey evidence).
 struct Area {
-  int64_t all = 0, bright = 0;
+  int64_t all = 0, bright = 0, share = 0;  // share: bright and out of the grey's dim band
   Area& operator+=(const Area& o) {
-    all += o.all, bright += o.bright;
+    all += o.all, bright += o.bright, share += o.share;
     return *this;
   }
 };
@@ -93,6 +93,13 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
   uint32_t* L = labels.data();
   const uint8_t* m = solid.data();
   const uint8_t bright = std::max<uint8_t>(opt.bright_level, 1);
+  if (opt.grey && opt.grey->shape() != s) throw UsageError("merge: labels and grey differ in shape");
+  const uint8_t* G = opt.grey ? opt.grey->data() : nullptr;
+  // 0: dim; 1: bright; 2: bright and out of the grey's dim band.
+  auto brightness = [&](int64_t idx) -> int {
+    if (m[idx] < bright) return 0;
+    return G && G[idx] > opt.grey_dim_lo && G[idx] <= opt.grey_dim_hi ? 1 : 2;
+  };
   uint32_t maxl = 0;
 #pragma omp parallel for schedule(static) reduction(max : maxl)
   for (int64_t i = 0; i < n; ++i) maxl = std::max(maxl, L[i]);
@@ -119,14 +126,15 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
     // the map when the pair changes, not one lookup a voxel.
     uint64_t last_key = 0;
     Area pending;
-    auto count_pair = [&](uint64_t key, bool is_bright) {
+    auto count_pair = [&](uint64_t key, int level) {  // level as brightness()
       if (key != last_key) {
         if (pending.all) my_iface[last_key] += pending;
         last_key = key;
         pending = {};
       }
       ++pending.all;
-      pending.bright += is_bright;
+      pending.bright += level >= 1;
+      pending.share += level == 2;
     };
     // Row by row, in runs of one label: a run adds its length to the
     // label's volume; its voxels are looked at one by one only where that
@@ -151,7 +159,7 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
               uint32_t ls[3];
               if (neighbour_labels(labels, nb, k, j, i, idx, ls) == 2) {
                 const uint64_t key = pair_key(ls[0], ls[1]);
-                count_pair(key, m[idx] >= bright);
+                count_pair(key, brightness(idx));
                 my_two.emplace_back(idx, key);
               }
             }
@@ -162,12 +170,12 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
               const uint32_t by = up ? up[i] : 0, bz = back ? back[i] : 0;
               const bool x_other = i + 1 == i1 && i1 < s.nx && L[row + i1] != 0;
               if (!x_other && (by == 0 || by == a) && (bz == 0 || bz == a)) continue;
-              // A face is bright when both its voxels are.
+              // A face is as bright as the dimmer of its voxels.
               const int64_t idx = row + i;
-              const bool here = m[idx] >= bright;
-              if (x_other) count_pair(pair_key(a, L[row + i1]), here && m[idx + 1] >= bright);
-              if (by != 0 && by != a) count_pair(pair_key(a, by), here && m[idx + sy] >= bright);
-              if (bz != 0 && bz != a) count_pair(pair_key(a, bz), here && m[idx + sz] >= bright);
+              const int here = brightness(idx);
+              if (x_other) count_pair(pair_key(a, L[row + i1]), std::min(here, brightness(idx + 1)));
+              if (by != 0 && by != a) count_pair(pair_key(a, by), std::min(here, brightness(idx + sy)));
+              if (bz != 0 && bz != a) count_pair(pair_key(a, bz), std::min(here, brightness(idx + sz)));
             }
           }
           i0 = i1;
@@ -197,7 +205,7 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
     const uint32_t small = b, large = a;
     const double r = std::cbrt(3.0 * double(vol[small]) / (4.0 * std::numbers::pi));
     if (double(area.bright) < opt.ratio * std::numbers::pi * r * r) continue;
-    if (double(area.bright) < opt.min_bright_share * double(area.all)) continue;
+    if (double(area.share) < opt.min_bright_share * double(area.all)) continue;
     ++res.candidates;
     if (area.bright > best_area[small]) best_area[small] = area.bright, best[small] = large;
   }

@@ -60,6 +60,19 @@ struct MergeOptions {
   double ratio = 1.0;  // merge when interface >= ratio * pi r^2 (r: smaller label's equivalent radius)
   uint8_t bright_level = 1;  // interface voxels with a lower level in `solid` do not count (grey evidence)
   double min_bright_share = 0.5;  // and the bright part must be at least this share of the interface
+  // With `grey` (the scan's grey, any one-byte code of it, same shape): a
+  // voxel at bright_level or above whose grey g has grey_dim_lo < g <=
+  // grey_dim_hi counts dim for the share test all the same (the area test
+  // still counts it: a cut through a textured grain runs through its darker
+  // spots, and its area is what tells it from a contact). segment() sets
+  // the band where the grading's bright level sat under halfway from the
+  // threshold to the solid, capped 3 noise sigmas under a solid peak that a
+  // texture inside the grains widened: the grading then called a gap's
+  // partial-volume voxels bright, and the merge glued split halves back
+  // (blind_scene.py --grain-texture 0.1, R 12: 67 of 101 halves). Voxels
+  // the pore filling made bright (grey under the band) stay bright.
+  const Volume<uint8_t>* grey = nullptr;
+  uint8_t grey_dim_lo = 0, grey_dim_hi = 0;
   // false: the merged labels' voxels keep their old labels and `root` says
   // where each goes, for a caller that renumbers anyway (relabel_consecutive
   // takes it as its premap): one pass over the volume less.

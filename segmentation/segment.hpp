@@ -209,6 +209,7 @@ struct SegmentResult {
   PoreFilterResult pores;
   bool graded = false;          // grey evidence used (a grey scan and grey_evidence)
   uint16_t bright_value = 0;    // graded: voxels above this grey level are bright
+  uint16_t merge_bright_value = 0;  // the merge's share test's (GreyDecisions::merge_bright)
   double solid_noise_sigma = 0; // graded: the solid peak's noise sigma (threshold.hpp solid_peak)
   double dim_fraction = 0;      // graded: dim voxels / solid voxels, after the pore passes
   PoreFilterResult dim_pockets; // graded: the second pore pass (dim pockets enclosed by bright solid)
@@ -217,6 +218,7 @@ struct SegmentResult {
   uint32_t markers = 0;
   double buckets_per_unit = 0;  // watershed levels per distance unit actually used (see quantise_levels)
   MergeResult merge;
+  bool merge_dim_band = false;  // the merge read the grey's band (MergeOptions::grey)
   bool split_used = false;        // the split repair ran (a grey scan, a global threshold, split on)
   double smoothed_noise_sigma = 0;// the smoothed grey's noise sigma the depth is from, grey levels (split_labels.hpp)
   double smoothed_solid_sigma = 0;     // the smoothed solid peak's sigma
@@ -268,6 +270,10 @@ struct GreyDecisions {
   LocalThreshold local;  // ThresholdMethod::local only (segment() alone: it needs the volume)
   bool graded = false;
   uint16_t bright = 0;
+  // The merge's share test's bright level (grey evidence on): halfway from
+  // the threshold to the solid's mean, without the noise cap that may lower
+  // `bright` (>= it; = it where the grains differ in brightness).
+  uint16_t merge_bright = 0;
   double noise_sigma = 0;  // the solid peak's (graded only)
   // Split repair: the smoothed solid's noise sigma (from the sample slices'
   // histogram, smoothed_sample_histogram) and the depth it sets; 0: off.

@@ -23,6 +23,9 @@ drift 0. Factor levels (each varied alone around the middle):
   shells {0, 0.15, 0.3}: that share of the grains drawn as open shells, walls
   2-4 voxels thick (blind_scene.py --shell-frac; bioclasts of a carbonate
   sand: issue 19's real scan)
+  texture {0, 0.1, 0.15}: a texture inside every grain, attenuation x (1 + A g),
+  g correlated over 2 voxels (blind_scene.py --grain-texture; grains of
+  uneven density, as a real sand's)
   R {8, 12, 20, 40, 60} at sizes {96, 128, 192, 320, 448}^3 (>= ~40-60
   whole grains each; run once, not per --sizes entry)
 Seeds are 1..--seeds (or --seed-list); these were the development seeds;
@@ -65,11 +68,13 @@ REF = "/work/shared/peers/skimage/ref_pipeline.py"
 PY = "/usr/bin/python3"
 TMP = "/tmp"
 MIDDLE = {"gap": 1.0, "psf": 0.7, "cnr": 13.0, "pores": "1,3", "cupping": 0.0, "drift": 0.0, "corr": 0.0, "elong": 1.0,
-          "angular": 0.0, "contrast": "1,1", "shells": 0.0}
+          "angular": 0.0, "contrast": "1,1", "shells": 0.0,
+          "texture": 0.0}
 FACTORS = {"gap": [0.5, 1.0, 1.5, 2.5], "psf": [0.5, 0.7, 1.0, 1.5], "cnr": [5.0, 8.0, 13.0, 30.0],
            "pores": ["1,2", "2,4", "3,5"], "cupping": [0.0, 0.15, 0.3], "drift": [0.0, 2.0],
            "corr": [0.0, 0.7, 1.5], "elong": [1.0, 1.6, 2.0],
-           "angular": [0.0, 0.15, 0.3], "contrast": ["1,1", "0.85,1", "0.7,1"], "shells": [0.0, 0.15, 0.3]}
+           "angular": [0.0, 0.15, 0.3], "contrast": ["1,1", "0.85,1", "0.7,1"], "shells": [0.0, 0.15, 0.3],
+           "texture": [0.0, 0.1, 0.15]}
 SHORT = {"tomograin": "tg", "skimage": "sk"}
 R_SIZES = {8: 96, 12: 128, 20: 192, 40: 320, 60: 448}
 METRICS = ["f1", "halves_recovered", "halves", "shells_recovered", "shells", "shell_unlabelled", "over_segmented", "under_segmenting", "under_one_grain", "median_abs_dv",
@@ -95,7 +100,8 @@ def scene_name(size, R, s, seed):
             + (f"_e{s['elong']:g}" if s["elong"] != 1.0 else "")
             + (f"_a{s['angular']:g}" if s["angular"] != 0.0 else "")
             + (f"_gc{s['contrast'].split(',')[0]}" if s["contrast"] != "1,1" else "")
-            + (f"_sh{s['shells']:g}" if s["shells"] else "") + f"_s{seed}")
+            + (f"_sh{s['shells']:g}" if s["shells"] else "")
+            + (f"_tx{s['texture']:g}" if s["texture"] else "") + f"_s{seed}")
 
 
 def make_scene(a, prefix, size, R, s, seed):
@@ -105,6 +111,7 @@ def make_scene(a, prefix, size, R, s, seed):
            "--gap", str(s["gap"]), "--psf", str(s["psf"]), "--cnr", str(s["cnr"]), "--pores", s["pores"],
            "--cupping", str(s["cupping"]), "--drift", str(s["drift"]), "--noise-corr", str(s["corr"]), "--elongation", str(s["elong"]),
            "--angularity", str(s["angular"]), "--grain-contrast", s["contrast"], "--shell-frac", str(s["shells"]),
+           "--grain-texture", str(s["texture"]),
            "--seed", str(seed)]
     if a.skimage:
         cmd.append("--tif")
@@ -277,7 +284,7 @@ def main():
     ap.add_argument("--seed-list", help="explicit seeds, e.g. 1,2 (overrides --seeds)")
     ap.add_argument("--big-seeds", type=int, default=2, help="seeds used for scenes larger than 256^3 (2)")
     ap.add_argument("--sizes", default="192:20", help="middle scenes SIZE:R[,SIZE:R...] (192:20)")
-    ap.add_argument("--factors", help="only these factors, comma separated (gap,psf,cnr,pores,cupping,drift,corr,elong,angular,contrast,shells,R)")
+    ap.add_argument("--factors", help="only these factors, comma separated (gap,psf,cnr,pores,cupping,drift,corr,elong,angular,contrast,shells,texture,R)")
     ap.add_argument("--quick", action="store_true", help="middle setting only")
     ap.add_argument("--reuse", action="store_true", help="do not regenerate scenes that exist")
     ap.add_argument("--md-only", action="store_true", help="rewrite DIR/sweep.md from DIR/sweep.csv and the scenes, run nothing")

@@ -144,6 +144,26 @@ TEST(GreyEvidence, OnlyTheBrightPartOfAnInterfaceCounts) {
   EXPECT_EQ(merge_oversegmented(plain.lab, plain.levels, {1.0, 1}).merges, 1);    // no grey evidence
 }
 
+// The merge's dim band (MergeOptions::grey): graded bright by a level the
+// noise cap lowered, the line between two halves is dim for the merge where
+// its grey lies in the band; under the band (a pore the filling made
+// bright) or above it (a cut through solid) it stays bright.
+TEST(GreyEvidence, AGreyBandGradedBrightIsDimForTheMerge) {
+  for (const uint8_t line_grey : {100, 60, 200}) {  // in the band (80, 120], a filled pore, solid
+    Halves h(5);  // every voxel graded bright, the line too
+    auto grey = Volume<uint8_t>::filled(h.levels.shape(), 0);
+    for (int64_t i = 0; i < grey.size(); ++i)
+      if (h.levels[i]) grey[i] = h.lab[i] ? 200 : line_grey;
+    MergeOptions o;
+    o.bright_level = 2;
+    o.grey = &grey;
+    o.grey_dim_lo = 80, o.grey_dim_hi = 120;
+    EXPECT_EQ(merge_oversegmented(h.lab, h.levels, o).merges, line_grey == 100 ? 0 : 1) << int(line_grey);
+  }
+  Halves h(5);
+  EXPECT_EQ(merge_oversegmented(h.lab, h.levels, {1.0, 2}).merges, 1) << "without the band: the grading alone";
+}
+
 TEST(GreyEvidence, ANeckPieceJoinsOneGrainNotBoth) {
   // Balls A (label 1) and B (label 2) of radius 9 with a small piece P
   // (label 3) between them: P's interfaces with A and B both exceed its own

@@ -135,7 +135,8 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
   // to the mean solid then lies inside the dim grains, whose cuts would read
   // dim: the merge keeps the grading's level (blind_scene.py --grain-contrast
   // 0.7,1: 13 of 17 merges lost, F1 -0.004).
-  if (d.noise_within_grains) d.merge_bright = d.bright;
+  if (d.within_grain_sigma > 0 && d.smoothed_solid_sigma > kDimGrainsPeak * d.within_grain_sigma)
+    d.merge_bright = d.bright;
   if ((o.noise_specks || o.face_slivers) && o.threshold != ThresholdMethod::local) {
     // The void's noise above t (noise_specks.hpp): the void peak's mode and
     // the sigma of its lower side, the voxels a noisy scan clipped at 0

@@ -315,6 +315,13 @@ inline constexpr double kSplitDepthShare = 0.5;
 // replaces the smoothed solid peak's when the latter is over kWideSolidPeak
 // times as large and at least kWideSolidMinPairs pairs measured it.
 inline constexpr double kWideSolidPeak = 1.5;
+// Where it is over kDimGrainsPeak times as wide the grains differ in
+// brightness, and the merge's share test keeps the grey evidence's bright
+// level (GreyDecisions::merge_bright): halfway to the mean solid would lie
+// in the dim grains. A texture inside the grains widens it less: 1.1-1.8
+// (blind_scene.py --grain-texture 0.1-0.15, R 8-30), against 2.4-7.9 for
+// grain contrasts 0.85-1 and 0.7-1 (R 20).
+inline constexpr double kDimGrainsPeak = 2.0;
 inline constexpr int64_t kWideSolidMinPairs = 500;
 // The sigmas whose smoothed sample histograms decide_grey needs: the given
 // one, or the ladder.

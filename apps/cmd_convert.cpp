@@ -7,11 +7,13 @@
 #include "apps/command.hpp"
 #include "core/io/volume_io.hpp"
 #include "segmentation/normalise.hpp"
+#include "segmentation/rings.hpp"
 
 namespace cmd_convert {
 
 struct Opts {
-  std::string in, out, to, range = "auto", crop;
+  std::string in, out, to, range = "auto", crop, ring_axis;
+  bool rings = false;
   double voxel_um = 0;
   int compression = 0;
 };
@@ -118,6 +120,33 @@ tg::AnyVolume crop(tg::AnyVolume&& v, const tg::Box& b) {
       v);
 }
 
+// --rings: ring artefacts removed in place (segmentation/rings.hpp), what
+// was found printed.
+void remove_rings(tg::AnyVolume& v, const Opts& o) {
+  tg::RingOptions ro;
+  if (!o.ring_axis.empty()) {
+    const auto comma = o.ring_axis.find(',');
+    char* e1 = nullptr;
+    char* e2 = nullptr;
+    const std::string a = o.ring_axis.substr(0, comma), b = comma == std::string::npos ? "" : o.ring_axis.substr(comma + 1);
+    ro.centre_y = std::strtod(a.c_str(), &e1);
+    ro.centre_x = std::strtod(b.c_str(), &e2);
+    if (comma == std::string::npos || e1 == a.c_str() || *e1 || e2 == b.c_str() || *e2 || !(ro.centre_y >= 0) ||
+        !(ro.centre_x >= 0))
+      throw tg::UsageError("--ring-axis must be 'Y,X' (voxels from the slice's corner, >= 0), got '" + o.ring_axis + "'");
+  }
+  tg::RingResult r;
+  if (auto* u = std::get_if<tg::Volume<uint16_t>>(&v)) r = tg::remove_rings(*u, ro);
+  else if (auto* f = std::get_if<tg::Volume<float>>(&v)) r = tg::remove_rings(*f, ro);
+  else throw tg::UsageError("--rings works on uint16 or float32 scans (add --to uint16)");
+  if (r.rings == 0)
+    fmt::print("rings: none found ({} radius bins about ({:.1f}, {:.1f}) voxels; the volume is unchanged)\n", r.bins,
+               r.centre_y, r.centre_x);
+  else
+    fmt::print("rings: {} of {} radius bins about ({:.1f}, {:.1f}) voxels corrected, offsets up to {:.4g} grey levels\n",
+               r.rings, r.bins, r.centre_y, r.centre_x, r.max_offset);
+}
+
 int run_convert(const Opts& o) {
   tg::ReadOptions ro;
   ro.voxel_um = o.voxel_um;
@@ -135,6 +164,7 @@ int run_convert(const Opts& o) {
   }
   if (!o.to.empty()) v = convert_type(std::move(v), tg::parse_dtype(o.to), o);
   else if (o.range != "auto") throw tg::UsageError("--range needs --to uint16");
+  if (o.rings) remove_rings(v, o);
   tg::WriteOptions wo;
   wo.compression = o.compression;
   tg::write_volume(v, o.out, wo);
@@ -153,13 +183,18 @@ static tg::app::Registrar reg{{"convert", 20,
       "99.99 % percentiles of the grey values (printed). The output format follows its name;\n"
       "a name without extension or ending in '/' is a folder of slices. --crop keeps a box, its\n"
       "origin moved with it; only the box's slices are read (a part of a scan larger than memory).\n"
+      "--rings removes ring artefacts (a radius of every slice offset by a detector element's\n"
+      "gain): each radius bin's mean grey over all slices against the median of its neighbours,\n"
+      "removed where it stands over 8 standard errors out (segmentation/rings.hpp); the axis is\n"
+      "the slice's centre unless --ring-axis gives it.\n"
       "Output is written atomically: an error leaves nothing behind.\n\n"
       "Examples:\n"
       "  tomograin convert slices/ -o scan.h5 --voxel-um 12.3\n"
       "  tomograin convert recon.tif -o scan.h5 --to uint16 --range auto\n"
       "  tomograin convert recon.h5:/volume -o scan16.tif --to uint16 --range -0.2,1.5\n"
       "  tomograin convert scan.h5 -o scan.json          (raw + JSON sidecar)\n"
-      "  tomograin convert labels.h5 -o top.h5 --crop 0:600,:,:   (slices 0-599, origin kept)",
+      "  tomograin convert labels.h5 -o top.h5 --crop 0:600,:,:   (slices 0-599, origin kept)\n"
+      "  tomograin convert scan.h5 -o scan_norings.h5 --rings",
       [](CLI::App* sub) -> tg::app::Runner {
   auto o = std::make_shared<Opts>();
   sub->add_option("input", o->in, "Input volume (.tif/.tiff, folder, .json sidecar, .h5[:/dataset])")->required();
@@ -174,6 +209,10 @@ static tg::app::Registrar reg{{"convert", 20,
   sub->add_option("--compress", o->compression, "HDF5 deflate level 0-9 (0 = none)")
       ->check(CLI::Range(0, 9))
       ->capture_default_str();
+  sub->add_flag("--rings", o->rings,
+                "Remove ring artefacts about the rotation axis (after --to; uint16 or float32)");
+  sub->add_option("--ring-axis", o->ring_axis,
+                  "The rotation axis for --rings: Y,X in voxels from the slice's corner (default: its centre)");
   tg::app::add_voxel_option(sub, o->voxel_um);
   return [o] { return run_convert(*o); };
 }}};

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "apps/command.hpp"
 #include "core/io/volume_io.hpp"
@@ -12,8 +13,9 @@
 namespace cmd_convert {
 
 struct Opts {
-  std::string in, out, to, range = "auto", crop, ring_axis;
+  std::string in, out, to, range = "auto", crop;
   bool rings = false;
+  std::vector<double> ring_axis;  // --ring-axis Y,X (empty: the slice's centre)
   double voxel_um = 0;
   int compression = 0;
 };
@@ -125,15 +127,9 @@ tg::AnyVolume crop(tg::AnyVolume&& v, const tg::Box& b) {
 void remove_rings(tg::AnyVolume& v, const Opts& o) {
   tg::RingOptions ro;
   if (!o.ring_axis.empty()) {
-    const auto comma = o.ring_axis.find(',');
-    char* e1 = nullptr;
-    char* e2 = nullptr;
-    const std::string a = o.ring_axis.substr(0, comma), b = comma == std::string::npos ? "" : o.ring_axis.substr(comma + 1);
-    ro.centre_y = std::strtod(a.c_str(), &e1);
-    ro.centre_x = std::strtod(b.c_str(), &e2);
-    if (comma == std::string::npos || e1 == a.c_str() || *e1 || e2 == b.c_str() || *e2 || !(ro.centre_y >= 0) ||
-        !(ro.centre_x >= 0))
-      throw tg::UsageError("--ring-axis must be 'Y,X' (voxels from the slice's corner, >= 0), got '" + o.ring_axis + "'");
+    if (o.ring_axis.size() != 2 || !(o.ring_axis[0] >= 0) || !(o.ring_axis[1] >= 0))
+      throw tg::UsageError("--ring-axis takes Y,X (two numbers >= 0, voxels from the slice's corner)");
+    ro.centre_y = o.ring_axis[0], ro.centre_x = o.ring_axis[1];
   }
   tg::RingResult r;
   if (auto* u = std::get_if<tg::Volume<uint16_t>>(&v)) r = tg::remove_rings(*u, ro);
@@ -212,7 +208,9 @@ static tg::app::Registrar reg{{"convert", 20,
   sub->add_flag("--rings", o->rings,
                 "Remove ring artefacts about the rotation axis (after --to; uint16 or float32)");
   sub->add_option("--ring-axis", o->ring_axis,
-                  "The rotation axis for --rings: Y,X in voxels from the slice's corner (default: its centre)");
+                  "The rotation axis for --rings: Y,X in voxels from the slice's corner (default: its centre)")
+      ->delimiter(',')
+      ->expected(2);
   tg::app::add_voxel_option(sub, o->voxel_um);
   return [o] { return run_convert(*o); };
 }}};

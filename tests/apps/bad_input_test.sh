@@ -66,6 +66,8 @@ expect_bad "missing HDF5 dataset" "g.h5:/labels: no such dataset" -- "$TG" info 
 # is the labels, so segment and measure --grey name the grey one to use.
 /usr/bin/python3 -c "import h5py, numpy as np; f = h5py.File('both.h5', 'w'); f['scan'] = np.full((4, 8, 8), 1000, np.uint16); f['labels'] = np.ones((4, 8, 8), np.uint32)"
 expect_bad "labels where a scan is expected" "both.h5: its default dataset holds uint32 labels.*name it: both.h5:/scan" -- "$TG" segment both.h5 -o out.h5
+expect_bad "rings of a label volume" "--rings works on uint16 or float32" -- "$TG" convert both.h5:/labels -o out.h5 --rings
+expect_bad "ring axis not Y,X" "--ring-axis takes Y,X" -- "$TG" convert both.h5:/scan -o out.h5 --rings --ring-axis=-3,4
 expect_bad "labels as --grey" "both.h5: its default dataset holds uint32 labels.*both.h5:/scan" -- "$TG" measure both.h5 --grey both.h5 -o out.csv --voxel-um 10
 expect_bad "missing input" "none.tif: no such file" -- "$TG" convert none.tif -o out.h5
 expect_bad "unknown format" "unknown volume format" -- "$TG" convert good.tif -o out.xyz

@@ -4,7 +4,7 @@
 // about the rotation axis by the same grey offset: a ring. Through a grain
 // a dark ring reads as the dim sheet of a gap (the split repair cuts the
 // grain along it), a bright one bridges gaps (blind_scene.py --rings 0.2,0.3:
-// F1 0.93-0.95 against 0.99 without; bench/segmentation/RESULTS.md "Ring
+// F1 0.60-0.96 as scanned, 0.96-0.99 corrected; bench/segmentation/RESULTS.md "Ring
 // artefacts").
 //
 // Method (the radial-profile correction of reconstructed slices, as in
@@ -15,8 +15,8 @@
 // slice reconstructed about its middle). The mean grey M(b) of each bin over
 // all slices is smooth in b but for rings: the packing's own radial
 // structure varies over a grain's size, a ring over one bin. The offset of
-// bin b is M(b) minus the median of M over the `window` bins around it (a
-// median keeps the step at a field of view's edge); it is removed where it
+// bin b is M(b) minus the median of M over the `window` bins around it
+// (exact on a linear profile, blind to one bin's ring); it is removed where it
 // exceeds min_z standard errors of M(b) (sqrt(var / n) of the bin's grey
 // values), elsewhere left alone: on 8 ring-free blind scenes the largest
 // offset was 5.3 standard errors, on scenes with rings up to 260. Bins

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "core/errors.hpp"
 
@@ -69,7 +70,7 @@ RingResult remove_rings_impl(Volume<T>& v, const RingOptions& o) {
     std::nth_element(w.begin(), w.begin() + h, w.end());
     const double off = mean[size_t(b)] - w[size_t(h)];
     const double se = std::sqrt(var[size_t(b)] / count[size_t(b)]);
-    if (std::abs(off) > o.min_z * se && off != 0) {
+    if (std::abs(off) > o.min_z * se) {  // se > 0: the window holds no flat bin
       res.offset[size_t(b)] = off;
       ++res.rings;
       res.max_offset = std::max(res.max_offset, std::abs(off));

@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <numbers>
 #include <set>
 #include <vector>
 
@@ -162,6 +163,35 @@ TEST(GreyEvidence, AGreyBandGradedBrightIsDimForTheMerge) {
   }
   Halves h(5);
   EXPECT_EQ(merge_oversegmented(h.lab, h.levels, {1.0, 2}).merges, 1) << "without the band: the grading alone";
+  // 48 % of the line in the band: the share (52 %) passes, and the area test
+  // still counts the band's voxels (without them the area would fall under
+  // the half's cross-section: a textured grain's cut runs through its
+  // darker spots).
+  Halves part(5);
+  auto grey = Volume<uint8_t>::filled(part.levels.shape(), 0);
+  int64_t line = 0, in_band = 0;
+  for (int64_t i = 0; i < grey.size(); ++i) {
+    if (!part.levels[i]) continue;
+    if (part.lab[i]) {
+      grey[i] = 200;
+      continue;
+    }
+    const auto c = grey.shape().coords(i);
+    const bool band = (c[0] + c[1]) % 25 < 12;
+    grey[i] = band ? 100 : 200;
+    ++line, in_band += band;
+  }
+  int64_t half = 0;
+  for (int64_t i = 0; i < grey.size(); ++i) half += part.lab[i] == 3;
+  const double section = std::numbers::pi * std::pow(3.0 * double(half) / (4.0 * std::numbers::pi), 2.0 / 3.0);
+  ASSERT_GE(double(line - in_band), 0.5 * double(line));  // the share passes
+  ASSERT_LT(double(line - in_band), section);             // the banded area alone would not
+  ASSERT_GE(double(line), section);
+  MergeOptions o;
+  o.bright_level = 2;
+  o.grey = &grey;
+  o.grey_dim_lo = 80, o.grey_dim_hi = 120;
+  EXPECT_EQ(merge_oversegmented(part.lab, part.levels, o).merges, 1) << line << " line voxels, " << in_band << " in the band";
 }
 
 TEST(GreyEvidence, ANeckPieceJoinsOneGrainNotBoth) {

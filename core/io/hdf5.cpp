@@ -53,6 +53,15 @@ template <> hid_t native_type<uint8_t>() { return H5T_NATIVE_UINT8; }
 template <> hid_t native_type<uint16_t>() { return H5T_NATIVE_UINT16; }
 template <> hid_t native_type<uint32_t>() { return H5T_NATIVE_UINT32; }
 template <> hid_t native_type<float>() { return H5T_NATIVE_FLOAT; }
+hid_t native_of(DType t) {
+  switch (t) {
+    case DType::u8: return H5T_NATIVE_UINT8;
+    case DType::u16: return H5T_NATIVE_UINT16;
+    case DType::u32: return H5T_NATIVE_UINT32;
+    case DType::f32: return H5T_NATIVE_FLOAT;
+  }
+  return H5T_NATIVE_UINT8;
+}
 
 // Absolute dataset path. Built by append: GCC 12 warns falsely (-Wrestrict) on "/" + string.
 std::string norm(const std::string& ds) {
@@ -233,10 +242,7 @@ void H5Writer::create_volume(const std::string& dataset, DType type, const Shape
     H5Pset_shuffle(dcpl.get());
     H5Pset_deflate(dcpl.get(), static_cast<unsigned>(compression));
   }
-  const hid_t ftype = type == DType::u8    ? H5T_NATIVE_UINT8
-                      : type == DType::u16 ? H5T_NATIVE_UINT16
-                      : type == DType::u32 ? H5T_NATIVE_UINT32
-                                           : H5T_NATIVE_FLOAT;
+  const hid_t ftype = native_of(type);
   Handle lcpl = plist_h(lcpl_intermediate());
   Handle d = dset_h(H5Dcreate2(impl_->file.get(), ds.c_str(), ftype, space.get(), lcpl.get(), dcpl.get(), H5P_DEFAULT));
   if (!d.ok()) throw InputError(impl_->path + ":" + ds + ": cannot create dataset");
@@ -266,7 +272,9 @@ void H5Writer::write_slab(const std::string& dataset, int64_t z0, const Volume<T
   // when the slab is whole rows of chunks, as write_volume's are.
   Handle dcpl = plist_h(H5Dget_create_plist(d.get()));
   h5chunks::Layout layout{{dims[0], dims[1], dims[2]}, {0, 0, 0}, sizeof(T)};
-  if (dcpl.ok() && H5Pget_layout(dcpl.get()) == H5D_CHUNKED && H5Pget_chunk(dcpl.get(), 3, layout.chunk) == 3) {
+  Handle ft = type_h(H5Dget_type(d.get()));  // the stored bytes must be T's own (not a big-endian dataset)
+  if (dcpl.ok() && H5Pget_layout(dcpl.get()) == H5D_CHUNKED && H5Pget_chunk(dcpl.get(), 3, layout.chunk) == 3 &&
+      H5Tequal(ft.get(), native_type<T>()) > 0) {
     const h5chunks::Pipeline pipe = h5chunks::pipeline_of(dcpl.get());
     const int64_t cz = int64_t(layout.chunk[0]);
     if (pipe.usable && z0 % cz == 0 && (nz % cz == 0 || hsize_t(z0 + nz) == dims[0])) {
@@ -430,7 +438,10 @@ AnyVolume read_range(hid_t file, const std::string& path, const std::string& dat
   // (hdf5_chunks.hpp); any other layout or pipeline goes through libhdf5.
   h5chunks::Pipeline pipe;
   h5chunks::Layout layout;
-  if (rank == 3 && !labels_only) {
+  // The chunk path moves the stored bytes as they are: only where the stored
+  // type is this machine's own (a big-endian dataset goes through libhdf5's
+  // conversion, or its values would be read byte-swapped).
+  if (rank == 3 && !labels_only && H5Tequal(ft.get(), native_of(dt)) > 0) {
     Handle dcpl = plist_h(H5Dget_create_plist(d.get()));
     if (dcpl.ok() && H5Pget_layout(dcpl.get()) == H5D_CHUNKED && H5Pget_chunk(dcpl.get(), 3, layout.chunk) == 3) {
       pipe = h5chunks::pipeline_of(dcpl.get());

@@ -730,6 +730,42 @@ TEST_P(Hdf5ChunksFromLibhdf5, ReadsIncludingUnwrittenChunks) {
       for (int64_t i = 0; i < s.nx; ++i) ASSERT_EQ(back(k, j, i), k < 16 ? grey(k, j, i) : 0) << k << " " << j << " " << i;
 }
 
+// A big-endian dataset (older beamline files, Java and MATLAB writers):
+// its chunks' stored bytes are not this machine's values, so the chunk path
+// must not move them as they are (it did: a u16 scan read as noise).
+TEST_P(Hdf5ChunksFromLibhdf5, BigEndianDatasetsReadByValue) {
+  TempDir dir;
+  const Shape s{21, 40, 50};
+  const auto grey = runs_volume<uint16_t>(s, 8);
+  Volume<float> att(s);
+  for (int64_t i = 0; i < s.voxels(); ++i) att.data()[i] = 0.5f + 1e-4f * float(grey.data()[i]);
+  const std::string path = dir / "be.h5";
+  const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  const hsize_t dims[3] = {21, 40, 50}, chunk[3] = {8, 16, 32};
+  const hid_t sp = H5Screate_simple(3, dims, nullptr);
+  const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+  H5Pset_chunk(dcpl, 3, chunk);
+  if (GetParam()) {
+    H5Pset_shuffle(dcpl);
+    H5Pset_deflate(dcpl, 4);
+  }
+  const hid_t du = H5Dcreate2(f, "u16", H5T_STD_U16BE, sp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  const hid_t df = H5Dcreate2(f, "f32", H5T_IEEE_F32BE, sp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  ASSERT_GE(H5Dwrite(du, H5T_NATIVE_UINT16, H5S_ALL, H5S_ALL, H5P_DEFAULT, grey.data()), 0);
+  ASSERT_GE(H5Dwrite(df, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, att.data()), 0);
+  H5Sclose(sp);
+  H5Pclose(dcpl);
+  H5Dclose(du);
+  H5Dclose(df);
+  H5Fclose(f);
+  const auto bu = std::get<Volume<uint16_t>>(H5Reader(path).read_volume("/u16"));
+  EXPECT_EQ(std::memcmp(bu.data(), grey.data(), size_t(s.voxels()) * 2), 0);
+  const auto bf = std::get<Volume<float>>(H5Reader(path).read_volume("/f32"));
+  EXPECT_EQ(std::memcmp(bf.data(), att.data(), size_t(s.voxels()) * 4), 0);
+  const auto slab = std::get<Volume<uint16_t>>(H5Reader(path).read_slab("/u16", 8, 8));  // one whole row of chunks
+  EXPECT_EQ(std::memcmp(slab.data(), grey.data() + 8 * s.slice_voxels(), size_t(8 * s.slice_voxels()) * 2), 0);
+}
+
 TEST(Hdf5Chunks, AChunkThatDoesNotInflateIsAnInputErrorNamingIt) {
   TempDir dir;
   const Shape s{16, 20, 20};

@@ -7,7 +7,7 @@ not tuned on. Everything is in voxels; voxel (k,j,i) covers
 [k,k+1)x[j,j+1)x[i,i+1) in (z,y,x), so its centre is (k+0.5, j+0.5, i+0.5).
 
 Method
-  1. Packing: grain radii r ~ N(R, spread R) (clipped to [0.6R, 1.5R]) are
+  1. Packing: grain radii r ~ N(R, spread R) (clipped to [0.6R, 1.5R], --radius-range) are
      drawn until their volume is --phi of a periodic box one grain larger
      than the scan on each side; centres uniform at random; then collective
      overlap removal (each overlapping pair pushed apart along its axis by
@@ -133,7 +133,7 @@ def parse_rings(s):
 def parse_range(s):
     a, b = (float(v) for v in s.split(","))
     if not 0 < a <= b:
-        raise argparse.ArgumentTypeError("--pores is min,max with 0 < min <= max")
+        raise argparse.ArgumentTypeError("a range is LO,HI with 0 < LO <= HI")
     return a, b
 
 
@@ -150,7 +150,7 @@ def radial(shapes, idx, u):
     return shapes["r0"][idx] * bump / np.sqrt(q)
 
 
-def pack(rng, shape, R, spread, phi, pad_frac, pad, elongation=1.0, angularity=0.0):
+def pack(rng, shape, R, spread, phi, pad_frac, pad, elongation=1.0, angularity=0.0, radius_range=(0.6, 1.5)):
     """Centres (volume coordinates), shapes and a uniform draw u per grain
     of a dense random packing. The overlap of a pair is measured with each
     grain's radius along the line of centres (its shape, not a bounding
@@ -158,14 +158,14 @@ def pack(rng, shape, R, spread, phi, pad_frac, pad, elongation=1.0, angularity=0
     u < pad_frac (the ones to be split) get pad more reach while relaxing,
     room for their halves' drift. Facets (angularity > 0) are not seen by
     the packing: it places the unfaceted bodies."""
-    rmax = 1.5 * R
+    rmax = radius_range[1] * R
     margin = rmax * 1.1 * elongation ** (2 / 3) + 2.0 if elongation != 1.0 else rmax + 2.0
     L = np.array(shape, float) + 2 * margin
     target = phi * float(np.prod(L))
     radii = []
     vol = 0.0
     while vol < target:
-        r = float(np.clip(rng.normal(R, spread * R), 0.6 * R, rmax))
+        r = float(np.clip(rng.normal(R, spread * R), radius_range[0] * R, rmax))
         radii.append(r)
         vol += 4.0 / 3.0 * math.pi * r ** 3
     r = np.array(radii)
@@ -331,7 +331,7 @@ def place_pores(rng, g, planes, a):
 def build(rng, a, shape):
     split_pad = a.drift / 2.0
     centres, shapes, kinds, pstats = pack(rng, shape, a.radius, a.spread, a.phi, a.split_frac, split_pad, a.elongation,
-                                          a.angularity)
+                                          a.angularity, a.radius_range)
     hi = np.array(shape, float)
     particles = []
     gid = 0
@@ -472,6 +472,9 @@ def main(argv=None):
     ap.add_argument("--size", type=parse_size, default=(192, 192, 192), help="scan size, voxels: N or nz,ny,nx (192)")
     ap.add_argument("--radius", type=float, default=20.0, help="mean grain radius, voxels (20)")
     ap.add_argument("--spread", type=float, default=0.12, help="relative standard deviation of the grain radii (0.12)")
+    ap.add_argument("--radius-range", type=parse_range, default=(0.6, 1.5),
+                    help="grain radii clipped to [LO R, HI R] (0.6,1.5; e.g. --spread 0.5 --radius-range 0.3,2 "
+                         "for a crushed sand's wide size distribution)")
     ap.add_argument("--elongation", type=float, default=1.0,
                     help="long axis over the other two of every grain, same volume (1.0: near-spheres)")
     ap.add_argument("--angularity", type=float, default=0.0,

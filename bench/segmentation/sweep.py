@@ -26,6 +26,9 @@ drift 0. Factor levels (each varied alone around the middle):
   texture {0, 0.1, 0.15}: a texture inside every grain, attenuation x (1 + A g),
   g correlated over 2 voxels (blind_scene.py --grain-texture; grains of
   uneven density, as a real sand's)
+  spread {0.12 in 0.6-1.5 R, 0.3 in 0.4-1.8 R, 0.5 in 0.3-2 R}: the grain
+  radii's relative sigma and their clip (blind_scene.py --spread,
+  --radius-range; a crushed sand's wide sizes, segmented with the mean R)
   R {8, 12, 20, 40, 60} at sizes {96, 128, 192, 320, 448}^3 (>= ~40-60
   whole grains each; run once, not per --sizes entry)
 Seeds are 1..--seeds (or --seed-list); these were the development seeds;
@@ -69,12 +72,14 @@ PY = "/usr/bin/python3"
 TMP = "/tmp"
 MIDDLE = {"gap": 1.0, "psf": 0.7, "cnr": 13.0, "pores": "1,3", "cupping": 0.0, "drift": 0.0, "corr": 0.0, "elong": 1.0,
           "angular": 0.0, "contrast": "1,1", "shells": 0.0,
-          "texture": 0.0}
+          "texture": 0.0, "spread": "0.12,0.6,1.5"}
 FACTORS = {"gap": [0.5, 1.0, 1.5, 2.5], "psf": [0.5, 0.7, 1.0, 1.5], "cnr": [5.0, 8.0, 13.0, 30.0],
            "pores": ["1,2", "2,4", "3,5"], "cupping": [0.0, 0.15, 0.3], "drift": [0.0, 2.0],
            "corr": [0.0, 0.7, 1.5], "elong": [1.0, 1.6, 2.0],
            "angular": [0.0, 0.15, 0.3], "contrast": ["1,1", "0.85,1", "0.7,1"], "shells": [0.0, 0.15, 0.3],
-           "texture": [0.0, 0.1, 0.15]}
+           "texture": [0.0, 0.1, 0.15],
+           # radius spread (relative sigma) and its clip (x R): a crushed sand's wide sizes
+           "spread": ["0.12,0.6,1.5", "0.3,0.4,1.8", "0.5,0.3,2"]}
 SHORT = {"tomograin": "tg", "skimage": "sk"}
 R_SIZES = {8: 96, 12: 128, 20: 192, 40: 320, 60: 448}
 METRICS = ["f1", "halves_recovered", "halves", "shells_recovered", "shells", "shell_unlabelled", "over_segmented", "under_segmenting", "under_one_grain", "median_abs_dv",
@@ -101,7 +106,8 @@ def scene_name(size, R, s, seed):
             + (f"_a{s['angular']:g}" if s["angular"] != 0.0 else "")
             + (f"_gc{s['contrast'].split(',')[0]}" if s["contrast"] != "1,1" else "")
             + (f"_sh{s['shells']:g}" if s["shells"] else "")
-            + (f"_tx{s['texture']:g}" if s["texture"] else "") + f"_s{seed}")
+            + (f"_tx{s['texture']:g}" if s["texture"] else "")
+            + (f"_sp{s['spread'].split(',')[0]}" if s["spread"] != MIDDLE["spread"] else "") + f"_s{seed}")
 
 
 def make_scene(a, prefix, size, R, s, seed):
@@ -112,6 +118,7 @@ def make_scene(a, prefix, size, R, s, seed):
            "--cupping", str(s["cupping"]), "--drift", str(s["drift"]), "--noise-corr", str(s["corr"]), "--elongation", str(s["elong"]),
            "--angularity", str(s["angular"]), "--grain-contrast", s["contrast"], "--shell-frac", str(s["shells"]),
            "--grain-texture", str(s["texture"]),
+           "--spread", s["spread"].split(",")[0], "--radius-range", ",".join(s["spread"].split(",")[1:]),
            "--seed", str(seed)]
     if a.skimage:
         cmd.append("--tif")
@@ -284,7 +291,7 @@ def main():
     ap.add_argument("--seed-list", help="explicit seeds, e.g. 1,2 (overrides --seeds)")
     ap.add_argument("--big-seeds", type=int, default=2, help="seeds used for scenes larger than 256^3 (2)")
     ap.add_argument("--sizes", default="192:20", help="middle scenes SIZE:R[,SIZE:R...] (192:20)")
-    ap.add_argument("--factors", help="only these factors, comma separated (gap,psf,cnr,pores,cupping,drift,corr,elong,angular,contrast,shells,texture,R)")
+    ap.add_argument("--factors", help="only these factors, comma separated (gap,psf,cnr,pores,cupping,drift,corr,elong,angular,contrast,shells,texture,spread,R)")
     ap.add_argument("--quick", action="store_true", help="middle setting only")
     ap.add_argument("--reuse", action="store_true", help="do not regenerate scenes that exist")
     ap.add_argument("--md-only", action="store_true", help="rewrite DIR/sweep.md from DIR/sweep.csv and the scenes, run nothing")

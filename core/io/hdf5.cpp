@@ -388,6 +388,38 @@ std::vector<std::string> H5Reader::datasets() const {
 
 namespace {
 
+// A volume's (z, y, x) in a dataset's dimensions: rank 3, one slice (rank
+// 2), or up to 5 dimensions whose extra ones are 1, in front or behind
+// (ilastik exports (z, y, x, c), some viewers (t, z, y, x)): z is dimension
+// `lead` (-1 for a single slice of rank 2).
+struct VolumeAxes {
+  hsize_t zyx[3] = {1, 1, 1};
+  int rank = 3;
+  int lead = 0;
+};
+VolumeAxes volume_axes(const std::vector<hsize_t>& d, const std::string& where) {
+  VolumeAxes a;
+  a.rank = int(d.size());
+  auto dims_str = [&] {
+    std::string t;
+    for (const hsize_t v : d) t += (t.empty() ? "" : ", ") + std::to_string(v);
+    return "(" + t + ")";
+  };
+  if (a.rank == 2) {
+    a.lead = -1, a.zyx[1] = d[0], a.zyx[2] = d[1];
+    return a;
+  }
+  int lo = 0, hi = a.rank;  // [lo, hi): the dimensions left
+  while (hi - lo > 3 && d[size_t(lo)] == 1) ++lo;
+  while (hi - lo > 3 && d[size_t(hi - 1)] == 1) --hi;
+  if (a.rank < 2 || a.rank > 5 || hi - lo != 3)
+    throw InputError(where + ": dataset has dimensions " + dims_str() +
+                     ", expected (z, y, x) (a single slice (y, x), or extra dimensions of 1 around them)");
+  a.lead = lo;
+  for (int k = 0; k < 3; ++k) a.zyx[k] = d[size_t(lo + k)];
+  return a;
+}
+
 // Slices [z0, z0 + nz) of a dataset (nz < 0: all of them).
 AnyVolume read_range(hid_t file, const std::string& path, const std::string& dataset, int64_t z0, int64_t nz,
                      bool progress, AnyVolume* reuse = nullptr) {
@@ -411,9 +443,10 @@ AnyVolume read_range(hid_t file, const std::string& path, const std::string& dat
   Handle sp = space_h(H5Dget_space(d.get()));
   const int rank = H5Sget_simple_extent_ndims(sp.get());
   check_chunk_layout(d.get(), sp.get(), where, false);  // the chunk sizes below, where libhdf5 reads
-  if (rank != 3 && rank != 2) throw InputError(where + ": dataset has rank " + std::to_string(rank) + ", expected 3 (z, y, x)");
-  hsize_t dims[3] = {1, 1, 1};
-  H5Sget_simple_extent_dims(sp.get(), rank == 3 ? dims : dims + 1, nullptr);
+  std::vector<hsize_t> all(size_t(std::max(0, rank)));
+  H5Sget_simple_extent_dims(sp.get(), all.data(), nullptr);
+  const VolumeAxes axes = volume_axes(all, where);
+  const hsize_t* dims = axes.zyx;
   const Shape whole{static_cast<int64_t>(dims[0]), static_cast<int64_t>(dims[1]), static_cast<int64_t>(dims[2])};
   if (whole.empty()) throw InputError(where + ": dataset is empty " + whole.str());
   if (nz < 0) z0 = 0, nz = whole.nz;
@@ -473,11 +506,15 @@ AnyVolume read_range(hid_t file, const std::string& path, const std::string& dat
               nullptr);
         const hsize_t step = 16;
         for (hsize_t k0 = 0; k0 < static_cast<hsize_t>(shape.nz); k0 += step) {
-          hsize_t start[3] = {hsize_t(z0) + k0, 0, 0};
           hsize_t count[3] = {std::min<hsize_t>(step, shape.nz - k0), dims[1], dims[2]};
           Handle fsp = space_h(H5Dget_space(d.get()));
-          if (rank == 3) H5Sselect_hyperslab(fsp.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
-          Handle msp = space_h(H5Screate_simple(rank, rank == 3 ? count : count + 1, nullptr));
+          if (axes.lead >= 0) {  // z at dimension lead; the dimensions of 1 around it: index 0
+            std::vector<hsize_t> fstart(size_t(rank), 0), fcount(size_t(rank), 1);
+            fstart[size_t(axes.lead)] = hsize_t(z0) + k0;
+            for (int a = 0; a < 3; ++a) fcount[size_t(axes.lead + a)] = count[a];
+            H5Sselect_hyperslab(fsp.get(), H5S_SELECT_SET, fstart.data(), nullptr, fcount.data(), nullptr);
+          }
+          Handle msp = space_h(H5Screate_simple(3, count, nullptr));
           if (H5Dread(d.get(), native_type<T>(), msp.get(), fsp.get(), dxpl.get(),
                       v.data() + static_cast<int64_t>(k0) * shape.slice_voxels()) < 0)
             throw InputError(where + (labels_only ? ": a value outside 0..4294967295 (a signed or 64-bit integer "
@@ -524,11 +561,8 @@ Shape H5Reader::shape(const std::string& dataset) const {
   const std::string ds = norm(dataset);
   const std::string where = impl_->path + ":" + ds;
   if (!has(ds)) throw InputError(where + ": no such dataset");
-  const std::vector<hsize_t> d = dataset_dims(impl_->file.get(), ds, where);
-  if (d.size() != 3 && d.size() != 2)
-    throw InputError(where + ": dataset has rank " + std::to_string(d.size()) + ", expected 3 (z, y, x)");
-  if (d.size() == 2) return Shape{1, static_cast<int64_t>(d[0]), static_cast<int64_t>(d[1])};
-  return Shape{static_cast<int64_t>(d[0]), static_cast<int64_t>(d[1]), static_cast<int64_t>(d[2])};
+  const VolumeAxes a = volume_axes(dataset_dims(impl_->file.get(), ds, where), where);
+  return Shape{static_cast<int64_t>(a.zyx[0]), static_cast<int64_t>(a.zyx[1]), static_cast<int64_t>(a.zyx[2])};
 }
 
 int H5Reader::rank(const std::string& dataset) const {

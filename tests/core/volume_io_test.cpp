@@ -197,6 +197,43 @@ TEST(VolumeIO, HDF5OnlyThreeDimensionalDatasetIsTheDefault) {
   expect_same(v, read_volume(d / "two.h5:/exchange/dark"));
 }
 
+// Volumes with extra dimensions of 1 (ilastik's (z, y, x, c) export, a
+// (t, z, y, x) series of one time point) read as (z, y, x); any other
+// extra extent is an error naming the dimensions.
+TEST(VolumeIO, HDF5ExtraDimensionsOfOneAroundAVolume) {
+  TempDir d;
+  const Shape s{5, 6, 7};
+  const auto v = random_volume<uint16_t>(s, 3);
+  const std::string file = d / "axes.h5";
+  const hid_t f = H5Fcreate(file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  auto put = [&](const char* name, std::vector<hsize_t> dims, hid_t type) {
+    const hid_t sp = H5Screate_simple(int(dims.size()), dims.data(), nullptr);
+    const hid_t ds = H5Dcreate2(f, name, type, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (hsize_t(s.voxels()) == [&] { hsize_t n = 1; for (hsize_t x : dims) n *= x; return n; }())
+      H5Dwrite(ds, H5T_NATIVE_UINT16, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+    H5Dclose(ds);
+    H5Sclose(sp);
+  };
+  put("tzyx", {1, 5, 6, 7}, H5T_NATIVE_UINT16);
+  put("zyxc", {5, 6, 7, 1}, H5T_NATIVE_UINT16);
+  put("tzyxc_labels", {1, 5, 6, 7, 1}, H5T_STD_I64LE);  // signed integers: labels, read as u32
+  put("two_channels", {5, 6, 7, 2}, H5T_NATIVE_UINT16);
+  H5Fclose(f);
+  expect_same(v, read_volume(file + ":/tzyx"));
+  expect_same(v, read_volume(file + ":/zyxc"));
+  EXPECT_EQ(H5Reader(file).shape("/zyxc"), s);
+  const auto labels = std::get<Volume<uint32_t>>(H5Reader(file).read_volume("/tzyxc_labels"));
+  for (int64_t i = 0; i < s.voxels(); ++i) ASSERT_EQ(labels.data()[i], uint32_t(v.data()[i])) << i;
+  const auto slab = std::get<Volume<uint16_t>>(H5Reader(file).read_slab("/zyxc", 2, 3));
+  for (int64_t i = 0; i < slab.size(); ++i) ASSERT_EQ(slab.data()[i], v.data()[2 * s.slice_voxels() + i]) << i;
+  try {
+    read_volume(file + ":/two_channels");
+    FAIL() << "two channels are not one volume";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("(5, 6, 7, 2)"), std::string::npos) << e.what();
+  }
+}
+
 // Slabs of z written out of order into one dataset, read back whole and as
 // slabs (origin moved to the slab's first slice); out-of-range slabs are errors.
 TEST(VolumeIO, HDF5SlabsWriteAndRead) {

@@ -387,19 +387,37 @@ int64_t absorbed_piece(size_t a, const LineageRow& pr, int64_t after, const std:
 // The volume-loss rule's limit (track.hpp step 5): median + loss_outlier_sigmas x 1.4826 MAD of
 // the relative loss 1 - V(child) / V(a) over the whole grains clear of the faces with one child,
 // at least loss_floor_fraction; infinite (the rule off) with fewer than kMinLossSample of them or
-// loss_outlier_sigmas = 0.
-double whole_grain_loss_limit(const std::vector<LineageRow>& prev, const std::vector<LineageRow>& rows,
-                              const std::vector<std::vector<int32_t>>& kids, const std::vector<char>& whole,
-                              const TrackOptions& o) {
+// loss_outlier_sigmas = 0. A grain smaller than the sample's median r_eq (r_ref) has its loss
+// weighed by (r_eq / r_ref)^loss_size_power, in the sample and in the test (LossLimit::scaled):
+// the voxels a grain's label gains and loses from stage to stage lie on its surface, a share of
+// its volume that grows as the grain gets smaller (measured: about as 1 / r_eq^2 on segmented
+// wide gradings; track.hpp step 5).
+struct LossLimit {
+  double limit = std::numeric_limits<double>::infinity();
+  double r_ref = 0;
+  double power = 0;
+  // A grain's relative loss, weighed for its size, to compare with `limit`.
+  double scaled(double loss, double volume_vox) const {
+    return r_ref > 0 ? loss * std::min(1.0, std::pow(r_eq(volume_vox) / r_ref, power)) : loss;
+  }
+};
+
+LossLimit whole_grain_loss_limit(const std::vector<LineageRow>& prev, const std::vector<LineageRow>& rows,
+                                 const std::vector<std::vector<int32_t>>& kids, const std::vector<char>& whole,
+                                 const TrackOptions& o) {
   constexpr size_t kMinLossSample = 30;
-  std::vector<double> loss;
+  std::vector<double> loss, volume, radius;
   for (size_t a = 0; a < prev.size() && a < whole.size(); ++a) {
     if (!whole[a] || kids[a].size() != 1) continue;
     const LineageRow& c = rows[static_cast<size_t>(kids[a][0])];
     if (prev[a].touches_border || c.touches_border || prev[a].volume_vox <= 0) continue;
-    loss.push_back(1 - static_cast<double>(c.volume_vox) / static_cast<double>(prev[a].volume_vox));
+    const auto v = static_cast<double>(prev[a].volume_vox);
+    loss.push_back(1 - static_cast<double>(c.volume_vox) / v);
+    volume.push_back(v);
+    radius.push_back(r_eq(v));
   }
-  if (!(o.loss_outlier_sigmas > 0) || loss.size() < kMinLossSample) return std::numeric_limits<double>::infinity();
+  LossLimit L;
+  if (!(o.loss_outlier_sigmas > 0) || loss.size() < kMinLossSample) return L;
   auto median = [](std::vector<double> v) {
     const size_t h = v.size() / 2;
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(h), v.end());
@@ -407,10 +425,14 @@ double whole_grain_loss_limit(const std::vector<LineageRow>& prev, const std::ve
     if (v.size() % 2) return hi;
     return 0.5 * (hi + *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(h)));
   };
+  L.r_ref = median(radius);
+  L.power = o.loss_size_power;
+  for (size_t i = 0; i < loss.size(); ++i) loss[i] = L.scaled(loss[i], volume[i]);
   const double m = median(loss);
   std::vector<double> dev(loss.size());
   for (size_t i = 0; i < loss.size(); ++i) dev[i] = std::abs(loss[i] - m);
-  return std::max(o.loss_floor_fraction, m + o.loss_outlier_sigmas * 1.4826 * median(dev));
+  L.limit = std::max(o.loss_floor_fraction, m + o.loss_outlier_sigmas * 1.4826 * median(dev));
+  return L;
 }
 }  // namespace
 
@@ -440,7 +462,7 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
     r.displacement_vox = {kNaN, kNaN, kNaN};
     r.quality = 0;
   }
-  const double loss_limit = whole_grain_loss_limit(prev, rows, kids, ev.whole, o);
+  const LossLimit loss_limit = whole_grain_loss_limit(prev, rows, kids, ev.whole, o);
   for (size_t a = 0; a < prev.size(); ++a) {
     const auto& k = kids[a];
     if (k.empty()) continue;
@@ -477,7 +499,8 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
           first = Event::chipping, absorbed = x.voxels;
       }
       // A whole grain that lost more than the stage's whole grains do, its chips unseen (track.hpp step 5).
-      if (first == Event::intact && !cut && a < ev.whole.size() && ev.whole[a] && 1 - kept > loss_limit)
+      if (first == Event::intact && !cut && a < ev.whole.size() && ev.whole[a] &&
+          loss_limit.scaled(1 - kept, static_cast<double>(pr.volume_vox)) > loss_limit.limit)
         first = Event::chipping;
     } else if (const int64_t t = absorbed_piece(a, pr, after, k, parent, prev, kids_volume, piece, o); t > 0) {
       // A piece of a break in a neighbour's label (track.hpp step 5): one more child.
@@ -498,8 +521,9 @@ void link_stage(const std::vector<LineageRow>& prev, std::vector<LineageRow>& ro
       // Pieces that the parent covers less than half of, beside a body that kept its volume
       // within a share of the stage's limit (track.hpp step 5): not chips, but particles first
       // seen now.
-      bool weak = std::isfinite(loss_limit) && !ev.coverage.empty() && !pr.touches_border &&
-                  1 - body / static_cast<double>(pr.volume_vox) <= o.weak_piece_loss_share * loss_limit;
+      bool weak = std::isfinite(loss_limit.limit) && !ev.coverage.empty() && !pr.touches_border &&
+                  loss_limit.scaled(1 - body / static_cast<double>(pr.volume_vox), static_cast<double>(pr.volume_vox)) <=
+                      o.weak_piece_loss_share * loss_limit.limit;
       for (size_t n = 1; n < k.size() && weak; ++n) weak = ev.coverage[k[n]] < o.weak_piece_coverage;
       if (weak) first = Event::intact, rest = Event::new_particle;
       // A parent cut by the faces whose smaller pieces they cut too (track.hpp step 5): by count.

@@ -120,7 +120,17 @@
 //                          MAD of that loss over the stage's whole one-child
 //                          grains clear of the faces (at least 30 of them,
 //                          else the rule is off), and loss_floor_fraction
-//                          (1.5 %). A chip under the threshold, glued to its
+//                          (1.5 %); a grain smaller than the sample's median
+//                          r_eq (r_ref) has its loss weighed by (r_eq /
+//                          r_ref)^loss_size_power (2), in the sample and the
+//                          test: its label count varies more from stage to
+//                          stage (segmented wide grading, another generator's
+//                          R 12 series, 1.4826 MAD of the loss at stage 4:
+//                          9.3 % under r_eq 4, 3.9 % at 4-6, 2.2 % at 8-11,
+//                          0.95 % at 11-14, 0.69 % above), which one limit for
+//                          all sizes read as chips of the small grains
+//                          (bench/track/RESULTS.md "Wide gradings").
+//                          A chip under the threshold, glued to its
 //                          body or inside a neighbour's label by less than
 //                          the threshold above leaves no piece to see, but
 //                          its grain's label shrinks by it; the limit is the
@@ -351,6 +361,10 @@ struct TrackOptions {
   // (median + this many robust standard deviations of their relative loss) is chipping; 0: off
   double loss_outlier_sigmas = 4.0;
   double loss_floor_fraction = 0.015;  // ... and at least this share of its volume
+  // ... a grain smaller than the stage's median r_eq has its relative loss weighed by
+  // (r_eq / median)^this, in the statistics and the test: a small grain's label count
+  // varies more from stage to stage (2 chosen on wide gradings; 0: one limit for all sizes)
+  double loss_size_power = 2.0;
   // step 5: a chipping whose every piece its parent covers less than this share of (match
   // quality) needs its body to lose more than weak_piece_loss_share of the same limit, else
   // the pieces are `new`

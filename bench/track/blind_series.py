@@ -162,6 +162,8 @@ def main(argv=None):
     ap.add_argument("--size", type=bs.parse_size, default=(192, 192, 192), help="scan window, voxels: N or nz,ny,nx (192)")
     ap.add_argument("--radius", type=float, default=16.0, help="mean grain radius, voxels (16)")
     ap.add_argument("--spread", type=float, default=0.12, help="relative standard deviation of the radii (0.12)")
+    ap.add_argument("--radius-range", type=bs.parse_range, default=(0.6, 1.5),
+                    help="radii clipped to [LO R, HI R] (0.6,1.5; with a larger --spread: a wide grading)")
     ap.add_argument("--phi", type=float, default=0.58, help="solid fraction of the final packing (0.58)")
     ap.add_argument("--strains", default="0,0.044,0.0712,0.1128,0.1548", help="axial strain per stage (the study's)")
     ap.add_argument("--broken", default="0,0.2,0.4,0.55,0.7", help="fraction of grains broken by each stage (nested)")
@@ -197,7 +199,7 @@ def main(argv=None):
     # the packing of the final, shortest specimen over the window: at earlier
     # stages the distances from the fixed platen are longer, so the window
     # shows less of it and the rest enters from the moving end
-    centres, shapes, u, _ = bs.pack(rng, shape, a.radius, a.spread, a.phi, 0.0, 0.0)
+    centres, shapes, u, _ = bs.pack(rng, shape, a.radius, a.spread, a.phi, 0.0, 0.0, radius_range=a.radius_range)
     z_fixed = float(nz) if a.platen == "bottom" else 0.0
     grains = []
     for k in range(centres.shape[0]):

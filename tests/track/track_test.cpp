@@ -901,6 +901,36 @@ TEST(Track, WholeGrainLosingMoreThanTheStagesGrainsDoIsChipping) {
   EXPECT_EQ(f[41], Event::chipping);
 }
 
+// The volume-loss rule weighs a small grain's loss by (r_eq / r_ref)^2 (track.hpp step 5): 40 whole
+// grains of 5 000 voxels keep their volume (median r_eq r_ref = 10.61 voxels, the limit the 1.5 %
+// floor) beside one of 625 voxels (r_eq 5.30, half: weight 1/4). By hand: losing 4 % (25 voxels)
+// weighs 1 %, intact; losing 8 % weighs 2 %, chipping; with loss_size_power 0 (one limit for all
+// sizes) 4 % is chipping. A grain larger than r_ref is not weighed up: a 40 000-voxel grain losing
+// 1.4 % is intact at any power.
+TEST(Track, SmallGrainsLossIsWeighedForItsSize) {
+  auto classify = [](int64_t v0, int64_t v1, double power) {
+    std::vector<LineageRow> prev(41), rows(41);
+    std::vector<int32_t> parent(41);
+    for (size_t i = 0; i < 41; ++i) {
+      prev[i].label = uint32_t(i + 1), prev[i].grain = uint32_t(i + 1), prev[i].volume_vox = i < 40 ? 5000 : v0;
+      rows[i].label = uint32_t(i + 101), rows[i].volume_vox = i < 40 ? 5000 : v1;
+      parent[i] = int32_t(i);
+    }
+    LinkEvidence ev;
+    ev.whole.assign(41, 1);
+    TrackOptions o;
+    o.loss_size_power = power;
+    link_stage(prev, rows, parent, o, ev);
+    return rows[40].event;
+  };
+  EXPECT_EQ(TrackOptions{}.loss_size_power, 2.0);
+  EXPECT_EQ(classify(625, 600, 2.0), Event::intact);    // 4 % x 1/4 = 1 %
+  EXPECT_EQ(classify(625, 575, 2.0), Event::chipping);  // 8 % x 1/4 = 2 %
+  EXPECT_EQ(classify(625, 600, 0.0), Event::chipping);  // 4 % against 1.5 %
+  EXPECT_EQ(classify(40000, 39440, 2.0), Event::intact);  // 1.4 %
+  EXPECT_EQ(classify(40000, 39200, 2.0), Event::chipping);  // 2 %
+}
+
 // The weak-piece rule (track.hpp step 5): beside 40 whole grains keeping their volume (the limit
 // is then the 1.5 % floor), grain a (5 000 voxels) has a body and one small piece of 20 voxels.
 // A piece its moved parent covers less than half of (coverage 0.3) beside a body that lost 0.8 %

@@ -119,6 +119,12 @@ void FovScan::add(const Volume<uint16_t>& g) {
       constant_ = false;  // no constant outside: nothing to detect, nothing to say
       return;
     }
+  // The middle rows' grey levels, until there are 4 (finish: a few-level image has no field of view).
+  for (int64_t k = 0; k < s.nz && levels_.size() < 4; ++k) {
+    const uint16_t* row = &g(k, s.ny / 2, 0);
+    for (int64_t i = 0; i < s.nx && levels_.size() < 4; ++i)
+      if (std::find(levels_.begin(), levels_.end(), row[i]) == levels_.end()) levels_.push_back(row[i]);
+  }
   // Per row y, the envelope over the slices of the first / last voxel != c
   // (carried from slab to slab: the envelope of a union is the envelope of
   // the parts' envelopes).
@@ -142,6 +148,10 @@ void FovScan::add(const Volume<uint16_t>& g) {
 
 FieldOfView FovScan::finish(const Shape& whole) const {
   if (whole.empty() || whole.ny < 8 || whole.nx < 8 || !constant_ || slices_ == 0) return no_fov("");
+  if (levels_.size() < 4)
+    return no_fov(fmt::format("field of view: the slices' corners hold the constant {}, but the image has under 4 grey "
+                              "levels (binary or pre-thresholded): its outside is data, not cut away",
+                              c_));
   return fit_field_of_view(whole, c_, xmin_, xmax_);
 }
 

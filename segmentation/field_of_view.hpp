@@ -21,7 +21,11 @@
 //      analysis", IEEE Trans. Instrum. Meas. IM-25:8-14,
 //      doi:10.1109/TIM.1976.6312298), leaving out the points on the slice's
 //      own border (there the circle is clipped by the slice, not seen);
-//   4. the fit is accepted when at least 16 points remain, their RMS
+//   4. the fit is accepted when at least 16 points remain, the slices'
+//      middle rows hold at least 4 grey levels (a reconstruction's inside is
+//      noisy; a binary, pre-thresholded image whose outside is its void has
+//      no field of view to cut away: a 16^3 cube of 255 in 0 lost its
+//      corners to a fitted circle), their RMS
 //      distance to the circle is below 1.5 voxels and the circle leaves at
 //      least 1 % of the slice outside; the inside is then the voxels whose
 //      (y, x) centre lies within radius - 1 of the centre (the rim voxel
@@ -101,6 +105,7 @@ class FovScan {
   int64_t nx_ = 0, slices_ = 0;
   bool constant_ = true;  // every slice's corners so far hold c_
   uint16_t c_ = 0;
+  std::vector<uint16_t> levels_;  // distinct grey levels of the middle rows, up to 4
   std::vector<int64_t> xmin_, xmax_;  // per row y: envelope of the first / last voxel != c_
 };
 

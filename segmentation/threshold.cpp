@@ -289,8 +289,26 @@ double refine_mode(const std::vector<int64_t>& hist, double m, double sigma) {
 }  // namespace threshold_detail
 
 PhaseLevels phase_levels(std::vector<int64_t> hist, int64_t clipped_zeros) {
-  hist[0] = 0;  // pre-masked voxels (docs/real_scans.md) are no phase
   PhaseLevels r;
+  // A binary or few-level image (under 4 grey levels, as screen_levels
+  // calls it: a pre-thresholded scan, 0 / 255 or 0 / 65535): its zeros are
+  // a phase, not a mask, and each phase is its most populated level, without
+  // noise.
+  int distinct = 0;
+  for (size_t b = 0; b < hist.size() && distinct < 4; ++b) distinct += hist[b] > 0;
+  if (distinct < 4) {
+    r.threshold = moments_threshold(hist).value;
+    const auto mode = [&](size_t lo, size_t hi) {  // the fullest bin of [lo, hi)
+      size_t m = lo;
+      for (size_t g = lo; g < hi; ++g)
+        if (hist[g] > hist[m]) m = g;
+      return double(m);
+    };
+    r.void_level = mode(0, size_t(r.threshold) + 1);
+    r.solid = mode(size_t(r.threshold) + 1, hist.size());
+    return r;
+  }
+  hist[0] = 0;  // pre-masked voxels (docs/real_scans.md) are no phase
   r.threshold = moments_threshold(hist).value;
   const SolidPeak solid = solid_peak(hist, r.threshold);
   r.solid = threshold_detail::refine_mode(hist, solid.mode, solid.sigma);

@@ -312,6 +312,33 @@ TEST(FieldOfView, PremaskedZerosAndClippedVoid) {
   EXPECT_LE(zero_labelled, r1.pores.filled_voxels);
 }
 
+// A binary, pre-thresholded image (0 / 65535, as a float scan of two values
+// or an 8-bit 0 / 255 one becomes): its zeros are void data, its constant
+// corners no field of view. Before: the void's level was looked for without
+// the zeros (InputError "every voxel has the grey value 65535"), and where
+// that passed a circle fitted to the object cut the cube's corners away.
+TEST(FieldOfView, BinaryImageIsSegmentedWhole) {
+  const Shape s{40, 40, 40};
+  Volume<uint16_t> bin = Volume<uint16_t>::filled(s, 0);
+  int64_t solid = 0;
+  for (int64_t k = 0; k < s.nz; ++k)
+    for (int64_t j = 0; j < s.ny; ++j)
+      for (int64_t i = 0; i < s.nx; ++i) {
+        const bool cube = k >= 4 && k < 20 && j >= 12 && j < 28 && i >= 12 && i < 28;
+        const double dz = double(k) - 30, dy = double(j) - 20, dx = double(i) - 20;
+        const bool ball = dz * dz + dy * dy + dx * dx <= 36;
+        if (cube || ball) bin(k, j, i) = 65535, ++solid;
+      }
+  const auto r = segment(bin, opts(6));
+  EXPECT_FALSE(r.fov.active);
+  EXPECT_TRUE(has_note(r, "under 4 grey levels")) << "the corners are constant: the note says why no circle";
+  EXPECT_EQ(r.count, 2u);
+  int64_t labelled = 0, wrong = 0;
+  for (int64_t q = 0; q < bin.size(); ++q) labelled += r.labels[q] != 0, wrong += (r.labels[q] != 0) != (bin[q] != 0);
+  EXPECT_EQ(labelled, solid);
+  EXPECT_EQ(wrong, 0);
+}
+
 TEST(FieldOfView, AllZeroVolumeIsAClearInputError) {
   try {
     segment(Volume<uint16_t>::filled(Shape{6, 20, 30}, 0), opts(4));

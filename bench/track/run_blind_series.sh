@@ -27,7 +27,8 @@ for seed in $SEEDS; do
     --platen "$PLATEN" --seed "$seed" "$@" > "$p.log"
   seg=()
   truth=()
-  for s in 0 1 2 3 4; do
+  nst=$(ls "${p}"_stage*.h5 | wc -l)  # --strains sets the number of stages (5 by default)
+  for ((s = 0; s < nst; s++)); do
     [[ -f ${p}_seg$s.h5 ]] || "$T" segment "${p}_stage$s.h5:/scan" -o "${p}_seg$s.h5" --grain-radius-vox "$R" > /dev/null
     seg+=("${p}_seg$s.h5")
     truth+=("${p}_stage$s.h5")

@@ -110,16 +110,23 @@ bool read_attr_doubles(hid_t obj, const char* name, double* v, size_t n) {
 }
 
 // voxel_size_m as 3 doubles (z, y, x) or one (isotropic; the usual h5py idiom
-// `f.attrs["voxel_size_m"] = 12.3e-6`). Any other count is an error, not "no size".
+// `f.attrs["voxel_size_m"] = 12.3e-6`); any other count is an error, not "no
+// size". Without it, element_size_um (z, y, x) in micrometres, as Fiji's HDF5
+// plugin writes it (other counts of that one: no size).
 bool read_voxel_size(hid_t obj, const std::string& where, double* v) {
-  if (H5Aexists(obj, "voxel_size_m") <= 0) return false;
-  Handle a = attr_h(H5Aopen(obj, "voxel_size_m", H5P_DEFAULT));
+  const bool si = H5Aexists(obj, "voxel_size_m") > 0;
+  if (!si && H5Aexists(obj, "element_size_um") <= 0) return false;
+  const char* name = si ? "voxel_size_m" : "element_size_um";
+  Handle a = attr_h(H5Aopen(obj, name, H5P_DEFAULT));
   Handle sp = space_h(H5Aget_space(a.get()));
   const hssize_t n = H5Sget_simple_extent_npoints(sp.get());
+  if (!si && n != 1 && n != 3) return false;  // another tool's axes (a channel's too): no size, not an error
   if (n != 1 && n != 3)
-    throw InputError(where + ": attribute voxel_size_m holds " + std::to_string(n) + " values, expected 1 or 3 (z, y, x)");
-  if (H5Aread(a.get(), H5T_NATIVE_DOUBLE, v) < 0) throw InputError(where + ": attribute voxel_size_m is not numeric");
+    throw InputError(where + ": attribute " + name + " holds " + std::to_string(n) + " values, expected 1 or 3 (z, y, x)");
+  if (H5Aread(a.get(), H5T_NATIVE_DOUBLE, v) < 0) throw InputError(where + ": attribute " + name + " is not numeric");
   if (n == 1) v[1] = v[2] = v[0];
+  if (!si)
+    for (int k = 0; k < 3; ++k) v[k] *= 1e-6;
   return true;
 }
 
@@ -460,7 +467,7 @@ AnyVolume read_range(hid_t file, const std::string& path, const std::string& dat
     g.voxel_size_m = {buf[0], buf[1], buf[2]};
   if (read_attr_doubles(d.get(), "origin_m", buf, 3)) g.origin_m = {buf[0], buf[1], buf[2]};
   for (double v : g.voxel_size_m)
-    if (!(v >= 0 && std::isfinite(v))) throw InputError(where + ": attribute voxel_size_m is invalid");
+    if (!(v >= 0 && std::isfinite(v))) throw InputError(where + ": attribute voxel_size_m (or element_size_um) is invalid");
   g.origin_m[0] += double(z0) * g.voxel_size_m[0];
   // Into `reuse`'s storage when it has this type and shape: its pages are
   // the process's already, none for the kernel to zero.

@@ -3,7 +3,8 @@
 //   /labels  u32 particle labels (0 = void)
 //   tables (particles, truth) as groups of 1-D datasets, one per column
 // with attributes voxel_size_m and origin_m (3 doubles, z y x) and units on
-// every volume. Several datasets go into one file with H5Writer, which writes
+// every volume (other files' element_size_um, z y x in micrometres, is read
+// as the voxel size where voxel_size_m is absent). Several datasets go into one file with H5Writer, which writes
 // to a temporary and renames on commit().
 #pragma once
 #include <memory>

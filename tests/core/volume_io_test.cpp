@@ -660,6 +660,42 @@ TEST(VolumeIO, HDF5ScalarVoxelSizeIsIsotropic) {
   std::filesystem::remove_all(dir);
 }
 
+// Fiji's HDF5 plugin gives the voxel size as element_size_um
+// (z, y, x, micrometres); voxel_size_m wins where both are present.
+TEST(VolumeIO, HDF5ElementSizeUmIsTheVoxelSize) {
+  TempDir dir;
+  auto make = [&](const std::string& name, bool with_si) {
+    const std::string path = dir / name;
+    const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    const hsize_t dims[3] = {2, 3, 4}, three = 3;
+    const hid_t sp = H5Screate_simple(3, dims, nullptr);
+    const hid_t d = H5Dcreate2(f, "data", H5T_NATIVE_UINT16, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    std::vector<uint16_t> v(24, 7);
+    H5Dwrite(d, H5T_NATIVE_UINT16, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+    const hid_t asp = H5Screate_simple(1, &three, nullptr);
+    const double um[3] = {24.6, 12.3, 12.3}, m[3] = {5e-6, 5e-6, 5e-6};
+    const hid_t a = H5Acreate2(d, "element_size_um", H5T_NATIVE_FLOAT, asp, H5P_DEFAULT, H5P_DEFAULT);
+    H5Awrite(a, H5T_NATIVE_DOUBLE, um);
+    H5Aclose(a);
+    if (with_si) {
+      const hid_t b = H5Acreate2(d, "voxel_size_m", H5T_NATIVE_DOUBLE, asp, H5P_DEFAULT, H5P_DEFAULT);
+      H5Awrite(b, H5T_NATIVE_DOUBLE, m);
+      H5Aclose(b);
+    }
+    H5Sclose(asp);
+    H5Dclose(d);
+    H5Sclose(sp);
+    H5Fclose(f);
+    return path;
+  };
+  const auto g = read_volume_as<uint16_t>(make("fiji.h5", false) + ":/data").geometry();
+  EXPECT_NEAR(g.voxel_size_m[0], 24.6e-6, 1e-11);  // stored as float: 24.6 to 7 digits
+  EXPECT_NEAR(g.voxel_size_m[1], 12.3e-6, 1e-11);
+  EXPECT_NEAR(g.voxel_size_m[2], 12.3e-6, 1e-11);
+  const auto both = read_volume_as<uint16_t>(make("both.h5", true) + ":/data").geometry();
+  for (double e : both.voxel_size_m) EXPECT_EQ(e, 5e-6);
+}
+
 TEST(VolumeIO, IsHdf5DecidesByTheFilePart) {
   EXPECT_TRUE(is_hdf5("a.h5"));
   EXPECT_TRUE(is_hdf5("dir.x/a.HDF5:/volume"));

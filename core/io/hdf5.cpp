@@ -48,11 +48,6 @@ Handle type_h(hid_t id) { return {id, H5Tclose}; }
 Handle attr_h(hid_t id) { return {id, H5Aclose}; }
 Handle group_h(hid_t id) { return {id, H5Gclose}; }
 
-template <class T> hid_t native_type();
-template <> hid_t native_type<uint8_t>() { return H5T_NATIVE_UINT8; }
-template <> hid_t native_type<uint16_t>() { return H5T_NATIVE_UINT16; }
-template <> hid_t native_type<uint32_t>() { return H5T_NATIVE_UINT32; }
-template <> hid_t native_type<float>() { return H5T_NATIVE_FLOAT; }
 hid_t native_of(DType t) {
   switch (t) {
     case DType::u8: return H5T_NATIVE_UINT8;
@@ -62,6 +57,7 @@ hid_t native_of(DType t) {
   }
   return H5T_NATIVE_UINT8;
 }
+template <class T> hid_t native_type() { return native_of(dtype_of<T>()); }
 
 // Absolute dataset path. Built by append: GCC 12 warns falsely (-Wrestrict) on "/" + string.
 std::string norm(const std::string& ds) {

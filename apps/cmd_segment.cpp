@@ -323,7 +323,9 @@ static tg::app::Registrar reg{{"segment", 30,
     "(and at least 3 noise sigmas below the solid's peak) is 'dim': partial volume at grain\n"
     "surfaces and in the blurred gap between two fragments a voxel apart. The distance map\n"
     "stops at dim voxels, so fragments keep one marker each even where noise bridges their gap,\n"
-    "and a merge needs a mostly bright interface. Off on very noisy scans (CNR below ~6).\n"
+    "and a merge needs a mostly bright interface: past halfway from t to the two pieces' own\n"
+    "mean grey (grains of different brightness each weighed against their own). The grading is\n"
+    "off on very noisy scans (CNR below ~6); the merge's own test stays.\n"
     "Repairs after the watershed (the plan printed at the start says which run, the summary what\n"
     "each changed): noise specks cleared; split repair: a label whose smoothed grey holds two bright\n"
     "cores parted by a darker sheet (fragments a voxel apart) is cut along it (--no-split; the\n"
@@ -430,12 +432,13 @@ static tg::app::Registrar reg{{"segment", 30,
   sub->add_flag("--no-grey-evidence", o->no_grey_evidence,
                 "Decide from the solid mask alone (no dim/bright grading of the solid)");
   sub->add_option("--bright-fraction", o->seg.bright_fraction,
-                  "Solid darker than t + f (mean solid grey - t) is dim, f in 0..1")
+                  "Solid darker than t + f (mean solid grey - t) is dim, f in 0..1; a merge's interface is "
+                  "bright past t + f (the two pieces' mean grey - t)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   sub->add_option("--bright-sigmas", o->seg.bright_sigmas,
-                  "...and at least this many noise sigmas below the solid's peak grey (the merge repair keeps "
-                  "the first bound: it weighs a whole interface, which noise cannot dim)")
+                  "...and at least this many noise sigmas below the solid's peak grey (not the merge's test: "
+                  "it weighs a whole interface, which noise cannot dim)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   sub->add_option("--pore-shell", o->seg.pore_shell_vox,

@@ -19,7 +19,7 @@ namespace {
 // An interface's size in units (line voxels or faces): all of it, and its
 // bright part (grey evidence).
 struct Area {
-  int64_t all = 0, bright = 0, share = 0;  // share: bright and out of the grey's dim band
+  int64_t all = 0, bright = 0, share = 0;  // share: bright past the pair's own level (MergeOptions::grey)
   Area& operator+=(const Area& o) {
     all += o.all, bright += o.bright, share += o.share;
     return *this;
@@ -49,6 +49,35 @@ int neighbour_labels(const Volume<uint32_t>& lab, const seg::Neighbourhood& nb, 
     if (n == 3) break;
   }
   return n;
+}
+
+// Each label's voxels above `floor` and the sum of their greys (integers
+// per thread, added up: the same on any thread count).
+struct GreySums {
+  std::vector<int64_t> sum, count;
+  // The mean grey above `floor` of labels a and b together (`floor` where
+  // they have no such voxel).
+  double level(uint32_t a, uint32_t b, uint8_t floor) const {
+    const int64_t c = count[a] + count[b];
+    return c ? double(sum[a] + sum[b]) / double(c) : double(floor);
+  }
+};
+GreySums grey_sums(const Volume<uint32_t>& labels, const Volume<uint8_t>& grey, uint32_t maxl, uint8_t floor) {
+  if (grey.shape() != labels.shape()) throw UsageError("merge: labels and grey differ in shape");
+  const int64_t n = labels.size();
+  const uint32_t* L = labels.data();
+  const uint8_t* G = grey.data();
+  GreySums r{std::vector<int64_t>(size_t(maxl) + 1, 0), std::vector<int64_t>(size_t(maxl) + 1, 0)};
+#pragma omp parallel if (int64_t(maxl) <= n / 16)
+  {
+    std::vector<int64_t> my_sum(r.sum.size(), 0), my_count(r.sum.size(), 0);
+#pragma omp for schedule(static)
+    for (int64_t i = 0; i < n; ++i)
+      if (L[i] && G[i] > floor) my_sum[L[i]] += G[i], ++my_count[L[i]];
+#pragma omp critical
+    for (size_t l = 0; l < r.sum.size(); ++l) r.sum[l] += my_sum[l], r.count[l] += my_count[l];
+  }
+  return r;
 }
 
 // Unions of labels 0..n-1 (the smaller root wins: merged labels keep the
@@ -95,15 +124,25 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
   const uint8_t bright = std::max<uint8_t>(opt.bright_level, 1);
   if (opt.grey && opt.grey->shape() != s) throw UsageError("merge: labels and grey differ in shape");
   const uint8_t* G = opt.grey ? opt.grey->data() : nullptr;
-  // 0: dim; 1: bright; 2: bright and out of the grey's dim band.
-  auto brightness = [&](int64_t idx) -> int {
-    if (m[idx] < bright) return 0;
-    return G && G[idx] > opt.grey_dim_lo && G[idx] <= opt.grey_dim_hi ? 1 : 2;
-  };
+  if (G && !(opt.grey_fraction >= 0 && opt.grey_fraction <= 1))
+    throw UsageError("merge: grey_fraction must lie in 0..1");
   uint32_t maxl = 0;
 #pragma omp parallel for schedule(static) reduction(max : maxl)
   for (int64_t i = 0; i < n; ++i) maxl = std::max(maxl, L[i]);
   std::vector<int64_t> vol(size_t(maxl) + 1, 0);
+  const GreySums sums = G ? grey_sums(labels, *opt.grey, maxl, opt.grey_floor) : GreySums{};
+  // The grey a voxel of the interface of a and b needs to count bright for
+  // the share: grey_fraction of the way to the pair's level.
+  auto share_level = [&](uint64_t key) {
+    const double level = sums.level(uint32_t(key >> 32), uint32_t(key & 0xffffffffu), opt.grey_floor);
+    return double(opt.grey_floor) + opt.grey_fraction * (level - double(opt.grey_floor));
+  };
+  // 0: dim; 1: graded bright; 2: bright for the share too (at or above
+  // `share`, or brightened by the pore filling).
+  auto brightness = [&](int64_t idx, double share) -> int {
+    if (m[idx] < bright) return 0;
+    return !G || G[idx] <= opt.grey_filled || double(G[idx]) >= share ? 2 : 1;
+  };
 
   // Volumes, and interfaces: line voxels between exactly two labels, and
   // direct faces. Slices in parallel, each thread with its own tables,
@@ -159,7 +198,7 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
               uint32_t ls[3];
               if (neighbour_labels(labels, nb, k, j, i, idx, ls) == 2) {
                 const uint64_t key = pair_key(ls[0], ls[1]);
-                count_pair(key, brightness(idx));
+                count_pair(key, brightness(idx, G ? share_level(key) : 0.0));
                 my_two.emplace_back(idx, key);
               }
             }
@@ -172,10 +211,14 @@ MergeResult merge_oversegmented(Volume<uint32_t>& labels, const Volume<uint8_t>&
               if (!x_other && (by == 0 || by == a) && (bz == 0 || bz == a)) continue;
               // A face is as bright as the dimmer of its voxels.
               const int64_t idx = row + i;
-              const int here = brightness(idx);
-              if (x_other) count_pair(pair_key(a, L[row + i1]), std::min(here, brightness(idx + 1)));
-              if (by != 0 && by != a) count_pair(pair_key(a, by), std::min(here, brightness(idx + sy)));
-              if (bz != 0 && bz != a) count_pair(pair_key(a, bz), std::min(here, brightness(idx + sz)));
+              auto face = [&](uint32_t b, int64_t other) {
+                const uint64_t key = pair_key(a, b);
+                const double share = G ? share_level(key) : 0.0;
+                count_pair(key, std::min(brightness(idx, share), brightness(other, share)));
+              };
+              if (x_other) face(L[row + i1], idx + 1);
+              if (by != 0 && by != a) face(by, idx + sy);
+              if (bz != 0 && bz != a) face(bz, idx + sz);
             }
           }
           i0 = i1;

@@ -60,19 +60,32 @@ struct MergeOptions {
   double ratio = 1.0;  // merge when interface >= ratio * pi r^2 (r: smaller label's equivalent radius)
   uint8_t bright_level = 1;  // interface voxels with a lower level in `solid` do not count (grey evidence)
   double min_bright_share = 0.5;  // and the bright part must be at least this share of the interface
-  // With `grey` (the scan's grey, any one-byte code of it, same shape): a
-  // voxel at bright_level or above whose grey g has grey_dim_lo < g <=
-  // grey_dim_hi counts dim for the share test all the same (the area test
-  // still counts it: a cut through a textured grain runs through its darker
-  // spots, and its area is what tells it from a contact). segment() sets
-  // the band where the grading's bright level sat under halfway from the
-  // threshold to the solid, capped 3 noise sigmas under a solid peak that a
-  // texture inside the grains widened: the grading then called a gap's
-  // partial-volume voxels bright, and the merge glued split halves back
-  // (blind_scene.py --grain-texture 0.1, R 12: 67 of 101 halves). Voxels
-  // the pore filling made bright (grey under the band) stay bright.
+  // With `grey` (the scan's grey, any one-byte code of it, same shape) the
+  // share test weighs each pair against its own solid: a voxel graded
+  // bright counts bright for the share where its grey is at least
+  // grey_floor + grey_fraction x (L - grey_floor), L the pair's level (the
+  // mean grey of the two labels' voxels above grey_floor: the grain's,
+  // were they one), or where it is at most grey_filled (the pore filling
+  // made it bright). (The dimmer label's level, tried first, is the one a
+  // small piece's rim lowers most: at R 8 it glued textured grains' halves,
+  // 584 -> 573 of 723 on eight scenes; the brighter one's cut a textured
+  // grain whose pieces differ by a few % in mean grey.) The area test still
+  // counts every voxel graded bright (a cut through a textured grain runs
+  // through its darker spots, and its area is what tells it from a
+  // contact). One global level failed both ways: where grains differ in
+  // brightness, halfway to the mean solid lies inside the dim grains (their
+  // cuts read dim) while the grading's level lies under the bright grains'
+  // gaps (their halves glued back: blind_scene.py --grain-contrast 0.7,1 at
+  // R 8, 20 of 40 merges joined two particles; by each pair's own level 5,
+  // every merge inside one grain kept; bench/segmentation/RESULTS.md
+  // "Grains of different brightness: each pair's own level"). A texture
+  // inside the grains widens the solid's peak the same way (the grading's
+  // level fell to the threshold and a bridged gap's partial-volume voxels
+  // read bright: --grain-texture 0.1, R 12, 67 of 101 halves).
   const Volume<uint8_t>* grey = nullptr;
-  uint8_t grey_dim_lo = 0, grey_dim_hi = 0;
+  uint8_t grey_floor = 0;     // the threshold, in the grey's units
+  uint8_t grey_filled = 0;    // graded bright at or below it: brightened by the pore filling
+  double grey_fraction = 0.5;  // of the way from grey_floor to the pair's level
   // false: the merged labels' voxels keep their old labels and `root` says
   // where each goes, for a caller that renumbers anyway (relabel_consecutive
   // takes it as its premap): one pass over the volume less.

@@ -86,11 +86,6 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
     const double halfway = double(d.t.value) + o.bright_fraction * (mean_above(hist, d.t.value) - double(d.t.value));
     const double b = std::min(halfway, peak.mode - o.bright_sigmas * peak.sigma);
     d.bright = uint16_t(std::clamp(std::lround(b), long(d.t.value), 65535L));
-    // The merge reads a share over a whole interface, not voxel by voxel:
-    // noise cannot dim a cut through one grain there, so it keeps the
-    // halfway level where the cap lowered the grading's (merge_labels.hpp
-    // MergeOptions::grey).
-    d.merge_bright = std::max(d.bright, uint16_t(std::clamp(std::lround(halfway), 0L, 65535L)));
     d.noise_sigma = peak.sigma;
     d.graded = d.bright > d.t.value;  // no dim band: the plain mask's chain (no second pore pass)
   }
@@ -110,8 +105,14 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
     // needs what varies inside a grain: noise, and texture where the grains
     // have it (the void's noise alone split textured grains into dozens:
     // --grain-texture 0.1, F1 0.39). That sigma comes from pairs of pixels
-    // inside one body (split_labels.hpp within_grain_sigma); it replaces the
-    // solid peak's when that is over kWideSolidPeak times as wide.
+    // inside one body (split_labels.hpp within_grain_sigma). Both sigmas
+    // bound what varies inside a grain from above (the peak holds the
+    // spread between grains, the pairs the partial volume near a grain's
+    // surface and pores: 1.2-2 x the noise at R 8), so the smaller is taken.
+    // (It used to take over only where the peak was over 1.5 times as wide:
+    // at R 8, grain contrast 0.85-1, seeds at 1.48-1.49 kept the peak's
+    // depth and 36 of 80 halves, the peer 55; bench/segmentation/RESULTS.md
+    // "Grains of different brightness: each pair's own level".)
     const SolidPeak raw = solid_peak(hist, d.t.value);
     const double height = std::max(0.0, raw.mode - double(d.t.value));
     d.solid_level = raw.mode;
@@ -120,10 +121,10 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
       SolidPeak sm = solid_peak(smoothed[k], d.t.value);
       d.smoothed_solid_sigma = sm.sigma;
       const WithinGrain within =
-          k < pairs.size() ? within_grain_sigma(pairs[k], d.t.value, kWideSolidMinPairs) : WithinGrain{};
+          k < pairs.size() ? within_grain_sigma(pairs[k], d.t.value, kWithinGrainMinPairs) : WithinGrain{};
       d.within_grain_sigma = within.sigma;
       d.within_grain_pairs = within.pairs;
-      d.noise_within_grains = within.sigma > 0 && sm.sigma > kWideSolidPeak * within.sigma;
+      d.noise_within_grains = within.sigma > 0 && within.sigma < sm.sigma;
       if (d.noise_within_grains) sm.sigma = within.sigma;
       d.split_smoothing = sigmas[k];
       d.smoothed_sigma = sm.sigma;
@@ -131,12 +132,6 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
       if (o.split_depth_sigmas * sm.sigma <= kSplitDepthShare * height) break;
     }
   }
-  // Grains of different brightness widen the solid's peak too, but halfway
-  // to the mean solid then lies inside the dim grains, whose cuts would read
-  // dim: the merge keeps the grading's level (blind_scene.py --grain-contrast
-  // 0.7,1: 13 of 17 merges lost, F1 -0.004).
-  if (d.within_grain_sigma > 0 && d.smoothed_solid_sigma > kDimGrainsPeak * d.within_grain_sigma)
-    d.merge_bright = d.bright;
   if ((o.noise_specks || o.face_slivers) && o.threshold != ThresholdMethod::local) {
     // The void's noise above t (noise_specks.hpp): the void peak's mode and
     // the sigma of its lower side, the voxels a noisy scan clipped at 0
@@ -180,11 +175,11 @@ struct SlabRun {
   int64_t min_size_vox = 8;  // the caller's size floor (the slab's own chain runs with 1)
 };
 
-// The merge's dim band in the grey code's units: voxels the grading calls
-// bright whose code c has lo < c <= hi (the grading's bright level and the
-// merge's, GreyDecisions::merge_bright) count dim for the merge.
-struct MergeDimBand {
-  uint8_t lo = 0, hi = 0;
+// The merge's share test in the grey code's units (merge_labels.hpp
+// MergeOptions::grey): the threshold, and the grading's bright level (graded
+// bright at or below it: brightened by the pore filling).
+struct MergeGrey {
+  uint8_t floor = 0, filled = 0;
 };
 
 // grey_code (or nullptr) and split_depth > 0: the split repair runs on the
@@ -193,7 +188,7 @@ struct MergeDimBand {
 SegmentResult segment_graded(Volume<uint8_t> mask, const SegmentOptions& opt, bool graded, SlabRun* slab = nullptr,
                              const Volume<uint8_t>* grey_code = nullptr, double split_depth = 0,
                              double split_floor = 0, const SpeckTest* specks = nullptr, double solid_level = 0,
-                             const FaceSliverOptions* slivers = nullptr, const MergeDimBand* merge_band = nullptr);
+                             const FaceSliverOptions* slivers = nullptr, const MergeGrey* merge_grey = nullptr);
 
 // grey -> mask with the decisions d, then the chain. The core's solid count
 // (slab) or the field of view's goes to *nsolid_out.
@@ -236,18 +231,15 @@ SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* ow
   st.threshold = (st.threshold - c.lo) / c.step, st.void_level = (st.void_level - c.lo) / c.step, st.sigma /= c.step;
   SegmentOptions o = opt;
   o.split_smoothing_vox = d.split_smoothing;  // chosen from the noise (decide_grey) unless given
-  MergeDimBand band;  // empty unless the noise cap lowered the grading's bright level
-  if (d.merge_bright > d.bright) {
-    auto code = [&](double g) { return uint8_t(std::clamp(std::lround((g - c.lo) / c.step), 0L, 255L)); };
-    band.lo = code(d.bright), band.hi = code(d.merge_bright);
-  }
+  auto code_of = [&](double g) { return uint8_t(std::clamp(std::lround((g - c.lo) / c.step), 0L, 255L)); };
+  const MergeGrey mg{code_of(double(t.value)), code_of(double(d.bright))};
   FaceSliverOptions fs;  // in the code's units; a slab's cut faces are not the scan's
   fs.threshold = (double(t.value) - c.lo) / c.step, fs.void_level = (d.void_level - c.lo) / c.step;
   if (slab) fs.faces[0] = slab->window.scan_bottom, fs.faces[1] = slab->window.scan_top;
   fs.min_size_vox = slab ? slab->min_size_vox : opt.min_size_vox;
   return segment_graded(std::move(mask), o, d.graded, slab, split || specks || slivers ? &code : nullptr,
                         split ? d.split_depth / c.step : 0.0, (double(t.value) - c.lo) / c.step, specks ? &st : nullptr,
-                        (d.solid_level - c.lo) / c.step, slivers ? &fs : nullptr, &band);
+                        (d.solid_level - c.lo) / c.step, slivers ? &fs : nullptr, &mg);
 }
 
 
@@ -275,7 +267,6 @@ void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& o
   const ThresholdResult& t = d.t;
   r.threshold = t;
   r.bright_value = d.bright;
-  r.merge_bright_value = d.merge_bright;
   r.solid_noise_sigma = d.noise_sigma;
   r.smoothed_noise_sigma = d.smoothed_sigma;
   r.smoothed_solid_sigma = d.smoothed_solid_sigma;
@@ -294,7 +285,8 @@ void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& o
   if (r.split_used && d.noise_within_grains)
     r.notes.push_back(fmt::format(
         "the smoothed solid's grey peak is {:.1f} times as wide as the grey varies inside a grain (grains of "
-        "different brightness, or brightness drifting over the scan): the split repair's depth is from the latter",
+        "different brightness, a texture inside them, or brightness drifting over the scan): the split repair's depth "
+        "is from the latter",
         d.smoothed_solid_sigma / d.within_grain_sigma));
   if (opt.grey_evidence && t.method != ThresholdMethod::local && !d.graded)
     r.notes.push_back("grey evidence off: the solid's grey spread (sigma " + std::to_string(long(d.noise_sigma)) +
@@ -407,7 +399,7 @@ namespace {
 SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in, bool graded, SlabRun* slab,
                              const Volume<uint8_t>* grey_code, double split_depth, double split_floor,
                              const SpeckTest* specks, double solid_level, const FaceSliverOptions* slivers,
-                             const MergeDimBand* merge_band) {
+                             const MergeGrey* merge_grey) {
   const SegmentOptions opt = opt_in.resolved();
   SegmentResult r;
   StageClock clock(r);
@@ -536,10 +528,11 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
   mo.ratio = opt.merge_ratio;
   mo.bright_level = merge_bright;
   mo.apply = false;
-  if (grey_code && merge_band && merge_band->hi > merge_band->lo) {
+  if (grey_code && merge_grey && opt.grey_evidence) {
     mo.grey = grey_code;
-    mo.grey_dim_lo = merge_band->lo, mo.grey_dim_hi = merge_band->hi;
-    r.merge_dim_band = true;
+    mo.grey_floor = merge_grey->floor, mo.grey_filled = merge_grey->filled;
+    mo.grey_fraction = opt.bright_fraction;
+    r.merge_own_levels = true;
   }
   if (opt.merge) r.merge = merge_oversegmented(lab, levels, mo);
   clock.lap("merge");
@@ -725,12 +718,13 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                 {"touching_pairs", r.merge.touching_pairs},
                 {"passing_pairs", r.merge.candidates},
                 {"merges", r.merge.merges},
-                {"bright_value", r.merge_dim_band ? r.merge_bright_value : r.bright_value},
-                {"bright_rule", r.merge_dim_band
-                                    ? "the interface's bright share counts voxels above bright_value (halfway from the "
-                                      "threshold to the solid's mean: the grey evidence's bright level sat lower, "
-                                      "capped by a wide solid peak) or made bright by the pore filling; its area "
-                                      "counts every voxel the grey evidence grades bright"
+                {"bright_value", r.bright_value},
+                {"bright_rule", r.merge_own_levels
+                                    ? "the interface's bright share counts the voxels whose grey lies past "
+                                      "--bright-fraction of the way from the threshold to the pair's own level (the "
+                                      "mean grey of the two labels' voxels above the threshold), or that the pore "
+                                      "filling made bright; its area counts every voxel the grey evidence grades "
+                                      "bright (above bright_value)"
                                     : "an interface voxel counts bright where the grey evidence grades it bright "
                                       "(every solid voxel without grey evidence)"}};
   j["split"] = {{"enabled", r.split_used},
@@ -745,8 +739,8 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                 {"within_grain_sigma", r.within_grain_sigma},
                 {"within_grain_pairs", r.within_grain_pairs},
                 {"noise_from", r.split_noise_within_grains
-                                   ? fmt::format("within grains: the solid's peak is over {} times as wide "
-                                                 "(grains of different brightness)", kWideSolidPeak)
+                                   ? std::string("within grains: narrower than the solid's peak (grains of "
+                                                 "different brightness or texture widen the peak)")
                                    : std::string("solid peak")},
                 {"depth_sigmas", o.split_depth_sigmas},
                 {"min_depth_contrast", o.split_min_depth_contrast},

@@ -209,7 +209,6 @@ struct SegmentResult {
   PoreFilterResult pores;
   bool graded = false;          // grey evidence used (a grey scan and grey_evidence)
   uint16_t bright_value = 0;    // graded: voxels above this grey level are bright
-  uint16_t merge_bright_value = 0;  // the merge's share test's (GreyDecisions::merge_bright)
   double solid_noise_sigma = 0; // graded: the solid peak's noise sigma (threshold.hpp solid_peak)
   double dim_fraction = 0;      // graded: dim voxels / solid voxels, after the pore passes
   PoreFilterResult dim_pockets; // graded: the second pore pass (dim pockets enclosed by bright solid)
@@ -218,13 +217,13 @@ struct SegmentResult {
   uint32_t markers = 0;
   double buckets_per_unit = 0;  // watershed levels per distance unit actually used (see quantise_levels)
   MergeResult merge;
-  bool merge_dim_band = false;  // the merge read the grey's band (MergeOptions::grey)
+  bool merge_own_levels = false;  // the merge's share test read each pair's own level (MergeOptions::grey)
   bool split_used = false;        // the split repair ran (a grey scan, a global threshold, split on)
   double smoothed_noise_sigma = 0;// the smoothed grey's noise sigma the depth is from, grey levels (split_labels.hpp)
   double smoothed_solid_sigma = 0;     // the smoothed solid peak's sigma
   double within_grain_sigma = 0;       // the smoothed grey's inside grains (0: too few pairs)
   int64_t within_grain_pairs = 0;
-  bool split_noise_within_grains = false;  // the solid's peak too wide (kWideSolidPeak): the depth from the latter
+  bool split_noise_within_grains = false;  // the depth from the sigma inside grains (narrower than the solid's peak)
   double split_smoothing_vox = 0; // the Gaussian sigma the split repair read the grey with (chosen or given)
   double split_depth = 0;         // grey levels
   GreyCode split_code;
@@ -270,10 +269,6 @@ struct GreyDecisions {
   LocalThreshold local;  // ThresholdMethod::local only (segment() alone: it needs the volume)
   bool graded = false;
   uint16_t bright = 0;
-  // The merge's share test's bright level (grey evidence on): halfway from
-  // the threshold to the solid's mean, without the noise cap that may lower
-  // `bright` (>= it; = it where the grains differ in brightness).
-  uint16_t merge_bright = 0;
   double noise_sigma = 0;  // the solid peak's (graded only)
   // Split repair: the smoothed solid's noise sigma (from the sample slices'
   // histogram, smoothed_sample_histogram) and the depth it sets; 0: off.
@@ -282,7 +277,7 @@ struct GreyDecisions {
   double split_smoothing = 0;  // sigma_s, voxels, that smoothed_sigma and split_depth are for
   // The smoothed solid peak's sigma and the smoothed grey's inside grains
   // (split_labels.hpp within_grain_sigma); noise_within_grains: the peak
-  // was too wide to be what varies inside a grain (kWideSolidPeak).
+  // was wider than what varies inside a grain: the depth is from the latter.
   double smoothed_solid_sigma = 0, within_grain_sigma = 0;
   int64_t within_grain_pairs = 0;
   bool noise_within_grains = false;
@@ -309,24 +304,11 @@ struct GreyDecisions {
 // (59 -> 44 of 61, seed 2), where the rule keeps 1.0.
 inline constexpr double kSplitSmoothingLadder[] = {0.7, 1.0};
 inline constexpr double kSplitDepthShare = 0.5;
-// The split repair's noise when the solid's grey peak is wider than what
-// varies inside a grain (grains of different brightness; segment.cpp
-// threshold_from_histogram): the smoothed grey's sigma inside grains
-// replaces the smoothed solid peak's when the latter is over kWideSolidPeak
-// times as large and at least kWideSolidMinPairs pairs measured it.
-inline constexpr double kWideSolidPeak = 1.5;
-// Where it is over kDimGrainsPeak times as wide the grains differ in
-// brightness, and the merge's share test keeps the grey evidence's bright
-// level (GreyDecisions::merge_bright): halfway to the mean solid would lie
-// in the dim grains. A texture inside the grains widens it less: 1.1-2.01
-// (blind_scene.py --grain-texture 0.1-0.15, R 8-30), against 2.4-7.9 for
-// grain contrasts 0.85-1 and 0.7-1 at R 20 (2.8-5.2 for 0.7-1 at R 8-12;
-// 0.85-1 at R 8-12, 1.5-2.4, is closer to a texture and the band costs it
-// nothing measured). 2.2: the middle of the gap between 2.01 and 2.4 (2.0,
-// chosen first, left the texture's 2.01 out: R 8 seed 3 halves 50 -> 68 of
-// 80 at 2.2; bench/segmentation/RESULTS.md "Textured grains").
-inline constexpr double kDimGrainsPeak = 2.2;
-inline constexpr int64_t kWideSolidMinPairs = 500;
+// The split repair's noise: the smoothed grey's sigma inside grains where
+// it is below the smoothed solid peak's (grains of different brightness
+// widen the latter; segment.cpp threshold_from_histogram) and at least
+// kWithinGrainMinPairs pairs measured it.
+inline constexpr int64_t kWithinGrainMinPairs = 500;
 // The sigmas whose smoothed sample histograms decide_grey needs: the given
 // one, or the ladder.
 std::vector<double> split_smoothing_candidates(const SegmentOptions& opt);

@@ -15,9 +15,13 @@ them:
     bright level, merge_labels.hpp MergeOptions::grey, keeps the halves apart),
   * ring artefacts (--rings 0.2,0.3: 30 % of the radii offset by N(0, 0.2 x
     contrast)), removed first by `tomograin convert --rings` (segmentation/
-    rings.hpp), as a user with such a scan would.
+    rings.hpp), as a user with such a scan would,
+and one at 96^3, R 8:
+  * grains of different brightness (--grain-contrast 0.7,1), whose halves the
+    merge glued back by one global grey level (merge_labels.hpp
+    MergeOptions::grey weighs each pair against its own level).
 Segmented as a user would (`tomograin segment SCAN.h5:/scan --grain-radius-vox
-16`), scored by bench/segmentation/blind_score.py (F1 at IoU >= 0.5, halves
+R`), scored by bench/segmentation/blind_score.py (F1 at IoU >= 0.5, halves
 one by one, intact porous grains over-segmented).
 
 Seed 103 of the generator: never used while developing the split repair
@@ -31,8 +35,12 @@ fix before seed 103 was run: R 12 / 16 / 20, F1 0.969-0.983, halves 89-98 %;
 without it 0.910-0.976, halves 66-92 % (R 16: 0.959 / 0.935, 76 / 74 %).
 The rings scene's likewise (session 50), from dev seeds 82-83 (R 16) and
 held-out 84-87 (R 12, 20): corrected F1 0.955-0.994, halves 90-98 %; not
-corrected 0.603-0.960, 86-93 %.
-~50 s CPU.
+corrected 0.603-0.960, 86-93 %. The contrast scene's (session 52) from seeds
+7-10 (96^3, R 8) before seed 103 was run: F1 0.907-0.931, halves
+78-91 %, intact porous grains over-segmented 0-3 (R 8's middle setting: 0-3); by one
+global level F1 0.866-0.920, halves 56-85 %. Seed 103, run once afterwards:
+F1 0.917, halves 79 of 94 (one global level: 0.909, 75): a regression bound.
+~55 s CPU.
 
 usage: blind_extremes_test.py TOMOGRAIN [WORKDIR]
 """
@@ -47,14 +55,16 @@ sys.path.insert(0, os.path.join(ROOT, "bench", "segmentation"))
 import blind_scene  # noqa: E402
 import blind_score  # noqa: E402
 
-SEED, SIZE, R = 103, 160, 16
-# scene: (generator arguments, F1 bound, halves bound)
+SEED = 103
+# scene: (generator arguments, F1 bound, halves bound, size, grain radius,
+#         intact porous grains over-segmented at most)
 SCENES = {
-    "gap 0.5": (["--gap", "0.5"], 0.94, 0.88),
-    "CNR 5": (["--cnr", "5"], 0.92, 0.85),
-    "PSF 1.5": (["--psf", "1.5"], 0.90, 0.82),
-    "texture 0.1": (["--grain-texture", "0.1"], 0.95, 0.88),
-    "rings 0.2": (["--rings", "0.2,0.3"], 0.96, 0.90),
+    "gap 0.5": (["--gap", "0.5"], 0.94, 0.88, 160, 16, 1),
+    "CNR 5": (["--cnr", "5"], 0.92, 0.85, 160, 16, 1),
+    "PSF 1.5": (["--psf", "1.5"], 0.90, 0.82, 160, 16, 1),
+    "texture 0.1": (["--grain-texture", "0.1"], 0.95, 0.88, 160, 16, 1),
+    "rings 0.2": (["--rings", "0.2,0.3"], 0.96, 0.90, 160, 16, 1),
+    "contrast 0.7-1, R 8": (["--grain-contrast", "0.7,1"], 0.89, 0.72, 96, 8, 3),
 }
 
 
@@ -65,9 +75,9 @@ def main():
     work = sys.argv[2] if len(sys.argv) > 2 else tempfile.mkdtemp(prefix="tg_blind_x_")
     os.makedirs(work, exist_ok=True)
     fails = []
-    for name, (args, f1_bound, halves_bound) in SCENES.items():
-        prefix = os.path.join(work, "blind_" + name.replace(" ", "_"))
-        blind_scene.main(["-o", prefix, "--size", str(SIZE), "--radius", str(R), "--seed", str(SEED), "--no-measure"]
+    for name, (args, f1_bound, halves_bound, size, radius, porous_bound) in SCENES.items():
+        prefix = os.path.join(work, "blind_" + name.replace(" ", "_").replace(",", ""))
+        blind_scene.main(["-o", prefix, "--size", str(size), "--radius", str(radius), "--seed", str(SEED), "--no-measure"]
                          + args)
         out = prefix + "_labels.h5"
         scan = prefix + ".h5:/scan"
@@ -78,7 +88,7 @@ def main():
             if p.returncode or "radius bins" not in p.stdout:
                 sys.exit(f"FAIL: tomograin convert --rings exit {p.returncode}\n{p.stdout}")
             print(p.stdout.splitlines()[0])
-        cmd = [tomograin, "segment", scan, "-o", out, "--grain-radius-vox", str(R)]
+        cmd = [tomograin, "segment", scan, "-o", out, "--grain-radius-vox", str(radius)]
         p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         if p.returncode:
             sys.exit(f"FAIL: tomograin segment exit {p.returncode}\n{p.stdout}")
@@ -97,7 +107,7 @@ def main():
             fails.append(f"{name}: F1 {res['f1']:.4f} < {f1_bound}")
         if halves < halves_bound:
             fails.append(f"{name}: halves {100 * halves:.1f} % < {100 * halves_bound:.0f} %")
-        if res["pore_over_segmented_intact"] > 1:
+        if res["pore_over_segmented_intact"] > porous_bound:
             fails.append(f"{name}: {res['pore_over_segmented_intact']} intact porous grains over-segmented")
     if fails:
         sys.exit("FAIL: " + "; ".join(fails))

@@ -145,31 +145,63 @@ TEST(GreyEvidence, OnlyTheBrightPartOfAnInterfaceCounts) {
   EXPECT_EQ(merge_oversegmented(plain.lab, plain.levels, {1.0, 1}).merges, 1);    // no grey evidence
 }
 
-// The merge's dim band (MergeOptions::grey): graded bright by a level the
-// noise cap lowered, the line between two halves is dim for the merge where
-// its grey lies in the band; under the band (a pore the filling made
-// bright) or above it (a cut through solid) it stays bright.
-TEST(GreyEvidence, AGreyBandGradedBrightIsDimForTheMerge) {
-  for (const uint8_t line_grey : {100, 60, 200}) {  // in the band (80, 120], a filled pore, solid
+// The merge's share test against each pair's own level (MergeOptions::grey):
+// the line between two halves counts bright for the share where its grey is
+// past halfway from the threshold (50) to the mean grey above it of the two
+// halves together; a voxel the pore filling made bright (grey at or under
+// grey_filled) stays bright.
+TEST(GreyEvidence, EachPairWeighsItsInterfaceAgainstItsOwnLevel) {
+  auto merges = [](uint8_t body, uint8_t line_grey) {
     Halves h(5);  // every voxel graded bright, the line too
     auto grey = Volume<uint8_t>::filled(h.levels.shape(), 0);
     for (int64_t i = 0; i < grey.size(); ++i)
-      if (h.levels[i]) grey[i] = h.lab[i] ? 200 : line_grey;
+      if (h.levels[i]) grey[i] = h.lab[i] ? body : line_grey;
     MergeOptions o;
     o.bright_level = 2;
     o.grey = &grey;
-    o.grey_dim_lo = 80, o.grey_dim_hi = 120;
-    EXPECT_EQ(merge_oversegmented(h.lab, h.levels, o).merges, line_grey == 100 ? 0 : 1) << int(line_grey);
-  }
+    o.grey_floor = 50, o.grey_filled = 60, o.grey_fraction = 0.5;
+    return merge_oversegmented(h.lab, h.levels, o).merges;
+  };
+  // A bright grain (200: the pair's level 125): a line at 120 is a gap's
+  // partial volume, at 130 a cut through solid.
+  EXPECT_EQ(merges(200, 120), 0);
+  EXPECT_EQ(merges(200, 130), 1);
+  // A dim grain (120: level 85): the same 120 is its own solid, 80 a gap.
+  EXPECT_EQ(merges(120, 120), 1);
+  EXPECT_EQ(merges(120, 80), 0);
+  // A filled pore on the line: bright whatever the level.
+  EXPECT_EQ(merges(200, 55), 1);
   Halves h(5);
-  EXPECT_EQ(merge_oversegmented(h.lab, h.levels, {1.0, 2}).merges, 1) << "without the band: the grading alone";
-  // 48 % of the line in the band: the share (52 %) passes, and the area test
-  // still counts the band's voxels (without them the area would fall under
-  // the half's cross-section: a textured grain's cut runs through its
-  // darker spots).
+  EXPECT_EQ(merge_oversegmented(h.lab, h.levels, {1.0, 2}).merges, 1) << "without the grey: the grading alone";
+}
+
+// The level is the mean grey of the pair's voxels above the threshold: a
+// filled pore inside a half (grey under the threshold) does not dim it
+// (counted, it would take the level from 125 to ~119 and pass the line).
+TEST(GreyEvidence, FilledPoresDoNotLowerAPairsLevel) {
+  Halves h(5);
+  auto grey = Volume<uint8_t>::filled(h.levels.shape(), 0);
+  for (int64_t i = 0; i < grey.size(); ++i) {
+    if (!h.levels[i]) continue;
+    const auto c = grey.shape().coords(i);
+    const bool pore = h.lab[i] && std::hypot(double(c[0]) - 12, double(c[1]) - 12, double(c[2]) - 10) <= 4;
+    grey[i] = !h.lab[i] ? 122 : pore ? 10 : 200;  // the line a gap for a level of 125
+  }
+  MergeOptions o;
+  o.bright_level = 2;
+  o.grey = &grey;
+  o.grey_floor = 50, o.grey_filled = 5;
+  EXPECT_EQ(merge_oversegmented(h.lab, h.levels, o).merges, 0);
+}
+
+// 48 % of the line dim for the pair: the share (52 %) passes, and the area
+// test still counts the dim voxels the grading calls bright (without them
+// the area would fall under the half's cross-section: a textured grain's
+// cut runs through its darker spots).
+TEST(GreyEvidence, TheAreaCountsEveryVoxelGradedBright) {
   Halves part(5);
   auto grey = Volume<uint8_t>::filled(part.levels.shape(), 0);
-  int64_t line = 0, in_band = 0;
+  int64_t line = 0, dim = 0;
   for (int64_t i = 0; i < grey.size(); ++i) {
     if (!part.levels[i]) continue;
     if (part.lab[i]) {
@@ -177,21 +209,21 @@ TEST(GreyEvidence, AGreyBandGradedBrightIsDimForTheMerge) {
       continue;
     }
     const auto c = grey.shape().coords(i);
-    const bool band = (c[0] + c[1]) % 25 < 12;
-    grey[i] = band ? 100 : 200;
-    ++line, in_band += band;
+    const bool d = (c[0] + c[1]) % 25 < 12;
+    grey[i] = d ? 100 : 200;
+    ++line, dim += d;
   }
   int64_t half = 0;
   for (int64_t i = 0; i < grey.size(); ++i) half += part.lab[i] == 3;
   const double section = std::numbers::pi * std::pow(3.0 * double(half) / (4.0 * std::numbers::pi), 2.0 / 3.0);
-  ASSERT_GE(double(line - in_band), 0.5 * double(line));  // the share passes
-  ASSERT_LT(double(line - in_band), section);             // the banded area alone would not
+  ASSERT_GE(double(line - dim), 0.5 * double(line));  // the share passes
+  ASSERT_LT(double(line - dim), section);             // the bright area alone would not
   ASSERT_GE(double(line), section);
   MergeOptions o;
   o.bright_level = 2;
   o.grey = &grey;
-  o.grey_dim_lo = 80, o.grey_dim_hi = 120;
-  EXPECT_EQ(merge_oversegmented(part.lab, part.levels, o).merges, 1) << line << " line voxels, " << in_band << " in the band";
+  o.grey_floor = 50, o.grey_filled = 60;
+  EXPECT_EQ(merge_oversegmented(part.lab, part.levels, o).merges, 1) << line << " line voxels, " << dim << " dim";
 }
 
 TEST(GreyEvidence, ANeckPieceJoinsOneGrainNotBoth) {

@@ -68,7 +68,7 @@ struct MergeOptions {
   // were they one), or where it is at most grey_filled (the pore filling
   // made it bright). (The dimmer label's level, tried first, is the one a
   // small piece's rim lowers most: at R 8 it glued textured grains' halves,
-  // 584 -> 573 of 723 on eight scenes; the brighter one's cut a textured
+  // 584 -> 573 of 724 on eight scenes; the brighter one's cut a textured
   // grain whose pieces differ by a few % in mean grey.) The area test still
   // counts every voxel graded bright (a cut through a textured grain runs
   // through its darker spots, and its area is what tells it from a
@@ -76,9 +76,10 @@ struct MergeOptions {
   // brightness, halfway to the mean solid lies inside the dim grains (their
   // cuts read dim) while the grading's level lies under the bright grains'
   // gaps (their halves glued back: blind_scene.py --grain-contrast 0.7,1 at
-  // R 8, 20 of 40 merges joined two particles; by each pair's own level 5,
-  // every merge inside one grain kept; bench/segmentation/RESULTS.md
-  // "Grains of different brightness: each pair's own level"). A texture
+  // R 8, 20 of 40 merges joined two particles, whose interfaces lie mostly
+  // under halfway to their own level, and those inside one grain mostly
+  // above it; bench/segmentation/RESULTS.md "Grains of different brightness:
+  // each pair's own level"). A texture
   // inside the grains widens the solid's peak the same way (the grading's
   // level fell to the threshold and a bridged gap's partial-volume voxels
   // read bright: --grain-texture 0.1, R 12, 67 of 101 halves).

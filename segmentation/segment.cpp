@@ -108,7 +108,8 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
     // inside one body (split_labels.hpp within_grain_sigma). Both sigmas
     // bound what varies inside a grain from above (the peak holds the
     // spread between grains, the pairs the partial volume near a grain's
-    // surface and pores: 1.2-2 x the noise at R 8), so the smaller is taken.
+    // surface and pores: 1-2 x the solid peak's on uniform scenes), so the smaller
+    // is taken.
     // (It used to take over only where the peak was over 1.5 times as wide:
     // at R 8, grain contrast 0.85-1, seeds at 1.48-1.49 kept the peak's
     // depth and 36 of 80 halves, the peer 55; bench/segmentation/RESULTS.md

@@ -105,11 +105,11 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
     // needs what varies inside a grain: noise, and texture where the grains
     // have it (the void's noise alone split textured grains into dozens:
     // --grain-texture 0.1, F1 0.39). That sigma comes from pairs of pixels
-    // inside one body (split_labels.hpp within_grain_sigma). Both sigmas
+    // inside one body (split_labels.hpp within_grain_sigma), clear of the
+    // partial volume (segment.hpp kWithinGrainClearShare). Both sigmas
     // bound what varies inside a grain from above (the peak holds the
-    // spread between grains, the pairs the partial volume near a grain's
-    // surface and pores: 1-2 x the solid peak's on uniform scenes), so the smaller
-    // is taken.
+    // spread between grains, the pairs what partial volume is left above
+    // the cut), so the smaller is taken.
     // (It used to take over only where the peak was over 1.5 times as wide:
     // at R 8, grain contrast 0.85-1, seeds at 1.48-1.49 kept the peak's
     // depth and 36 of 80 halves, the peer 55; bench/segmentation/RESULTS.md
@@ -121,8 +121,12 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
       if (smoothed[k].size() != hist.size()) break;
       SolidPeak sm = solid_peak(smoothed[k], d.t.value);
       d.smoothed_solid_sigma = sm.sigma;
-      const WithinGrain within =
-          k < pairs.size() ? within_grain_sigma(pairs[k], d.t.value, kWithinGrainMinPairs) : WithinGrain{};
+      WithinGrain within;
+      if (k < pairs.size()) {
+        const double clear = double(d.t.value) + kWithinGrainClearShare * height;
+        within = within_grain_sigma(pairs[k], uint16_t(std::clamp(std::lround(clear), 0L, 65535L)), kWithinGrainMinPairs);
+        if (within.sigma == 0) within = within_grain_sigma(pairs[k], d.t.value, kWithinGrainMinPairs);
+      }
       d.within_grain_sigma = within.sigma;
       d.within_grain_pairs = within.pairs;
       d.noise_within_grains = within.sigma > 0 && within.sigma < sm.sigma;

@@ -163,6 +163,79 @@ TEST(SplitLabels, GrainsOfDifferentBrightnessComeApart) {
   }
 }
 
+// 216 balls of radius 8 (the blind sweep's smallest grains) on a 6 x 6 x 6
+// grid, 2 voxels apart, every fourth split by an oblique 1-voxel gap, of
+// brightness 0.85-1 of the solid's.
+BrightnessScene small_balls_of_different_brightness(uint64_t seed) {
+  constexpr int64_t g = 6, cell = 18, pad = 3, n = g * cell + 2 * pad;
+  constexpr double R = 8;
+  const double nn = std::sqrt(1 + 0.09 + 0.04);
+  uint32_t next_half = g * g * g + 1;
+  std::array<uint32_t, g * g * g> half{};  // the second half's label of a split ball, 0: whole
+  for (int b = 0; b < g * g * g; b += 4) half[size_t(b)] = next_half++;
+  auto at = [&](double z, double y, double x, uint32_t* label) {
+    auto cell_of = [&](double v) { return std::clamp(int(std::floor((v - double(pad)) / cell)), 0, int(g) - 1); };
+    const int cz = cell_of(z), cy = cell_of(y), cx = cell_of(x), b = int(g * g) * cz + int(g) * cy + cx;
+    auto centre = [&](int c) { return double(pad) + cell * c + 0.5 * cell - 0.5; };
+    const double dz = z - centre(cz), dy = y - centre(cy), dx = x - centre(cx);
+    if (dz * dz + dy * dy + dx * dx > R * R) return 0.0;
+    uint32_t l = uint32_t(b + 1);
+    if (half[size_t(b)]) {
+      const double u = (dx + 0.3 * dy + 0.2 * dz) / nn;
+      if (std::abs(u) <= 0.5) return 0.0;  // the gap
+      if (u > 0) l = half[size_t(b)];
+    }
+    if (label) *label = l;
+    return 0.85 + 0.15 * double((37 * b) % 216) / 215.0;
+  };
+  BrightnessScene s;
+  s.grey = test::supersampled_scan(Shape{n, n, n}, [&](double z, double y, double x) { return at(z, y, x, nullptr); },
+                                   0.7, 13, seed);
+  s.truth = Volume<uint32_t>::filled(Shape{n, n, n}, 0u);
+  for (int64_t k = 0; k < n; ++k)
+    for (int64_t j = 0; j < n; ++j)
+      for (int64_t i = 0; i < n; ++i) {
+        uint32_t l = 0;
+        if (at(double(k), double(j), double(i), &l) > 0) s.truth(k, j, i) = l;
+      }
+  return s;
+}
+
+// Small grains: much of a grain lies in the partial volume round its
+// surface, where the smoothed grey falls toward the threshold, and pairs
+// there widened the sigma inside grains: at R 8 (blind_scene.py, grain
+// contrast 0.85-1) to 3.7 times the smoothed noise, a depth no gap's dip
+// passed (70 of 108 halves). The pairs clear of it (segment.hpp
+// kWithinGrainClearShare) measure the noise: that of white noise of sigma
+// s smoothed by the separable kernel w is s (sum of w_k^2)^(3/2).
+// (The halves come apart here either way; the blind scenes' are harder.)
+// Seed 41 was looked at while writing this; the assertions run on 43-44.
+TEST(SplitLabels, TheNoiseInsideSmallGrainsIsTheNoise) {
+  for (uint64_t seed : {43u, 44u}) {
+    const auto s = small_balls_of_different_brightness(seed);
+    SegmentOptions o;
+    o.grain_radius_vox = 8;
+    const SegmentResult r = segment(s.grey, o);
+    const double sig = r.split_smoothing_vox;
+    const int rad = int(std::ceil(3 * sig));
+    double sum = 0, w2 = 0;
+    for (int k = -rad; k <= rad; ++k) sum += std::exp(-0.5 * k * k / (sig * sig));
+    for (int k = -rad; k <= rad; ++k) w2 += std::pow(std::exp(-0.5 * k * k / (sig * sig)) / sum, 2);
+    const double noise = 20000.0 / 13 * std::pow(w2, 1.5);
+    const std::string what = "seed " + std::to_string(seed) + ": smoothing " + std::to_string(sig) + ", sigma " +
+                             std::to_string(r.within_grain_sigma) + " against the noise's " + std::to_string(noise) +
+                             ", " + std::to_string(r.within_grain_pairs) + " pairs";
+    EXPECT_TRUE(r.split_noise_within_grains) << what;
+    EXPECT_LT(r.within_grain_sigma, 1.45 * noise) << what;  // 1.14-1.34 (all pairs above the threshold: 1.65-1.73)
+    EXPECT_GT(r.within_grain_sigma, 0.9 * noise) << what;
+    const uint32_t labels = 216 + 54;
+    EXPECT_EQ(r.count, labels) << what;
+    int whole = 0;
+    for (uint32_t l = 1; l <= labels; ++l) whole += test::best_iou(s.truth, r.labels, l) > 0.7;
+    EXPECT_EQ(whole, int(labels)) << what;
+  }
+}
+
 TEST(SplitLabels, IntactPorousGrainsStayWhole) {
   const int64_t n = 36;
   for (uint64_t seed : {21u, 22u, 23u}) {

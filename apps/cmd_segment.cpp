@@ -118,10 +118,10 @@ void print_plan(const SegmentJob& o, const tg::SegmentOptions& s) {
              s.watershed_lines ? "with lines" : "without lines", s.merge ? fmt::format("{}", s.merge_ratio) : "off");
   fmt::print("  split repair: {}\n",
              s.split ? fmt::format("labels whose grey, smoothed over {} voxels, holds two cores {:.3g} noise sigmas "
-                                   "above the sheet between them are cut apart",
+                                   "above the sheet between them are cut apart ({:.3g} where the noise is correlated)",
                                    s.split_smoothing_vox > 0 ? fmt::format("{:.3g}", s.split_smoothing_vox)
                                                              : std::string("0.7 or 1 (from the noise)"),
-                                   s.split_depth_sigmas)
+                                   s.split_depth_sigmas, s.split_depth_sigmas_correlated)
                      : std::string("off"));
   fmt::print("  thin pieces: {}\n",
              s.split && s.thin_pieces
@@ -483,6 +483,11 @@ static tg::app::Registrar reg{{"segment", 30,
   sub->add_option("--split-depth-sigmas", o->seg.split_depth_sigmas,
                   "A piece's smoothed peak must stand this many smoothed-noise sigmas above the sheet between "
                   "pieces (blind scans: 4 split an intact grain, 6-9 gave the same labels)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--split-depth-sigmas-correlated", o->seg.split_depth_sigmas_correlated,
+                  "...this many where the noise is correlated (the void's smoothed noise over 1.8 x white noise's, "
+                  "as a reconstruction filter leaves it; reported as split.noise_correlation)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--split-min-depth-contrast", o->seg.split_min_depth_contrast,

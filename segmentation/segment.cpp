@@ -117,6 +117,9 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
     const SolidPeak raw = solid_peak(hist, d.t.value);
     const double height = std::max(0.0, raw.mode - double(d.t.value));
     d.solid_level = raw.mode;
+    // The void's raw noise, against its smoothed one below: correlated noise
+    // (segment.hpp kCorrelatedNoiseRatio).
+    const double raw_void_sigma = phase_levels(hist, d.levels.zeros_clipped ? d.levels.zero_count : 0).void_sigma;
     for (size_t k = 0; k < sigmas.size(); ++k) {
       if (smoothed[k].size() != hist.size()) break;
       SolidPeak sm = solid_peak(smoothed[k], d.t.value);
@@ -133,8 +136,13 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
       if (d.noise_within_grains) sm.sigma = within.sigma;
       d.split_smoothing = sigmas[k];
       d.smoothed_sigma = sm.sigma;
-      d.split_depth = std::max(o.split_depth_sigmas * sm.sigma, o.split_min_depth_contrast * height);
-      if (o.split_depth_sigmas * sm.sigma <= kSplitDepthShare * height) break;
+      const double white = raw_void_sigma * white_noise_gain(sigmas[k]);
+      d.noise_correlation = white > 0 ? phase_levels(smoothed[k]).void_sigma / white : 0.0;
+      d.depth_sigmas = d.noise_correlation > kCorrelatedNoiseRatio
+                           ? std::min(o.split_depth_sigmas, o.split_depth_sigmas_correlated)
+                           : o.split_depth_sigmas;
+      d.split_depth = std::max(d.depth_sigmas * sm.sigma, o.split_min_depth_contrast * height);
+      if (d.depth_sigmas * sm.sigma <= kSplitDepthShare * height) break;
     }
   }
   if ((o.noise_specks || o.face_slivers) && o.threshold != ThresholdMethod::local) {
@@ -278,6 +286,8 @@ void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& o
   r.within_grain_sigma = d.within_grain_sigma;
   r.within_grain_pairs = d.within_grain_pairs;
   r.split_noise_within_grains = d.noise_within_grains;
+  r.split_noise_correlation = d.noise_correlation;
+  r.split_depth_sigmas_used = d.depth_sigmas;
   r.split_smoothing_vox = d.split_smoothing;
   r.split_depth = r.split_used ? d.split_depth : 0.0;
   r.split_code = d.split_code;
@@ -748,6 +758,9 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                                                  "different brightness or texture widen the peak)")
                                    : std::string("solid peak")},
                 {"depth_sigmas", o.split_depth_sigmas},
+                {"depth_sigmas_correlated", o.split_depth_sigmas_correlated},
+                {"depth_sigmas_used", r.split_depth_sigmas_used},
+                {"noise_correlation", r.split_noise_correlation},
                 {"min_depth_contrast", o.split_min_depth_contrast},
                 {"depth", r.split_depth},
                 {"grey_code", {{"lo", r.split_code.lo}, {"step", r.split_code.step},

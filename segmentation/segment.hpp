@@ -175,6 +175,10 @@ struct SegmentOptions {
   bool split = true;
   double split_smoothing_vox = 0;
   double split_depth_sigmas = 6.0;
+  // ... and this many where the noise is correlated (the void's smoothed
+  // sigma over kCorrelatedNoiseRatio x white noise's): fewer independent
+  // dips for noise to fake a gap with, and a gap's dip smoothed as much.
+  double split_depth_sigmas_correlated = 4.0;
   double split_min_depth_contrast = 0.1;  // floor for noiseless scans
   double split_min_piece_fraction = 0.005;
   // Face caps (split_labels.hpp split_face_caps): with the split repair.
@@ -224,6 +228,8 @@ struct SegmentResult {
   double within_grain_sigma = 0;       // the smoothed grey's inside grains (0: too few pairs)
   int64_t within_grain_pairs = 0;
   bool split_noise_within_grains = false;  // the depth from the sigma inside grains (narrower than the solid's peak)
+  double split_noise_correlation = 0;  // the void's smoothed sigma / white noise's (0: not measured)
+  double split_depth_sigmas_used = 0;  // split_depth_sigmas, or ..._correlated where the noise is correlated
   double split_smoothing_vox = 0; // the Gaussian sigma the split repair read the grey with (chosen or given)
   double split_depth = 0;         // grey levels
   GreyCode split_code;
@@ -281,6 +287,8 @@ struct GreyDecisions {
   double smoothed_solid_sigma = 0, within_grain_sigma = 0;
   int64_t within_grain_pairs = 0;
   bool noise_within_grains = false;
+  double noise_correlation = 0;  // the void's smoothed sigma / white noise's, at split_smoothing (0: not measured)
+  double depth_sigmas = 0;       // the sigmas split_depth is
   GreyCode split_code;  // the one-byte grey it reads (0.1th..99.9th percentile of the histogram)
   double solid_level = 0;  // the solid's grey peak (split repair on): the face-cap repair's dip
   // Noise specks: the test in grey levels (sigma 0: off); it reads the same code.
@@ -318,6 +326,15 @@ inline constexpr double kSplitDepthShare = 0.5;
 // bench/segmentation/RESULTS.md "The split repair's noise, clear of the
 // partial volume".
 inline constexpr int64_t kWithinGrainMinPairs = 500;
+// The noise is correlated (split_depth_sigmas_correlated) where the void's
+// sigma after the split repair's smoothing is over this many times white
+// noise's (split_labels.hpp white_noise_gain). blind_scene.py R 20: white
+// 1.0-1.2, correlated over 0.7 / 1.5 voxels 2.3-2.9 / 3.3-5.1. Session 26
+// measured 4 sigmas on correlated noise: no intact grain cut on 12 scenes
+// (CNR 5-13, correlation 0.7-1.5), halves back at CNR 8 (white noise: 3
+// cut on 10); bench/segmentation/RESULTS.md "Correlated noise" and
+// "Correlated noise: the depth from fewer sigmas".
+inline constexpr double kCorrelatedNoiseRatio = 1.8;
 inline constexpr double kWithinGrainClearShare = 0.3;
 // The sigmas whose smoothed sample histograms decide_grey needs: the given
 // one, or the ladder.

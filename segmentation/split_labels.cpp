@@ -546,6 +546,12 @@ void smoothed_sample_histogram(const Volume<uint16_t>& slab, int64_t z0, int64_t
     for (size_t g = 0; g < pl.size(); ++g) (*pairs)[g] += pl[g];
 }
 
+double white_noise_gain(double smoothing_sigma_vox) {
+  double w2 = 0;
+  for (const float w : gaussian_kernel(smoothing_sigma_vox)) w2 += double(w) * double(w);
+  return std::pow(w2, 1.5);
+}
+
 WithinGrain within_grain_sigma(const std::vector<int64_t>& pairs, uint16_t t, int64_t min_pairs) {
   WithinGrain r;
   if (pairs.size() != kPairLevelBins * kPairDiffBins) return r;

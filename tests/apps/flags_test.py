@@ -87,6 +87,7 @@ def segment_rows(base):
         (["--keep-noise-specks"], ("noise_specks", "enabled", False)),
         (["--speck-z", "7"], ("noise_specks", "z_crit", 7.0)),
         (["--split-depth-sigmas", "3"], ("split", "depth_sigmas", 3.0)),
+        (["--split-depth-sigmas-correlated", "5"], ("split", "depth_sigmas_correlated", 5.0)),
         (["--split-min-depth-contrast", "0.3"], ("split", "min_depth_contrast", 0.3)),
         (["--split-min-piece", "0.05"], ("split", "min_piece_fraction", 0.05)),
         (["--split-smoothing-vox", "1.5"], ("split", "smoothing_sigma_vox", 1.5)),

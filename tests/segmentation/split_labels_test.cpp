@@ -13,6 +13,7 @@
 #include <set>
 #include <string>
 
+#include "data_synth/imaging.hpp"
 #include "scan_scenes.hpp"
 #include "segmentation/segment.hpp"
 #include "segmentation/segment_chunked.hpp"
@@ -233,6 +234,55 @@ TEST(SplitLabels, TheNoiseInsideSmallGrainsIsTheNoise) {
     int whole = 0;
     for (uint32_t l = 1; l <= labels; ++l) whole += test::best_iou(s.truth, r.labels, l) > 0.7;
     EXPECT_EQ(whole, int(labels)) << what;
+  }
+}
+
+// Noise a reconstruction filter correlated over c voxels (white noise
+// blurred by c, rescaled to CNR 13), added to a noiseless scan.
+Volume<uint16_t> with_correlated_noise(Volume<uint16_t> g, double c, uint64_t seed) {
+  Volume<float> nz(g.shape());
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> nd(0, 1);
+  for (auto& v : nz.span()) v = float(nd(rng));
+  if (c > 0) synth::gaussian_blur(nz, c);
+  double ss = 0;
+  for (const float v : nz.span()) ss += double(v) * double(v);
+  const double scale = 20000.0 / 13 / std::sqrt(ss / double(nz.size()));
+  for (int64_t i = 0; i < g.size(); ++i)
+    g.data()[i] = uint16_t(std::clamp(std::lround(double(g.data()[i]) + scale * nz.data()[i]), 0L, 65535L));
+  return g;
+}
+
+// Correlated noise: its smoothed sigma is several times white noise's, the
+// split repair's 6 sigmas a depth no gap's dip reaches (blind_scene.py R 20,
+// correlated over 1.5 voxels: 57 of 71 halves, the peer 61); it takes
+// split_depth_sigmas_correlated (4) there. The measure against its analytic
+// value on white noise: the void's smoothed sigma / (raw sigma x the
+// kernel's white-noise gain) = 1.
+TEST(SplitLabels, CorrelatedNoiseIsMeasuredAndTakesFewerSigmas) {
+  for (uint64_t seed : {51u, 52u}) {
+    const auto noiseless = test::split_ball_scan(48, 16, 1.0, 0, 0.7, 0, 1);
+    SegmentOptions o;
+    o.grain_radius_vox = 16;
+    const SegmentResult white = segment(with_correlated_noise(noiseless.clone(), 0, seed), o);
+    const std::string w = "white, seed " + std::to_string(seed) + ": correlation " + std::to_string(white.split_noise_correlation);
+    EXPECT_NEAR(white.split_noise_correlation, 1.0, 0.15) << w;
+    EXPECT_EQ(white.split_depth_sigmas_used, 6.0) << w;
+    EXPECT_EQ(white.count, 2u) << w;
+    for (const double c : {0.7, 1.5}) {
+      const SegmentResult r = segment(with_correlated_noise(noiseless.clone(), c, seed), o);
+      const std::string what = "correlated over " + std::to_string(c) + ", seed " + std::to_string(seed) +
+                               ": correlation " + std::to_string(r.split_noise_correlation);
+      EXPECT_GT(r.split_noise_correlation, kCorrelatedNoiseRatio) << what;
+      EXPECT_EQ(r.split_depth_sigmas_used, 4.0) << what;
+      // The halves apart; over 1.5 voxels noise blobs the speck test keeps
+      // add 2-4 labels at any depth: no cut beyond 6 sigmas' then.
+      SegmentOptions o6 = o;
+      o6.split_depth_sigmas_correlated = 6;
+      const SegmentResult r6 = segment(with_correlated_noise(noiseless.clone(), c, seed), o6);
+      if (c < 1) EXPECT_EQ(r.count, 2u) << what;
+      EXPECT_EQ(r.count, r6.count) << what;
+    }
   }
 }
 

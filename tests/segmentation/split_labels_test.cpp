@@ -92,36 +92,40 @@ TEST(SplitLabels, SegmentSplitsWhatTheGreyEvidenceJoined) {
   }
 }
 
-// 27 balls of radius 9 (3 x 3 x 3, 3 voxels apart), PSF 0.7, CNR 13; ball
-// b's contrast over the void is 0.7 + 0.3 ((7 b) mod 27) / 26 of the
-// solid's (grains of one sand differ in density), or the solid's for all
-// with `alike`. Six of them are cut through their centres by an oblique
-// 1-voxel gap. Truth: 1..27 the balls, the second halves of the split ones
-// 28..33 (0: void or gap).
+// A scene of balls on a grid and its truth labels.
 struct BrightnessScene {
   Volume<uint16_t> grey;
   Volume<uint32_t> truth;
 };
-BrightnessScene balls_of_different_brightness(bool alike, uint64_t seed) {
-  constexpr int64_t cell = 21, pad = 3, n = 3 * cell + 2 * pad;
-  constexpr double R = 9;
-  const std::array<int, 6> split = {0, 5, 10, 13, 20, 25};
+
+// g^3 balls of radius R, one a cell of `cell` voxels (3 voxels of margin
+// round the grid); ball b (z-major) is label b + 1, and those split(b)
+// says are cut by an oblique 1-voxel gap, their far halves labelled g^3 + 1,
+// g^3 + 2, .. in the order of b; brightness(b): the ball's share of the
+// solid's contrast. Imaged as supersampled_scan (PSF 0.7, CNR 13).
+template <class Split, class Brightness>
+BrightnessScene grid_of_balls(int g, int64_t cell, double R, Split&& split, Brightness&& brightness, uint64_t seed) {
+  const int64_t pad = 3, n = g * cell + 2 * pad;
   const double nn = std::sqrt(1 + 0.09 + 0.04);
+  std::vector<uint32_t> half(size_t(g * g * g), 0);  // the far half's label of a split ball, 0: whole
+  uint32_t next = uint32_t(g * g * g) + 1;
+  for (int b = 0; b < g * g * g; ++b)
+    if (split(b)) half[size_t(b)] = next++;
   // The one ball a point can lie in is its cell's.
   auto at = [&](double z, double y, double x, uint32_t* label) {
-    auto cell_of = [&](double v) { return std::clamp(int(std::floor((v - double(pad)) / cell)), 0, 2); };
-    const int cz = cell_of(z), cy = cell_of(y), cx = cell_of(x), b = 9 * cz + 3 * cy + cx;
-    auto centre = [&](int c) { return double(pad) + cell * c + 0.5 * cell - 0.5; };
+    auto cell_of = [&](double v) { return std::clamp(int(std::floor((v - double(pad)) / double(cell))), 0, g - 1); };
+    const int cz = cell_of(z), cy = cell_of(y), cx = cell_of(x), b = g * g * cz + g * cy + cx;
+    auto centre = [&](int c) { return double(pad) + double(cell) * c + 0.5 * double(cell) - 0.5; };
     const double dz = z - centre(cz), dy = y - centre(cy), dx = x - centre(cx);
     if (dz * dz + dy * dy + dx * dx > R * R) return 0.0;
     uint32_t l = uint32_t(b + 1);
-    if (const auto it = std::find(split.begin(), split.end(), b); it != split.end()) {
+    if (half[size_t(b)]) {
       const double u = (dx + 0.3 * dy + 0.2 * dz) / nn;
       if (std::abs(u) <= 0.5) return 0.0;  // the gap
-      if (u > 0) l = uint32_t(28 + (it - split.begin()));
+      if (u > 0) l = half[size_t(b)];
     }
     if (label) *label = l;
-    return alike ? 1.0 : 0.7 + 0.3 * double((7 * b) % 27) / 26.0;
+    return brightness(b);
   };
   BrightnessScene s;
   s.grey = test::supersampled_scan(Shape{n, n, n}, [&](double z, double y, double x) { return at(z, y, x, nullptr); },
@@ -134,6 +138,19 @@ BrightnessScene balls_of_different_brightness(bool alike, uint64_t seed) {
         if (at(double(k), double(j), double(i), &l) > 0) s.truth(k, j, i) = l;
       }
   return s;
+}
+
+// 27 balls of radius 9 (3 x 3 x 3, 3 voxels apart), PSF 0.7, CNR 13; ball
+// b's contrast over the void is 0.7 + 0.3 ((7 b) mod 27) / 26 of the
+// solid's (grains of one sand differ in density), or the solid's for all
+// with `alike`. Six of them are cut through their centres by an oblique
+// 1-voxel gap. Truth: 1..27 the balls, the second halves of the split ones
+// 28..33 (0: void or gap).
+BrightnessScene balls_of_different_brightness(bool alike, uint64_t seed) {
+  const std::array<int, 6> split = {0, 5, 10, 13, 20, 25};
+  return grid_of_balls(
+      3, 21, 9, [&](int b) { return std::find(split.begin(), split.end(), b) != split.end(); },
+      [&](int b) { return alike ? 1.0 : 0.7 + 0.3 * double((7 * b) % 27) / 26.0; }, seed);
 }
 
 // Where the grains differ in brightness the solid's grey peak is as wide as
@@ -168,38 +185,9 @@ TEST(SplitLabels, GrainsOfDifferentBrightnessComeApart) {
 // grid, 2 voxels apart, every fourth split by an oblique 1-voxel gap, of
 // brightness 0.85-1 of the solid's.
 BrightnessScene small_balls_of_different_brightness(uint64_t seed) {
-  constexpr int64_t g = 6, cell = 18, pad = 3, n = g * cell + 2 * pad;
-  constexpr double R = 8;
-  const double nn = std::sqrt(1 + 0.09 + 0.04);
-  uint32_t next_half = g * g * g + 1;
-  std::array<uint32_t, g * g * g> half{};  // the second half's label of a split ball, 0: whole
-  for (int b = 0; b < g * g * g; b += 4) half[size_t(b)] = next_half++;
-  auto at = [&](double z, double y, double x, uint32_t* label) {
-    auto cell_of = [&](double v) { return std::clamp(int(std::floor((v - double(pad)) / cell)), 0, int(g) - 1); };
-    const int cz = cell_of(z), cy = cell_of(y), cx = cell_of(x), b = int(g * g) * cz + int(g) * cy + cx;
-    auto centre = [&](int c) { return double(pad) + cell * c + 0.5 * cell - 0.5; };
-    const double dz = z - centre(cz), dy = y - centre(cy), dx = x - centre(cx);
-    if (dz * dz + dy * dy + dx * dx > R * R) return 0.0;
-    uint32_t l = uint32_t(b + 1);
-    if (half[size_t(b)]) {
-      const double u = (dx + 0.3 * dy + 0.2 * dz) / nn;
-      if (std::abs(u) <= 0.5) return 0.0;  // the gap
-      if (u > 0) l = half[size_t(b)];
-    }
-    if (label) *label = l;
-    return 0.85 + 0.15 * double((37 * b) % 216) / 215.0;
-  };
-  BrightnessScene s;
-  s.grey = test::supersampled_scan(Shape{n, n, n}, [&](double z, double y, double x) { return at(z, y, x, nullptr); },
-                                   0.7, 13, seed);
-  s.truth = Volume<uint32_t>::filled(Shape{n, n, n}, 0u);
-  for (int64_t k = 0; k < n; ++k)
-    for (int64_t j = 0; j < n; ++j)
-      for (int64_t i = 0; i < n; ++i) {
-        uint32_t l = 0;
-        if (at(double(k), double(j), double(i), &l) > 0) s.truth(k, j, i) = l;
-      }
-  return s;
+  return grid_of_balls(
+      6, 18, 8, [](int b) { return b % 4 == 0; }, [](int b) { return 0.85 + 0.15 * double((37 * b) % 216) / 215.0; },
+      seed);
 }
 
 // Small grains: much of a grain lies in the partial volume round its

@@ -78,6 +78,9 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
     d.t = o.threshold == ThresholdMethod::otsu ? otsu_threshold(hist) : moments_threshold(hist);
   }
   d.t.separability = separability(hist, d.t.value);
+  // The void's level and raw noise: the noise-speck test, the face slivers
+  // and the split repair's test for correlated noise read them.
+  const PhaseLevels phases = phase_levels(hist, d.levels.zeros_clipped ? d.levels.zero_count : 0);
   if (o.threshold != ThresholdMethod::local && o.grey_evidence) {
     // Halfway to the solid's mean grey, and at least bright_sigmas noise
     // sigmas below the solid's peak (a noisy scan lowers it, down to t:
@@ -117,9 +120,6 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
     const SolidPeak raw = solid_peak(hist, d.t.value);
     const double height = std::max(0.0, raw.mode - double(d.t.value));
     d.solid_level = raw.mode;
-    // The void's raw noise, against its smoothed one below: correlated noise
-    // (segment.hpp kCorrelatedNoiseRatio).
-    const double raw_void_sigma = phase_levels(hist, d.levels.zeros_clipped ? d.levels.zero_count : 0).void_sigma;
     for (size_t k = 0; k < sigmas.size(); ++k) {
       if (smoothed[k].size() != hist.size()) break;
       SolidPeak sm = solid_peak(smoothed[k], d.t.value);
@@ -136,7 +136,9 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
       if (d.noise_within_grains) sm.sigma = within.sigma;
       d.split_smoothing = sigmas[k];
       d.smoothed_sigma = sm.sigma;
-      const double white = raw_void_sigma * white_noise_gain(sigmas[k]);
+      // Correlated noise (segment.hpp kCorrelatedNoiseRatio): the void's
+      // smoothed sigma against white noise's.
+      const double white = phases.void_sigma * white_noise_gain(sigmas[k]);
       d.noise_correlation = white > 0 ? phase_levels(smoothed[k]).void_sigma / white : 0.0;
       d.depth_sigmas = d.noise_correlation > kCorrelatedNoiseRatio
                            ? std::min(o.split_depth_sigmas, o.split_depth_sigmas_correlated)
@@ -151,12 +153,11 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
     // counted in (the solid's sigma is no stand-in: where the threshold lies
     // low, the void's tail fills the histogram above it). The void's grey
     // also sets the face slivers' half levels (face_slivers.hpp).
-    const PhaseLevels pl = phase_levels(hist, d.levels.zeros_clipped ? d.levels.zero_count : 0);
-    d.void_level = pl.void_level;
+    d.void_level = phases.void_level;
     if (o.noise_specks) {
       d.speck_test.threshold = double(d.t.value);
-      d.speck_test.void_level = pl.void_level;
-      d.speck_test.sigma = pl.void_sigma;
+      d.speck_test.void_level = phases.void_level;
+      d.speck_test.sigma = phases.void_sigma;
       d.speck_test.z_crit = o.speck_z;
     }
   }

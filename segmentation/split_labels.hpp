@@ -278,9 +278,6 @@ Volume<uint8_t> quantise_grey(const Volume<uint16_t>& grey, const GreyCode& code
 // of the raw grey 2 slices below and above either one (the pair's "level":
 // above the threshold, both lie two voxels inside one solid body).
 // within_grain_sigma() reads it.
-// The sigma of white noise of sigma 1 after the split repair's smoothing
-// (the separable kernel of sigma_s voxels w: (sum of w_k^2)^(3/2)).
-double white_noise_gain(double smoothing_sigma_vox);
 inline constexpr int64_t kPairStepVox = 5;  // past the smoothed noise's correlation (correlated noise 1.5 voxels included)
 inline constexpr size_t kPairLevelBins = 64, kPairDiffBins = 1024;  // level: grey / 1024; |difference|: 16 grey a bin
 inline constexpr int kPairLevelShift = 10;
@@ -298,5 +295,9 @@ struct WithinGrain {
   int64_t pairs = 0;
 };
 WithinGrain within_grain_sigma(const std::vector<int64_t>& pairs, uint16_t t, int64_t min_pairs);
+
+// The sigma of white noise of sigma 1 after the split repair's smoothing
+// (the separable kernel w of sigma_s voxels: (sum of w_k^2)^(3/2)).
+double white_noise_gain(double smoothing_sigma_vox);
 
 }  // namespace tg

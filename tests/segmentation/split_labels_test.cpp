@@ -268,7 +268,9 @@ TEST(SplitLabels, CorrelatedNoiseIsMeasuredAndTakesFewerSigmas) {
       SegmentOptions o6 = o;
       o6.split_depth_sigmas_correlated = 6;
       const SegmentResult r6 = segment(with_correlated_noise(noiseless.clone(), c, seed), o6);
-      if (c < 1) EXPECT_EQ(r.count, 2u) << what;
+      if (c < 1) {
+        EXPECT_EQ(r.count, 2u) << what;
+      }
       EXPECT_EQ(r.count, r6.count) << what;
     }
   }

@@ -45,6 +45,9 @@ void validate(const SegmentOptions& o) {
   if (o.min_size_vox < 1) throw UsageError("segment: the minimum label size must be >= 1 voxel");
   if (!(o.split_smoothing_vox >= 0) || !std::isfinite(o.split_smoothing_vox))
     throw UsageError("segment: the split repair's smoothing must be >= 0 voxels (0: chosen from the noise)");
+  if (!(o.split_depth_sigmas > 0) || !std::isfinite(o.split_depth_sigmas) || !(o.split_depth_sigmas_correlated > 0) ||
+      !std::isfinite(o.split_depth_sigmas_correlated))
+    throw UsageError("segment: the split repair's depth must be a positive number of noise sigmas");
   if (o.saturation_level < 1 || o.saturation_level > 65535)
     throw UsageError("segment: the saturation level must be a grey level in 1..65535");
   if (o.local_window_vox < 0 || o.local_window_vox == 1)

@@ -175,9 +175,10 @@ struct SegmentOptions {
   bool split = true;
   double split_smoothing_vox = 0;
   double split_depth_sigmas = 6.0;
-  // ... and this many where the noise is correlated (the void's smoothed
-  // sigma over kCorrelatedNoiseRatio x white noise's): fewer independent
-  // dips for noise to fake a gap with, and a gap's dip smoothed as much.
+  // ... and this many (if fewer) where the noise is correlated (the void's
+  // smoothed sigma over kCorrelatedNoiseRatio x white noise's): fewer
+  // independent dips for noise to fake a gap with, and a gap's dip
+  // smoothed as much.
   double split_depth_sigmas_correlated = 4.0;
   double split_min_depth_contrast = 0.1;  // floor for noiseless scans
   double split_min_piece_fraction = 0.005;
@@ -331,11 +332,10 @@ inline constexpr double kWithinGrainClearShare = 0.3;
 // sigma after the split repair's smoothing is over this many times white
 // noise's (split_labels.hpp white_noise_gain). blind_scene.py R 20 and the
 // tests' split balls: white 1.0-1.2, correlated over 0.7 / 1.5 voxels
-// 2.1-2.9 / 2.8-5.1. Session 26
-// measured 4 sigmas on correlated noise: no intact grain cut on 12 scenes
-// (CNR 5-13, correlation 0.7-1.5), halves back at CNR 8 (white noise: 3
-// cut on 10); bench/segmentation/RESULTS.md "Correlated noise" and
-// "Correlated noise: the depth from fewer sigmas".
+// 2.1-2.9 / 2.8-5.1. Session 26 measured 4 sigmas on correlated noise: no
+// intact grain cut on 12 scenes (CNR 5-13, correlation 0.7-1.5), halves
+// back at CNR 8 (white noise: 3 cut on 10); bench/segmentation/RESULTS.md
+// "Correlated noise" and "Correlated noise: the depth from fewer sigmas".
 inline constexpr double kCorrelatedNoiseRatio = 1.8;
 // The sigmas whose smoothed sample histograms decide_grey needs: the given
 // one, or the ladder.

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <algorithm>
 #include <random>
 #include <set>
@@ -233,6 +235,14 @@ TEST(Segment, ResolvedDefaultsFollowTheGrainRadius) {
   auto bad = opts(5);
   bad.connectivity = 7;
   EXPECT_THROW(bad.resolved(), UsageError);
+  for (const double sigmas : {0.0, -1.0, std::nan("")}) {
+    auto depth = opts(5);
+    depth.split_depth_sigmas = sigmas;
+    EXPECT_THROW(depth.resolved(), UsageError) << sigmas;
+    depth = opts(5);
+    depth.split_depth_sigmas_correlated = sigmas;
+    EXPECT_THROW(depth.resolved(), UsageError) << sigmas;
+  }
 }
 
 }  // namespace

@@ -276,6 +276,9 @@ int run_segment(SegmentJob& o) {
   if (res.thin_pieces_used && res.thin_pieces.split)
     fmt::print("  thin pieces: {} of {} labels gave up a thin piece ({} pieces added; opening radius {:.3g} voxels)\n",
                res.thin_pieces.split, res.thin_pieces.tested, res.thin_pieces.pieces_added, res.thin_piece_radius_vox);
+  if (res.thin_walls_used && res.thin_walls.merges)
+    fmt::print("  thin walls: {} merges among {} labels thin throughout\n", res.thin_walls.merges,
+               res.thin_walls.thin_labels);
   if (res.face_slivers_used && res.face_slivers.labels_grown)
     fmt::print("  face slivers: {} thin labels on the scan's faces took {} partial-volume voxels\n",
                res.face_slivers.labels_grown, res.face_slivers.voxels_added);
@@ -336,8 +339,9 @@ static tg::app::Registrar reg{{"segment", 30,
     "ball of radius max(3, 0.15 R) whose opening keeps the grain, touching it by a small\n"
     "contact; at a face of the scan only from (3 r)^3 voxels up) gets its own label, and\n"
     "labels thin throughout that meet across an interface as bright as solid are put back\n"
-    "together (the wall of a shell, which the watershed cuts where grains touch it)\n"
-    "(--no-thin-pieces); face caps: a grain cut by a face\n"
+    "together (the wall of a shell, which the watershed cuts where grains touch it; only where\n"
+    "R >= 2 (r + 1): smaller grains' halves are thin throughout themselves) (--no-thin-pieces);\n"
+    "face caps: a grain cut by a face\n"
     "of the scan that shows only a thin cap, given by the watershed to the grain it touches,\n"
     "gets its own label when its section on\n"
     "the face is a second disc and the contact between them is dim, or when the label goes on\n"

@@ -238,6 +238,7 @@ struct SegmentResult {
   bool thin_pieces_used = false;     // the thin-piece repair ran (with the split repair, thin_pieces on)
   double thin_piece_radius_vox = 0;  // the opening's radius it used
   ThinPieceResult thin_pieces;
+  bool thin_walls_used = false;    // the wall merge ran (thin pieces on, grains deep enough: segment.cpp)
   WallMergeResult thin_walls;      // with the thin-piece repair: walls put back together (merge_thin_walls)
   bool face_caps_used = false;  // the face-cap repair ran (with the split repair, face_caps on)
   FaceCapResult face_caps;

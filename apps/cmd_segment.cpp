@@ -127,8 +127,11 @@ void print_plan(const SegmentJob& o, const tg::SegmentOptions& s) {
              s.split && s.thin_pieces
                  ? fmt::format("a piece of a label thinner than 2 x {:.3g} voxels (outside its opening by a ball of that "
                                "radius) that touches the rest by under a fifth of its voxels gets a label of its own "
-                               "(a chip pressed on a grain)",
-                               r.thin_piece_radius_vox)
+                               "(a chip pressed on a grain); {}",
+                               r.thin_piece_radius_vox,
+                               r.merges_thin_walls()
+                                   ? "labels thin throughout meeting across a bright interface merged (a shell's wall)"
+                                   : "walls not merged (grains under 2 (r + 1) voxels are thin throughout themselves)")
                  : std::string("off"));
   fmt::print("  face caps: {}\n", s.split && s.face_caps
                                      ? "a label whose footprint on a scan face holds two distance maxima parted by a "

@@ -617,13 +617,8 @@ SegmentResult segment_graded(Volume<uint8_t> solid, const SegmentOptions& opt_in
       wo.floor = split_floor;
       wo.bright = split_floor + 0.5 * (solid_level - split_floor);
       wo.min_area = int64_t(std::lround(to.radius_vox * to.radius_vox));
-      // The rule holds where grains and their halves are deeper than r: a
-      // half of a grain of radius R is about R / 2 deep, less the dim rim of
-      // about a voxel. Below R = 2 (r + 1) they are thin throughout
-      // themselves, and it glued halves and small grains back together
-      // (blind scenes R 5-7: F1 +0.009 to +0.05 without it; R 8 with it:
-      // +0.0002 and +0.0016 on 36 sweep scenes).
-      r.thin_walls_used = opt.grain_radius_vox >= 2 * (to.radius_vox + 1);
+      // Walls only where grains are deeper than r (segment.hpp).
+      r.thin_walls_used = opt.merges_thin_walls();
       if (r.thin_walls_used)
         r.thin_walls = merge_thin_walls(lab, *grey_code, r.thin_pieces.thin, r.thin_pieces.thin_boxes, wo);
       r.thin_pieces.thin = {};

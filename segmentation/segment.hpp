@@ -192,7 +192,7 @@ struct SegmentOptions {
   // are deeper than r: a half of a grain of radius R is about R / 2 deep,
   // less the dim rim of about a voxel. Below R = 2 (r + 1) the grains are
   // thin throughout themselves, and the merge glued small grains pressed on
-  // one another (blind scenes R 5-7: F1 +0.0 to +0.05 without it; R 8 with
+  // one another (blind scenes R 5-7: F1 -0.0004 to +0.05 without it; R 8 with
   // it: +0.0002 and +0.0016 on 36 sweep scenes). On resolved options.
   bool merges_thin_walls() const { return grain_radius_vox >= 2 * (thin_piece_radius_vox + 1); }
 

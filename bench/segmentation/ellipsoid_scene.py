@@ -15,8 +15,9 @@ Gaussian noise at contrast-to-noise --cnr on a void/solid grey of
 10000/30000. With --z-scale s the voxels are s times longer along z
 (voxel_size_m (s x 12.3, 12.3, 12.3) um).
 
-Truth: the label covering most of a voxel's eight samples, where half of
-them or more are solid. Outputs in blind_scene.py's layout, so that
+Truth: the label covering most of a voxel's eight samples, where more than
+half of them are solid (half: on every second voxel, so that a grain's truth
+volume is its volume). Outputs in blind_scene.py's layout, so that
 blind_score.py and sweep.py's scoring read them:
   PREFIX.h5         /scan (uint16), /labels (uint32 truth), voxel_size_m
   PREFIX_truth.csv  label, volume_vox, parent, kind (intact | half),
@@ -104,7 +105,11 @@ def main():
         better = (run > best_n) & (srt[:, k] > 0)
         best = np.where(better, srt[:, k], best)
         best_n = np.where(better, run, best_n)
-    best[solid < 0.5] = 0
+    # Half the samples solid is a tie: solid on every second voxel (by the
+    # parity of k + j + i), so that the truth's volume is not biased upward.
+    k, j, i = np.indices(shape)
+    odd = ((k + j + i) % 2 == 1).ravel()
+    best[(solid < 0.5) | ((solid == 0.5) & odd)] = 0
     truth = best.reshape(shape).astype(np.uint32)
     solid = solid.reshape(shape)
     grey = ndimage.gaussian_filter(10000 + 20000 * solid, [a.psf / zs, a.psf, a.psf])

@@ -343,7 +343,7 @@ static tg::app::Registrar reg{{"segment", 30,
     "contact; at a face of the scan only from (3 r)^3 voxels up) gets its own label, and\n"
     "labels thin throughout that meet across an interface as bright as solid are put back\n"
     "together (the wall of a shell, which the watershed cuts where grains touch it; only where\n"
-    "R >= 2 (r + 1): smaller grains' halves are thin throughout themselves) (--no-thin-pieces);\n"
+    "R >= 2 (r + 1): smaller grains are thin throughout themselves) (--no-thin-pieces);\n"
     "face caps: a grain cut by a face\n"
     "of the scan that shows only a thin cap, given by the watershed to the grain it touches,\n"
     "gets its own label when its section on\n"

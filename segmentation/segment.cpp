@@ -804,7 +804,7 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                                         "and labels so thin) merge where they meet across >= radius_vox^2 voxels of "
                                         "interface at least halfway from the threshold to the solid's grey, >= {} of "
                                         "it (a wall the watershed cut; merge_labels.hpp merge_thin_walls); runs where the grain radius "
-                                        "is >= 2 (radius_vox + 1) voxels (smaller grains' halves are thin throughout)",
+                                        "is >= 2 (radius_vox + 1) voxels (smaller grains are thin throughout themselves)",
                                         d.min_bright_share);
                                   }()},
                                  {"thin_labels", r.thin_walls.thin_labels},

@@ -98,6 +98,7 @@ tg::SegmentOptions segment_options(const SegmentJob& o, const tg::Geometry& geom
   s.face_caps = !o.no_face_caps;
   s.thin_pieces = !o.no_thin_pieces;
   s.face_slivers = !o.no_face_slivers;
+  s.grain_levels = !o.no_grain_levels;
   s.noise_specks = !o.keep_noise_specks;
   s.grey_evidence = !o.no_grey_evidence;
   if (o.grain_radius_vox > 0) {
@@ -138,6 +139,13 @@ void print_plan(const SegmentJob& o, const tg::SegmentOptions& s) {
                                        "dim contact, or goes on behind its footprint past a dim layer into a grain, "
                                        "gives up the cap of the grain cut by the face"
                                      : "off");
+  fmt::print("  grain levels: {}\n",
+             s.grain_levels && s.split && s.threshold != tg::ThresholdMethod::local
+                 ? fmt::format("where the grains differ in brightness (the smoothed solid peak >= {:g} x the grey's "
+                               "spread inside a grain), each grain's grey is raised to the solid's level before the "
+                               "threshold (whole-volume runs)",
+                               tg::GrainLevelsOptions{}.min_spread_ratio)
+                 : std::string("off"));
   fmt::print("  face slivers: {}\n", s.face_slivers && s.threshold != tg::ThresholdMethod::local
                                         ? "labels lying within 2 voxels of a scan face take the voxels beside them "
                                           "above half their own contrast over the void, where that is below the "
@@ -353,6 +361,11 @@ static tg::app::Registrar reg{{"segment", 30,
     "where it is dim (a volume imaged alone), its label (within 2 voxels of the face) takes the\n"
     "voxels beside it above half its own contrast over the void, before the size floor\n"
     "(--no-face-slivers).\n"
+    "Grain levels: where the grains differ in brightness (another mineral, porous grains: the\n"
+    "smoothed solid peak at least twice as wide as the grey varies inside a grain), each voxel's\n"
+    "grey is raised by (solid - void) / (M - void), M the brightest smoothed grey within 3 voxels,\n"
+    "so one threshold cuts every grain at half its own contrast; dim grains are read from the grey\n"
+    "smoothed over a voxel (their raw noise is too close to the void's) (--no-grain-levels).\n"
     "Defaults derive from the expected grain radius R in voxels: pores up to 2 % of a grain's\n"
     "volume are filled (a pore the scan's face cuts too: the face closes it); marker depth\n"
     "h = max(0.5, 0.035 R) voxels (bumps grow with the grain;\n"
@@ -476,6 +489,9 @@ static tg::app::Registrar reg{{"segment", 30,
                   "0.15 x the grain radius))")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  sub->add_flag("--no-grain-levels", o->no_grain_levels,
+                "Do not raise grains darker than the rest to the solid's grey level before the threshold (by default "
+                "this runs where the grains differ in brightness: the summary's grain_levels)");
   sub->add_flag("--no-face-slivers", o->no_face_slivers,
                 "Do not let labels lying within 2 voxels of a scan face (grains the face cuts near their edge: "
                 "all partial volume) take the unlabelled voxels beside them above half their own contrast over the "

@@ -17,7 +17,8 @@ struct SegmentJob {
   int manual = -1;
   tg::SegmentOptions seg;
   bool no_pores = false, no_lines = false, no_merge = false, no_grey_evidence = false, no_split = false,
-       no_face_caps = false, no_thin_pieces = false, no_face_slivers = false;
+       no_face_caps = false, no_thin_pieces = false, no_face_slivers = false,
+       no_grain_levels = false;
   bool keep_noise_specks = false;
   bool no_fov = false;                // --no-fov: no field-of-view detection
   std::vector<double> fov_centre;     // --fov-centre-vox Y,X (empty: the slice centre)

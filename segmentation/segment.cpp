@@ -150,6 +150,23 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
       if (d.depth_sigmas * sm.sigma <= kSplitDepthShare * height) break;
     }
   }
+  if (o.split && o.threshold != ThresholdMethod::local && smoothed.size() == sigmas.size() && !smoothed.empty() &&
+      smoothed.back().size() == hist.size()) {
+    // Grain levels (grain_levels.hpp) read the smoothest sample histogram.
+    d.levels_void = phases.void_level;
+    // The brightest grains' level: the 99th percentile of the smoothed
+    // solid (the mode is wherever most grains happen to lie).
+    const std::vector<int64_t>& h = smoothed.back();
+    int64_t above = 0;
+    for (size_t g = size_t(d.t.value) + 1; g < h.size(); ++g) above += h[g];
+    int64_t seen = 0;
+    for (size_t g = size_t(d.t.value) + 1; g < h.size() && above > 0; ++g)
+      if ((seen += h[g]) >= int64_t(std::ceil(kGrainLevelsSolidShare * double(above)))) {
+        d.levels_solid = double(g);
+        break;
+      }
+    d.levels_void_sigma = phase_levels(smoothed.back()).void_sigma;
+  }
   if ((o.noise_specks || o.face_slivers) && o.threshold != ThresholdMethod::local) {
     // The void's noise above t (noise_specks.hpp): the void peak's mode and
     // the sigma of its lower side, the voxels a noisy scan clipped at 0
@@ -261,14 +278,38 @@ SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* ow
 
 
 
+// The smoothed solid peak's width over the grey's variation inside a grain
+// (grain_levels.hpp: grains of different brightness); 0 where not measured.
+double spread_ratio(const GreyDecisions& d) {
+  return d.within_grain_sigma > 0 ? d.smoothed_solid_sigma / d.within_grain_sigma : 0.0;
+}
+
 SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owned, const SegmentOptions& opt) {
   validate(opt);
   SegmentResult r0;
   StageClock clock(r0);
   GreyDecisions d = choose_threshold(grey, opt);
-  int64_t nsolid = 0;
   const Shape whole = grey.shape();
-  SegmentResult r = chain_from_grey(grey, owned, d, opt, nullptr, &nsolid, clock);
+  // Grains of different brightness: the scan levelled grain by grain, and
+  // every grey decision taken again on it (the grains now share one level).
+  const GrainLevelsOptions glo;
+  GrainLevelsResult gl;
+  gl.spread_ratio = spread_ratio(d);
+  Volume<uint16_t> levelled;
+  const Volume<uint16_t>* src = &grey;
+  if (opt.grain_levels && gl.spread_ratio >= glo.min_spread_ratio && d.levels_void_sigma > 0 &&
+      d.levels_solid > d.levels_void) {
+    const double ratio = gl.spread_ratio;
+    levelled = normalise_grain_levels(grey, {d.levels_void, d.levels_solid, d.levels_void_sigma}, glo, &gl);
+    gl.spread_ratio = ratio;
+    if (owned) *owned = Volume<uint16_t>();  // the raw scan is read no more
+    src = owned = &levelled;
+    clock.lap("grain_levels");
+    d = choose_threshold(levelled, opt);
+  }
+  int64_t nsolid = 0;
+  SegmentResult r = chain_from_grey(*src, owned, d, opt, nullptr, &nsolid, clock);
+  r.grain_levels = gl;
   if (d.fov.active) {
     const int64_t inside = d.fov.inside_voxels(whole);
     r.solid_fraction = inside ? double(nsolid) / double(inside) : 0.0;
@@ -282,6 +323,15 @@ SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owne
 
 void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& opt, const Shape& whole) {
   const ThresholdResult& t = d.t;
+  if (!r.grain_levels.used) {
+    r.grain_levels.spread_ratio = spread_ratio(d);
+    if (opt.grain_levels && r.grain_levels.spread_ratio >= GrainLevelsOptions{}.min_spread_ratio)
+      r.notes.push_back(fmt::format(
+          "the grains differ in brightness (the smoothed solid peak is {:.1f} times as wide as the grey varies inside "
+          "a grain) but grain levels do not run slab by slab (--memory-limit): grains much darker than the rest may "
+          "be lost under the threshold",
+          r.grain_levels.spread_ratio));
+  }
   r.threshold = t;
   r.bright_value = d.bright;
   r.solid_noise_sigma = d.noise_sigma;
@@ -841,6 +891,28 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
                        {"slivers_joined", r.face_slivers.slivers_joined},
                        {"labels_grown", r.face_slivers.labels_grown},
                        {"voxels_added", r.face_slivers.voxels_added}};
+  {
+    const GrainLevelsOptions glo;
+    const GrainLevelsResult& g = r.grain_levels;
+    j["grain_levels"] = {
+        {"enabled", o.grain_levels},
+        {"used", g.used},
+        {"spread_ratio", g.spread_ratio},
+        {"min_spread_ratio", glo.min_spread_ratio},
+        {"void_level", g.levels.void_level},
+        {"solid_level", g.levels.solid_level},
+        {"smoothed_noise_sigma", g.levels.smoothed_sigma},
+        {"voxels_raised", g.voxels_raised},
+        {"voxels_from_smoothed", g.voxels_from_smoothed},
+        {"rule", fmt::format("where the smoothed solid peak is >= {:g} times as wide as the grey varies inside a grain "
+                             "(grains of different brightness), each voxel's grey is raised by gain = (solid - void) "
+                             "/ (M - void), M the largest grey smoothed over {:g} voxel within {} voxels, gain <= {:.3g}, "
+                             "read from the smoothed grey as the gain nears {:.3g}; left alone where M is the solid's "
+                             "level or within {:g} smoothed noise sigmas of the void; the threshold and every grey "
+                             "decision are then taken on the levelled scan (grain_levels.hpp)",
+                             glo.min_spread_ratio, glo.smoothing_sigma_vox, glo.reach_vox, glo.max_gain,
+                             glo.smooth_from_gain, glo.min_excess_sigmas)}};
+  }
   j["noise_specks"] = {{"enabled", r.specks.used},
                        {"rule", "a label is void noise, and cleared, when z = (m - mu0) / (s0 / sqrt(n)) < z_crit "
                                 "(m its mean grey's excess over the threshold in noise sigmas, n its voxels, mu0 and s0 "

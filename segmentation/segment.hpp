@@ -93,6 +93,7 @@
 #include "core/volume.hpp"
 #include "segmentation/face_slivers.hpp"
 #include "segmentation/field_of_view.hpp"
+#include "segmentation/grain_levels.hpp"
 #include "segmentation/local_threshold.hpp"
 #include "segmentation/merge_labels.hpp"
 #include "segmentation/noise_specks.hpp"
@@ -206,6 +207,13 @@ struct SegmentOptions {
   bool noise_specks = true;
   double speck_z = 5.0;
 
+  // Grains of different brightness (grain_levels.hpp): each grain's grey
+  // raised to the solid's level before the threshold, where the smoothed
+  // solid peak is >= GrainLevelsOptions::min_spread_ratio times as wide as
+  // the grey varies inside a grain (whole-volume runs with the split repair's
+  // histograms; not slab by slab).
+  bool grain_levels = true;
+
   // Resolved values (derived defaults filled in), as the pipeline will use them.
   SegmentOptions resolved() const;
 };
@@ -249,6 +257,7 @@ struct SegmentResult {
   WallMergeResult thin_walls;      // with the thin-piece repair: walls put back together (merge_thin_walls)
   bool face_caps_used = false;  // the face-cap repair ran (with the split repair, face_caps on)
   FaceCapResult face_caps;
+  GrainLevelsResult grain_levels;  // used: the scan was levelled before the threshold
   bool face_slivers_used = false;  // the face-sliver step ran
   FaceSliverResult face_slivers;   // the step's counts (whole runs; null in a chunked summary)
   double void_level = 0;           // the void's grey peak (0: not known)
@@ -303,6 +312,9 @@ struct GreyDecisions {
   // Noise specks: the test in grey levels (sigma 0: off); it reads the same code.
   SpeckTest speck_test;
   double void_level = 0;  // the void's grey peak (noise specks or face slivers on; 0: unknown)
+  // Grain levels (grain_levels.hpp), from the smoothest of the split
+  // repair's sample histograms: its solid peak and void sigma (0: none).
+  double levels_void = 0, levels_solid = 0, levels_void_sigma = 0;
 };
 
 // The split repair's smoothing, chosen from the noise when not given
@@ -335,6 +347,9 @@ inline constexpr double kSplitDepthShare = 0.5;
 // bench/segmentation/RESULTS.md "The split repair's noise, clear of the
 // partial volume".
 inline constexpr int64_t kWithinGrainMinPairs = 500;
+// Grain levels raise every grain to this percentile of the smoothed solid's
+// grey (grain_levels.hpp): the brightest grains' level.
+inline constexpr double kGrainLevelsSolidShare = 0.99;
 inline constexpr double kWithinGrainClearShare = 0.3;
 // The noise is correlated (split_depth_sigmas_correlated) where the void's
 // sigma after the split repair's smoothing is over this many times white

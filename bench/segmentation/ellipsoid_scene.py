@@ -12,7 +12,9 @@ halves through the centre by a plane of random normal with a gap of
 --gap voxels (--split-frac of the grains); partial volume by 2^3
 supersampling, Gaussian PSF (sigma --psf, the z sigma over --z-scale),
 Gaussian noise at contrast-to-noise --cnr on a void/solid grey of
-10000/30000. With --z-scale s the voxels are s times longer along z
+10000/30000; with --grain-contrast LO,HI each grain (its halves alike) has
+its own contrast over the void, U(LO, HI) of the solid's (drawn from a
+stream of its own: the scene is otherwise the same). With --z-scale s the voxels are s times longer along z
 (voxel_size_m (s x 12.3, 12.3, 12.3) um).
 
 Truth: the label covering most of a voxel's eight samples, where more than
@@ -48,6 +50,8 @@ def main():
     ap.add_argument("--psf", type=float, default=0.8, help="Gaussian PSF sigma, voxels (0.8)")
     ap.add_argument("--cnr", type=float, default=10.0, help="contrast over noise sigma (10)")
     ap.add_argument("--z-scale", type=float, default=1.0, help="z voxel edge over the x, y edge (1)")
+    ap.add_argument("--grain-contrast", default="1,1",
+                    help="LO,HI: each grain's contrast over the void, U(LO, HI) of the solid's (1,1)")
     ap.add_argument("--seed", type=int, default=1)
     a = ap.parse_args()
     rng = np.random.default_rng(a.seed)
@@ -112,7 +116,15 @@ def main():
     best[(solid < 0.5) | ((solid == 0.5) & odd)] = 0
     truth = best.reshape(shape).astype(np.uint32)
     solid = solid.reshape(shape)
-    grey = ndimage.gaussian_filter(10000 + 20000 * solid, [a.psf / zs, a.psf, a.psf])
+    lo, hi = (float(v) for v in a.grain_contrast.split(","))
+    if not (0 < lo <= hi <= 1):
+        raise SystemExit("--grain-contrast: 0 < LO <= HI <= 1")
+    bright = solid
+    if (lo, hi) != (1.0, 1.0):
+        by_grain = np.random.default_rng(a.seed + 7919).uniform(lo, hi, max(g[1] for g in grains) + 1)
+        share = np.concatenate([[0.0], [by_grain[g[1]] for g in grains]])
+        bright = share[blocks].mean(1).reshape(shape)
+    grey = ndimage.gaussian_filter(10000 + 20000 * bright, [a.psf / zs, a.psf, a.psf])
     grey += rng.normal(0, 20000 / a.cnr, shape)
     with h5py.File(a.output + ".h5", "w") as f:
         f.create_dataset("scan", data=np.clip(np.rint(grey), 0, 65535).astype(np.uint16))

@@ -1,0 +1,158 @@
+#include "segmentation/grain_levels.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/errors.hpp"
+
+namespace tg {
+namespace {
+
+uint16_t to_u16(float v) { return uint16_t(std::clamp(std::lround(v), 0L, 65535L)); }
+
+// Normalised Gaussian weights, half-width ceil(3 sigma).
+std::vector<float> kernel(double sigma) {
+  const int r = std::max(1, int(std::ceil(3.0 * sigma)));
+  std::vector<double> w(size_t(2 * r + 1));
+  double sum = 0;
+  for (int k = -r; k <= r; ++k) sum += w[size_t(k + r)] = std::exp(-0.5 * double(k) * double(k) / (sigma * sigma));
+  std::vector<float> f(w.size());
+  for (size_t k = 0; k < w.size(); ++k) f[k] = float(w[k] / sum);
+  return f;
+}
+
+// Separable passes over a (z, y, x) volume, the faces repeated. `Op` folds
+// a line's taps: Gaussian (weighted sum) or maximum. z reads `in` and
+// writes `out` (slice by slice: whole slices stay in cache); y and x work
+// in place on `out` from a copy of the slice or row.
+template <class Fold>
+void separable(const Volume<uint16_t>& in, Volume<uint16_t>& out, int r, Fold fold) {
+  const Shape s = in.shape();
+  const int64_t nz = s.nz, ny = s.ny, nx = s.nx, sl = ny * nx;
+  const uint16_t* I = in.data();
+  uint16_t* O = out.data();
+#pragma omp parallel
+  {
+    std::vector<float> acc(static_cast<size_t>(sl));
+    std::vector<float> buf(static_cast<size_t>(std::max<int64_t>(sl, nx + 2 * r)));
+#pragma omp for schedule(static)
+    for (int64_t z = 0; z < nz; ++z) {
+      // z: the 2r + 1 slices around z
+      for (int t = -r; t <= r; ++t) {
+        const uint16_t* src = I + std::clamp<int64_t>(z + t, 0, nz - 1) * sl;
+        fold.slice(acc.data(), src, sl, t + r);
+      }
+      // y: rows of acc around each row
+      std::copy(acc.begin(), acc.end(), buf.begin());
+      for (int64_t y = 0; y < ny; ++y) {
+        float* a = acc.data() + y * nx;
+        for (int t = -r; t <= r; ++t) fold.row(a, buf.data() + std::clamp<int64_t>(y + t, 0, ny - 1) * nx, nx, t + r);
+      }
+      // x: each row padded by its end voxels
+      uint16_t* o = O + z * sl;
+      for (int64_t y = 0; y < ny; ++y) {
+        const float* a = acc.data() + y * nx;
+        float* p = buf.data();
+        std::fill(p, p + r, a[0]);
+        std::copy(a, a + nx, p + r);
+        std::fill(p + r + nx, p + nx + 2 * r, a[nx - 1]);
+        for (int64_t x = 0; x < nx; ++x) o[y * nx + x] = to_u16(fold.line(p + x, 2 * r + 1));
+      }
+    }
+  }
+}
+
+struct GaussFold {
+  const std::vector<float>& w;
+  void slice(float* acc, const uint16_t* src, int64_t n, int t) const {
+    const float wt = w[size_t(t)];
+    if (t == 0)
+      for (int64_t i = 0; i < n; ++i) acc[i] = wt * float(src[i]);
+    else
+      for (int64_t i = 0; i < n; ++i) acc[i] += wt * float(src[i]);
+  }
+  // y pass: tap t of row `src` into a (which held the z result and is
+  // rebuilt from the copy).
+  void row(float* a, const float* src, int64_t n, int t) const {
+    const float wt = w[size_t(t)];
+    if (t == 0)
+      for (int64_t i = 0; i < n; ++i) a[i] = wt * src[i];
+    else
+      for (int64_t i = 0; i < n; ++i) a[i] += wt * src[i];
+  }
+  float line(const float* p, int n) const {
+    float v = 0;
+    for (int k = 0; k < n; ++k) v += w[size_t(k)] * p[k];
+    return v;
+  }
+};
+
+struct MaxFold {
+  void slice(float* acc, const uint16_t* src, int64_t n, int t) const {
+    if (t == 0)
+      for (int64_t i = 0; i < n; ++i) acc[i] = float(src[i]);
+    else
+      for (int64_t i = 0; i < n; ++i) acc[i] = std::max(acc[i], float(src[i]));
+  }
+  void row(float* a, const float* src, int64_t n, int t) const {
+    if (t == 0)
+      for (int64_t i = 0; i < n; ++i) a[i] = src[i];
+    else
+      for (int64_t i = 0; i < n; ++i) a[i] = std::max(a[i], src[i]);
+  }
+  float line(const float* p, int n) const {
+    float v = p[0];
+    for (int k = 1; k < n; ++k) v = std::max(v, p[k]);
+    return v;
+  }
+};
+
+}  // namespace
+
+Volume<uint16_t> normalise_grain_levels(const Volume<uint16_t>& grey, const GrainLevelsInput& in,
+                                        const GrainLevelsOptions& opt, GrainLevelsResult* result) {
+  if (!(in.solid_level > in.void_level) || !(in.smoothed_sigma > 0) || !std::isfinite(in.solid_level))
+    throw UsageError("segment: grain levels need the void's grey below the solid's and a smoothed noise sigma > 0");
+  if (!(opt.smoothing_sigma_vox > 0) || opt.reach_vox < 1 || !(opt.max_gain >= 1) || !(opt.smooth_from_gain > 1))
+    throw UsageError("segment: grain levels: smoothing > 0, reach >= 1 voxel, max gain >= 1, smooth-from gain > 1");
+  const std::vector<float> w = kernel(opt.smoothing_sigma_vox);
+  const int rg = int(w.size() / 2);
+  Volume<uint16_t> S(grey.shape(), grey.geometry());
+  separable(grey, S, rg, GaussFold{w});
+  Volume<uint16_t> M(grey.shape(), grey.geometry());
+  separable(S, M, opt.reach_vox, MaxFold{});
+
+  const double V = in.void_level, P = in.solid_level;
+  const double floor = opt.min_excess_sigmas * in.smoothed_sigma;
+  const double wspan = opt.smooth_from_gain - 1.0;
+  const uint16_t* G = grey.data();
+  const uint16_t* Sd = S.data();
+  uint16_t* Md = M.data();  // becomes grey'
+  const int64_t n = grey.size();
+  int64_t raised = 0, smoothed = 0;
+#pragma omp parallel for schedule(static) reduction(+ : raised, smoothed)
+  for (int64_t i = 0; i < n; ++i) {
+    const double ex = double(Md[i]) - V;
+    if (!(ex >= floor) || double(Md[i]) >= P) {
+      Md[i] = G[i];
+      continue;
+    }
+    const double gain = std::min(opt.max_gain, (P - V) / ex);
+    const double wt = std::clamp((gain - 1.0) / wspan, 0.0, 1.0);
+    raised += 1;
+    smoothed += wt >= 1.0;
+    const double v = V + gain * ((1.0 - wt) * (double(G[i]) - V) + wt * (double(Sd[i]) - V));
+    Md[i] = uint16_t(std::clamp(std::lround(v), 0L, 65535L));
+  }
+  if (result) {
+    result->used = true;
+    result->levels = in;
+    result->voxels_raised = raised;
+    result->voxels_from_smoothed = smoothed;
+  }
+  return M;
+}
+
+}  // namespace tg

@@ -1,0 +1,81 @@
+// Grains of different brightness: each grain's grey brought to the solid's
+// level before the threshold, so that one global threshold cuts every grain
+// at half its own contrast over the void.
+//
+// Why. A global threshold sits near half the solid's contrast. A grain much
+// darker than the rest (another mineral, a porous grain; blind_scene.py
+// --grain-contrast 0.35,1) lies partly or wholly under it: its voxels above
+// it are noise-lifted specks, its volume shrinks or it is lost (F1 0.68
+// against 0.99 on grains of one brightness). No global level fixes that:
+// void + 5 raw noise sigmas is already above the dimmest grains at CNR 13.
+//
+// Method: local contrast normalisation (the flat-field idea applied grain by
+// grain; cf. Pizer et al. 1987, "Adaptive histogram equalization and its
+// variations", CVGIP 39:355, for contrast taken from a neighbourhood). With
+// V the void's grey peak, P the smoothed solid's peak and s the smoothed
+// void noise sigma (all from the histograms segment() already takes):
+//   S = the grey smoothed by a Gaussian of 1 voxel (noise / ~6 at white noise);
+//   M = the largest S within a cube of half-width `reach_vox` (a grain's own
+//       level reaches its rim and the partial volume around it);
+//   gain = (P - V) / (M - V), clamped to [1, max_gain]; 1 where M - V is
+//       under min_excess_sigmas s (void: nothing there to brighten);
+//   w = clamp((gain - 1) / (smooth_from_gain - 1), 0, 1);
+//   grey' = V + gain ((1 - w) (grey - V) + w (S - V)).
+// A grain at the solid's level is left as it is (gain 1: M >= P); a dim
+// grain is raised to P, read from the smoothed grey where the gain would
+// otherwise raise the raw noise with it (a grain at 0.35 of the contrast
+// has a raw CNR of 4.5: per voxel it cannot be told from the void).
+//
+// When it runs (segment.hpp SegmentOptions::grain_levels): where the grains
+// differ in brightness, i.e. the smoothed solid peak is at least
+// min_spread_ratio times as wide as the grey varies inside one grain (the
+// split repair's within-grain sigma, split_labels.hpp). Grains of one
+// brightness measure 0.8-1.2, cupping and textured grains 1.2-1.4, grain
+// contrast 0.85-1 2.6-3.8, 0.7-1 5-8, 0.5-1 11, 0.35-1 14 (blind scenes,
+// R 14-20). Elsewhere it would only raise partial-volume crumbs at the
+// faces and small blurred chips (their smoothed peak is below P), which
+// grow by it: on grains of one brightness at R 20 it cost F1 0.006.
+//
+// Measured (bench/segmentation/RESULTS.md "Grains of different brightness:
+// each grain's own level").
+//
+// Cost: three separable passes of the Gaussian and three of the maximum,
+// O(N) time, OpenMP over slices (results independent of the thread count);
+// two 16-bit volumes besides the scan (S, then M, which becomes grey').
+#pragma once
+#include <cstdint>
+
+#include "core/volume.hpp"
+
+namespace tg {
+
+struct GrainLevelsOptions {
+  double smoothing_sigma_vox = 1.0;  // S's Gaussian
+  int reach_vox = 3;                 // M's cube half-width
+  double max_gain = 1.0 / 0.3;       // grains down to 0.3 of the contrast are raised
+  double smooth_from_gain = 1.0 / 0.6;  // from this gain on, grey' is read from S alone
+  double min_excess_sigmas = 8.0;    // M - V below this many smoothed void sigmas: left alone
+  double min_spread_ratio = 2.0;     // segment(): runs where the solid peak / within-grain sigma >= this
+};
+
+// The levels the normalisation reads, in grey levels.
+struct GrainLevelsInput {
+  double void_level = 0;      // V
+  double solid_level = 0;     // P (the smoothed solid's peak)
+  double smoothed_sigma = 0;  // s (the smoothed void's noise sigma)
+};
+
+struct GrainLevelsResult {
+  bool used = false;
+  double spread_ratio = 0;       // the smoothed solid peak's sigma / the within-grain sigma
+  GrainLevelsInput levels;
+  int64_t voxels_raised = 0;     // voxels with gain > 1
+  int64_t voxels_from_smoothed = 0;  // voxels with w = 1
+};
+
+// grey' as in the header; geometry kept. Throws UsageError on levels that
+// do not order V < P or a smoothed sigma <= 0.
+Volume<uint16_t> normalise_grain_levels(const Volume<uint16_t>& grey, const GrainLevelsInput& in,
+                                        const GrainLevelsOptions& opt, GrainLevelsResult* result = nullptr);
+
+}  // namespace tg

@@ -143,7 +143,7 @@ void print_plan(const SegmentJob& o, const tg::SegmentOptions& s) {
              s.grain_levels && s.split && s.threshold != tg::ThresholdMethod::local
                  ? fmt::format("where the grains differ in brightness (the smoothed solid peak >= {:g} x the grey's "
                                "spread inside a grain), each grain's grey is raised to the solid's level before the "
-                               "threshold (whole-volume runs)",
+                               "threshold",
                                tg::GrainLevelsOptions{}.min_spread_ratio)
                  : std::string("off"));
   fmt::print("  face slivers: {}\n", s.face_slivers && s.threshold != tg::ThresholdMethod::local

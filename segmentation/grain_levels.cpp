@@ -111,8 +111,13 @@ struct MaxFold {
 
 }  // namespace
 
+int64_t grain_levels_reach(const GrainLevelsOptions& opt) {
+  return int64_t(kernel(opt.smoothing_sigma_vox).size() / 2) + opt.reach_vox;
+}
+
 Volume<uint16_t> normalise_grain_levels(const Volume<uint16_t>& grey, const GrainLevelsInput& in,
-                                        const GrainLevelsOptions& opt, GrainLevelsResult* result) {
+                                        const GrainLevelsOptions& opt, GrainLevelsResult* result, int64_t count_z0,
+                                        int64_t count_z1) {
   if (!(in.solid_level > in.void_level) || !(in.smoothed_sigma > 0) || !std::isfinite(in.solid_level))
     throw UsageError("segment: grain levels need the void's grey below the solid's and a smoothed noise sigma > 0");
   if (!(opt.smoothing_sigma_vox > 0) || opt.reach_vox < 1 || !(opt.max_gain >= 1) || !(opt.smooth_from_gain > 1))
@@ -130,7 +135,9 @@ Volume<uint16_t> normalise_grain_levels(const Volume<uint16_t>& grey, const Grai
   const uint16_t* G = grey.data();
   const uint16_t* Sd = S.data();
   uint16_t* Md = M.data();  // becomes grey'
-  const int64_t n = grey.size();
+  const int64_t n = grey.size(), sl = grey.shape().slice_voxels();
+  const int64_t c0 = std::clamp<int64_t>(count_z0, 0, grey.shape().nz) * sl;
+  const int64_t c1 = (count_z1 < 0 ? grey.shape().nz : std::clamp<int64_t>(count_z1, 0, grey.shape().nz)) * sl;
   int64_t raised = 0, smoothed = 0;
 #pragma omp parallel for schedule(static) reduction(+ : raised, smoothed)
   for (int64_t i = 0; i < n; ++i) {
@@ -141,8 +148,9 @@ Volume<uint16_t> normalise_grain_levels(const Volume<uint16_t>& grey, const Grai
     }
     const double gain = std::min(opt.max_gain, (P - V) / ex);
     const double wt = std::clamp((gain - 1.0) / wspan, 0.0, 1.0);
-    raised += 1;
-    smoothed += wt >= 1.0;
+    const bool counted = i >= c0 && i < c1;
+    raised += counted;
+    smoothed += counted && wt >= 1.0;
     const double v = V + gain * ((1.0 - wt) * (double(G[i]) - V) + wt * (double(Sd[i]) - V));
     Md[i] = uint16_t(std::clamp(std::lround(v), 0L, 65535L));
   }

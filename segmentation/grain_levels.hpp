@@ -26,7 +26,9 @@
 // otherwise raise the raw noise with it (a grain at 0.35 of the contrast
 // has a raw CNR of 4.5: per voxel it cannot be told from the void).
 //
-// When it runs (segment.hpp SegmentOptions::grain_levels): where the grains
+// When it runs (segment.hpp SegmentOptions::grain_levels; whole volumes and
+// slab by slab, each slab levelled from grain_levels_reach() slices beyond
+// its own): where the grains
 // differ in brightness, i.e. the smoothed solid peak is at least
 // min_spread_ratio times as wide as the grey varies inside one grain (the
 // split repair's within-grain sigma, split_labels.hpp). Grains of one
@@ -73,9 +75,16 @@ struct GrainLevelsResult {
   int64_t voxels_from_smoothed = 0;  // voxels with w = 1
 };
 
-// grey' as in the header; geometry kept. Throws UsageError on levels that
-// do not order V < P or a smoothed sigma <= 0.
+// grey' as in the header; geometry kept. result's counts are over slices
+// [count_z0, count_z1) (count_z1 < 0: to the last; a slab's core). Throws
+// UsageError on levels that do not order V < P or a smoothed sigma <= 0.
 Volume<uint16_t> normalise_grain_levels(const Volume<uint16_t>& grey, const GrainLevelsInput& in,
-                                        const GrainLevelsOptions& opt, GrainLevelsResult* result = nullptr);
+                                        const GrainLevelsOptions& opt, GrainLevelsResult* result = nullptr,
+                                        int64_t count_z0 = 0, int64_t count_z1 = -1);
+
+// A grey value depends on the grey within this many slices (the smoothing's
+// and the maximum's half-widths, default options): a slab levelled from
+// this many more slices either side is exact.
+int64_t grain_levels_reach(const GrainLevelsOptions& opt);
 
 }  // namespace tg

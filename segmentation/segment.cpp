@@ -278,12 +278,6 @@ SegmentResult chain_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* ow
 
 
 
-// The smoothed solid peak's width over the grey's variation inside a grain
-// (grain_levels.hpp: grains of different brightness); 0 where not measured.
-double spread_ratio(const GreyDecisions& d) {
-  return d.within_grain_sigma > 0 ? d.smoothed_solid_sigma / d.within_grain_sigma : 0.0;
-}
-
 SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owned, const SegmentOptions& opt) {
   validate(opt);
   SegmentResult r0;
@@ -294,13 +288,12 @@ SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owne
   // every grey decision taken again on it (the grains now share one level).
   const GrainLevelsOptions glo;
   GrainLevelsResult gl;
-  gl.spread_ratio = spread_ratio(d);
+  gl.spread_ratio = grain_spread_ratio(d);
   Volume<uint16_t> levelled;
   const Volume<uint16_t>* src = &grey;
-  if (opt.grain_levels && gl.spread_ratio >= glo.min_spread_ratio && d.levels_void_sigma > 0 &&
-      d.levels_solid > d.levels_void) {
+  if (grain_levels_wanted(d, opt)) {
     const double ratio = gl.spread_ratio;
-    levelled = normalise_grain_levels(grey, {d.levels_void, d.levels_solid, d.levels_void_sigma}, glo, &gl);
+    levelled = normalise_grain_levels(grey, grain_levels_input(d), glo, &gl);
     gl.spread_ratio = ratio;
     if (owned) *owned = Volume<uint16_t>();  // the raw scan is read no more
     src = owned = &levelled;
@@ -321,17 +314,22 @@ SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owne
 
 }  // namespace
 
+double grain_spread_ratio(const GreyDecisions& d) {
+  return d.within_grain_sigma > 0 ? d.smoothed_solid_sigma / d.within_grain_sigma : 0.0;
+}
+
+bool grain_levels_wanted(const GreyDecisions& d, const SegmentOptions& opt) {
+  return opt.grain_levels && grain_spread_ratio(d) >= GrainLevelsOptions{}.min_spread_ratio &&
+         d.levels_void_sigma > 0 && d.levels_solid > d.levels_void;
+}
+
+GrainLevelsInput grain_levels_input(const GreyDecisions& d) {
+  return {d.levels_void, d.levels_solid, d.levels_void_sigma};
+}
+
 void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& opt, const Shape& whole) {
   const ThresholdResult& t = d.t;
-  if (!r.grain_levels.used) {
-    r.grain_levels.spread_ratio = spread_ratio(d);
-    if (opt.grain_levels && r.grain_levels.spread_ratio >= GrainLevelsOptions{}.min_spread_ratio)
-      r.notes.push_back(fmt::format(
-          "the grains differ in brightness (the smoothed solid peak is {:.1f} times as wide as the grey varies inside "
-          "a grain) but grain levels do not run slab by slab (--memory-limit): grains much darker than the rest may "
-          "be lost under the threshold",
-          r.grain_levels.spread_ratio));
-  }
+  if (!r.grain_levels.used) r.grain_levels.spread_ratio = grain_spread_ratio(d);
   r.threshold = t;
   r.bright_value = d.bright;
   r.solid_noise_sigma = d.noise_sigma;

@@ -210,8 +210,8 @@ struct SegmentOptions {
   // Grains of different brightness (grain_levels.hpp): each grain's grey
   // raised to the solid's level before the threshold, where the smoothed
   // solid peak is >= GrainLevelsOptions::min_spread_ratio times as wide as
-  // the grey varies inside a grain (whole-volume runs with the split repair's
-  // histograms; not slab by slab).
+  // the grey varies inside a grain (with the split repair's histograms,
+  // whole volumes and slab by slab).
   bool grain_levels = true;
 
   // Resolved values (derived defaults filled in), as the pipeline will use them.
@@ -378,6 +378,13 @@ GreyDecisions decide_grey(FieldOfView fov, std::vector<int64_t> hist,
 // Puts the decisions into a result: threshold, bright level, field of
 // view, level screen, and their notes (segment() does the same).
 void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& opt, const Shape& whole);
+
+// Grain levels (grain_levels.hpp): the smoothed solid peak's width over the
+// grey's variation inside a grain (0: not measured), whether the scan is to
+// be levelled (the option, the ratio, the levels known), and the levels.
+double grain_spread_ratio(const GreyDecisions& d);
+bool grain_levels_wanted(const GreyDecisions& d, const SegmentOptions& opt);
+GrainLevelsInput grain_levels_input(const GreyDecisions& d);
 
 // A slab: slices [core_begin, core_end) of it are its core (the rest its
 // margins), and the watershed's levels per distance unit are the whole

@@ -122,7 +122,38 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
       for (int64_t z0 = 0; z0 < shape.nz; z0 += step) add_hist(read(z0, std::min(step, shape.nz - z0)), z0);
     }
   }
-  GreyDecisions d = decide_grey(std::move(fov), std::move(hist), smoothed, opt, pairs);
+  GreyDecisions d = decide_grey(fov, hist, smoothed, opt, pairs);
+  // Grains of different brightness (grain_levels.hpp), as segment() does:
+  // every slab levelled from grain_levels_reach() slices beyond it (so its
+  // values are the whole scan's), the histograms and the decisions taken
+  // again on the levelled scan, and pass 2 reads levelled slabs.
+  GreySlabReader source = read;
+  GrainLevelsResult gl;
+  gl.spread_ratio = grain_spread_ratio(d);
+  if (grain_levels_wanted(d, opt)) {
+    const GrainLevelsOptions glo;
+    const GrainLevelsInput in = grain_levels_input(d);
+    const int64_t halo = grain_levels_reach(glo);
+    auto levelled = [&read, &shape, in, glo, halo](int64_t z0, int64_t nz, GrainLevelsResult* res) {
+      const int64_t a = std::max<int64_t>(0, z0 - halo), b = std::min(shape.nz, z0 + nz + halo);
+      const Volume<uint16_t> lev = normalise_grain_levels(read(a, b - a), in, glo, res, z0 - a, z0 - a + nz);
+      return to_volume(lev.view().slices(z0 - a, nz));
+    };
+    source = [levelled](int64_t z0, int64_t nz) { return levelled(z0, nz, nullptr); };
+    std::fill(hist.begin(), hist.end(), 0);
+    for (auto& h : smoothed) std::fill(h.begin(), h.end(), 0);
+    for (auto& h : pairs) std::fill(h.begin(), h.end(), 0);
+    for (int64_t z0 = 0; z0 < shape.nz; z0 += step) {
+      GrainLevelsResult part;
+      add_hist(levelled(z0, std::min(step, shape.nz - z0), &part), z0);
+      gl.voxels_raised += part.voxels_raised;
+      gl.voxels_from_smoothed += part.voxels_from_smoothed;
+    }
+    gl.used = true;
+    gl.levels = in;
+    cr.pass1_reads += 1;
+    d = decide_grey(fov, std::move(hist), smoothed, opt, pairs);
+  }
   cr.pass1_seconds = seconds_since(t1);
   if (talk)
     std::fprintf(stderr, "chunked: pass 1 (field of view, histogram, threshold %d) %.1f s; %lld slabs of %lld core + 2 x %lld margin slices\n",
@@ -153,7 +184,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
     const int64_t c0 = s * plan.core, c1 = std::min(shape.nz, c0 + plan.core);
     const int64_t z0 = std::max<int64_t>(0, c0 - plan.margin), z1 = std::min(shape.nz, c1 + plan.margin);
     const int64_t cb = c0 - z0, ce = c1 - z0;
-    SlabOutcome out = segment_slab(read(z0, z1 - z0), d, opt, {cb, ce, q, units, z0 == 0, z1 == shape.nz});
+    SlabOutcome out = segment_slab(source(z0, z1 - z0), d, opt, {cb, ce, q, units, z0 == 0, z1 == shape.nz});
     const float deepest = std::max(dmax_seen, out.core_dmax);
     if (q_for(deepest) != q || fixed_point_units(deepest) != units) {
       dmax_seen = deepest;
@@ -261,6 +292,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
   r.specks.used = specks_used;
   r.stage_seconds = std::move(stage_sum);
   r.stage_seconds.insert(r.stage_seconds.begin(), {"pass1", cr.pass1_seconds});
+  r.grain_levels = gl;
   record_decisions(r, std::move(d), opt, shape);
   r.peak_rss_bytes = peak_rss_bytes();
   release_idle_blocks();  // the slabs' blocks (core/memory.hpp)

@@ -111,7 +111,7 @@ struct ChunkedResult {
   Geometry geometry;
   ChunkPlan plan;
   double pass1_seconds = 0, pass2_seconds = 0;
-  int pass1_reads = 1;     // 2 when a field of view was detected
+  int pass1_reads = 1;     // +1 when a field of view was detected, +1 when the grains were levelled (grain_levels.hpp)
   int restarts = 0;        // pass 2 restarted with coarser watershed levels (grains deeper than 254 / q)
   std::vector<std::pair<std::string, double>> slab_seconds;  // per slab: its z range, seconds
 };

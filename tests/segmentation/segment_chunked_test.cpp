@@ -3,6 +3,8 @@
 // the labels must match voxel for voxel, number for number.
 #include <gtest/gtest.h>
 
+#include <array>
+
 #include <cmath>
 #include <cstdlib>
 
@@ -101,6 +103,28 @@ TEST(SegmentChunked, SameLabelsAsWholeVolume) {
   const ChunkRun run = run_chunked(scan, o, plan);
   expect_same_labels(whole, run);
   EXPECT_EQ(run.res.pass1_reads, 1);
+}
+
+// Grains of different brightness (grain_levels.hpp): each slab levelled
+// from the slices beyond it, the decisions again on the levelled histograms
+// (a third read of pass 1): the whole volume's levelled labels.
+TEST(SegmentChunked, SameLabelsWithGrainsOfDifferentBrightness) {
+  const auto s = test::grid_of_balls(
+      4, 21, 9, [](int b) { return b % 5 == 0; },
+      [](int b) { return std::array<double, 3>{0.35, 0.6, 1.0}[size_t(b % 3)]; }, 5);
+  SegmentOptions o;
+  o.grain_radius_vox = 9;
+  const SegmentResult whole = segment(s.grey, o);
+  ASSERT_TRUE(whole.grain_levels.used);
+  ChunkPlan plan;
+  plan.in_memory = false;
+  plan.core = 32;
+  plan.margin = 48;
+  const ChunkRun run = run_chunked(s.grey, o, plan);
+  EXPECT_TRUE(run.res.result.grain_levels.used);
+  EXPECT_EQ(run.res.pass1_reads, 2);
+  EXPECT_EQ(run.res.result.grain_levels.voxels_raised, whole.grain_levels.voxels_raised);
+  expect_same_labels(whole, run);
 }
 
 // The field of view detected slab by slab (FovScan: two reads of pass 1),

@@ -10,7 +10,9 @@
 namespace tg {
 namespace {
 
-uint16_t to_u16(float v) { return uint16_t(std::clamp(std::lround(v), 0L, 65535L)); }
+// Rounded to the nearest level (halves up) and clipped; no libm call (the
+// passes round every voxel six times).
+inline uint16_t to_u16(float v) { return uint16_t(std::clamp(v, 0.0f, 65535.0f) + 0.5f); }
 
 // Normalised Gaussian weights, half-width ceil(3 sigma).
 std::vector<float> kernel(double sigma) {
@@ -50,15 +52,17 @@ void separable(const Volume<uint16_t>& in, Volume<uint16_t>& out, int r, Fold fo
         float* a = acc.data() + y * nx;
         for (int t = -r; t <= r; ++t) fold.row(a, buf.data() + std::clamp<int64_t>(y + t, 0, ny - 1) * nx, nx, t + r);
       }
-      // x: each row padded by its end voxels
+      // x: each row padded by its end voxels, the taps shifted over the
+      // row (vectorised), into the row's own place in acc
       uint16_t* o = O + z * sl;
       for (int64_t y = 0; y < ny; ++y) {
-        const float* a = acc.data() + y * nx;
+        float* a = acc.data() + y * nx;
         float* p = buf.data();
         std::fill(p, p + r, a[0]);
         std::copy(a, a + nx, p + r);
         std::fill(p + r + nx, p + nx + 2 * r, a[nx - 1]);
-        for (int64_t x = 0; x < nx; ++x) o[y * nx + x] = to_u16(fold.line(p + x, 2 * r + 1));
+        for (int t = 0; t <= 2 * r; ++t) fold.row(a, p + t, nx, t);
+        for (int64_t x = 0; x < nx; ++x) o[y * nx + x] = to_u16(a[x]);
       }
     }
   }
@@ -73,19 +77,13 @@ struct GaussFold {
     else
       for (int64_t i = 0; i < n; ++i) acc[i] += wt * float(src[i]);
   }
-  // y pass: tap t of row `src` into a (which held the z result and is
-  // rebuilt from the copy).
+  // y and x passes: tap t of `src` into a (tap 0 overwrites it).
   void row(float* a, const float* src, int64_t n, int t) const {
     const float wt = w[size_t(t)];
     if (t == 0)
       for (int64_t i = 0; i < n; ++i) a[i] = wt * src[i];
     else
       for (int64_t i = 0; i < n; ++i) a[i] += wt * src[i];
-  }
-  float line(const float* p, int n) const {
-    float v = 0;
-    for (int k = 0; k < n; ++k) v += w[size_t(k)] * p[k];
-    return v;
   }
 };
 
@@ -101,11 +99,6 @@ struct MaxFold {
       for (int64_t i = 0; i < n; ++i) a[i] = src[i];
     else
       for (int64_t i = 0; i < n; ++i) a[i] = std::max(a[i], src[i]);
-  }
-  float line(const float* p, int n) const {
-    float v = p[0];
-    for (int k = 1; k < n; ++k) v = std::max(v, p[k]);
-    return v;
   }
 };
 
@@ -129,9 +122,10 @@ Volume<uint16_t> normalise_grain_levels(const Volume<uint16_t>& grey, const Grai
   Volume<uint16_t> M(grey.shape(), grey.geometry());
   separable(S, M, opt.reach_vox, MaxFold{});
 
-  const double V = in.void_level, P = in.solid_level;
-  const double floor = opt.min_excess_sigmas * in.smoothed_sigma;
-  const double wspan = opt.smooth_from_gain - 1.0;
+  // Single precision: the grey has 16 bits, the gain 2-3 digits.
+  const float V = float(in.void_level), P = float(in.solid_level);
+  const float floor = float(opt.min_excess_sigmas * in.smoothed_sigma);
+  const float inv_span = float(1.0 / (opt.smooth_from_gain - 1.0)), gmax = float(opt.max_gain);
   const uint16_t* G = grey.data();
   const uint16_t* Sd = S.data();
   uint16_t* Md = M.data();  // becomes grey'
@@ -141,18 +135,17 @@ Volume<uint16_t> normalise_grain_levels(const Volume<uint16_t>& grey, const Grai
   int64_t raised = 0, smoothed = 0;
 #pragma omp parallel for schedule(static) reduction(+ : raised, smoothed)
   for (int64_t i = 0; i < n; ++i) {
-    const double ex = double(Md[i]) - V;
-    if (!(ex >= floor) || double(Md[i]) >= P) {
+    const float m = float(Md[i]), ex = m - V;
+    if (!(ex >= floor) || m >= P) {
       Md[i] = G[i];
       continue;
     }
-    const double gain = std::min(opt.max_gain, (P - V) / ex);
-    const double wt = std::clamp((gain - 1.0) / wspan, 0.0, 1.0);
+    const float gain = std::min(gmax, (P - V) / ex);
+    const float wt = std::clamp((gain - 1.0f) * inv_span, 0.0f, 1.0f);
     const bool counted = i >= c0 && i < c1;
     raised += counted;
-    smoothed += counted && wt >= 1.0;
-    const double v = V + gain * ((1.0 - wt) * (double(G[i]) - V) + wt * (double(Sd[i]) - V));
-    Md[i] = uint16_t(std::clamp(std::lround(v), 0L, 65535L));
+    smoothed += counted && wt >= 1.0f;
+    Md[i] = to_u16(V + gain * ((1.0f - wt) * (float(G[i]) - V) + wt * (float(Sd[i]) - V)));
   }
   if (result) {
     result->used = true;

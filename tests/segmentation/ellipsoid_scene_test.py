@@ -11,6 +11,10 @@ generator (issue 19), against analytic answers:
     voxel counts; a parent has at most two halves
   * the noise: the standard deviation of the grey far inside the void is
     20000 / CNR within 3 %; the voxel size carries --z-scale
+  * --grain-contrast LO,HI: deep inside each grain the grey is 10000 +
+    20000 c (noise off) with c in [LO, HI], one c per grain (its halves
+    alike), the c spread over the range; the truth and the void are the
+    default scene's
 
 usage: ellipsoid_scene_test.py [WORKDIR]     (~5 s)
 """
@@ -92,6 +96,32 @@ def run(work):
     far = ndimage.distance_transform_edt(truth == 0, sampling=(1.5, 1, 1)) > 4
     sd = float(scan[far].std())
     check(abs(sd / 2000 - 1) < 0.03, f"void noise sigma {sd:.0f} against 20000 / 10 = 2000")
+    # Grains of their own brightness: noiseless, no blur, so a voxel deep in
+    # a grain reads its contrast exactly.
+    common = ["--size", "48,48,48", "--radius", "7", "--split-frac", "0.3", "--psf", "0.01", "--cnr", "1e9",
+              "--seed", "5"]
+    plain, t_plain, _, _ = scene(work, "plain", *common)
+    dim, t_dim, _, tab = scene(work, "dim", *common, "--grain-contrast", "0.4,0.9")
+    check(np.array_equal(t_plain, t_dim), "the contrast leaves the truth as it was")
+    boxes = ndimage.find_objects(t_dim)
+    share = {}
+    ok = True
+    for r in tab:
+        lab = int(r["label"])
+        box = tuple(slice(max(0, b.start - 3), b.stop + 3) for b in boxes[lab - 1])
+        mine = t_dim[box] == lab
+        v = dim[box][ndimage.distance_transform_edt(mine) > 2.5]  # clear of the void and of other grains
+        if v.size == 0:
+            continue
+        c = (v.astype(float) - 10000) / 20000
+        ok &= float(c.max() - c.min()) < 2e-4 and 0.4 - 1e-4 <= float(c.mean()) <= 0.9 + 1e-4
+        share.setdefault(r["parent"], []).append(float(c.mean()))
+    alike = all(max(v) - min(v) < 2e-4 for v in share.values())
+    means = [v[0] for v in share.values()]
+    check(ok and alike and len(means) >= 10 and max(means) - min(means) > 0.3,
+          f"--grain-contrast 0.4,0.9: one contrast per grain in range, halves alike ({len(means)} grains, "
+          f"{min(means):.3f} .. {max(means):.3f})")
+    check(bool(np.all(dim[t_dim == 0] <= plain[t_dim == 0])), "the void is no brighter than the default scene's")
     if FAILS:
         print(f"{len(FAILS)} check(s) failed")
         return 1

@@ -104,6 +104,36 @@ struct MaxFold {
 
 }  // namespace
 
+DimPopulation dim_population(const std::vector<int64_t>& h, const GrainLevelsInput& in, double min_prominence) {
+  DimPopulation out;
+  const double V = in.void_level, P = in.solid_level, span = P - V;
+  if (!(span > 0) || h.empty()) return out;
+  const double b = std::max(1.0, span / 40.0);
+  const int nb = 40;
+  std::vector<double> c(size_t(nb), 0.0);
+  for (int k = 0; k < nb; ++k) {
+    const int64_t g0 = std::max<int64_t>(0, std::llround(V + k * b)), g1 = std::llround(V + (k + 1) * b);
+    for (int64_t g = g0; g < g1 && g < int64_t(h.size()); ++g) c[size_t(k)] += double(h[size_t(g)]);
+  }
+  std::vector<double> a(c.size(), 0.0);  // 3-bin average
+  for (int k = 0; k < nb; ++k) a[size_t(k)] = (c[size_t(std::max(0, k - 1))] + c[size_t(k)] + c[size_t(std::min(nb - 1, k + 1))]) / 3.0;
+  const int lo = int(std::ceil(std::max(4.0 * in.smoothed_sigma, 0.15 * span) / b));
+  const int hi = int(std::floor((span - std::max(4.0 * in.smoothed_sigma, 0.1 * span)) / b)) - 1;
+  if (hi - lo < 2) return out;
+  int m = lo;
+  for (int k = lo; k <= hi; ++k)
+    if (a[size_t(k)] > a[size_t(m)]) m = k;
+  if (m == lo || m == hi) return out;  // a slope, no interior maximum
+  double left = a[size_t(m)], right = a[size_t(m)];
+  for (int k = lo; k < m; ++k) left = std::min(left, a[size_t(k)]);
+  for (int k = m + 1; k <= hi; ++k) right = std::min(right, a[size_t(k)]);
+  const double floor = std::max({left, right, 1.0});
+  out.level = V + (m + 0.5) * b;
+  out.prominence = a[size_t(m)] / floor;
+  out.found = out.prominence >= min_prominence;
+  return out;
+}
+
 int64_t grain_levels_reach(const GrainLevelsOptions& opt) {
   return int64_t(kernel(opt.smoothing_sigma_vox).size() / 2) + opt.reach_vox;
 }

@@ -28,15 +28,20 @@
 //
 // When it runs (segment.hpp SegmentOptions::grain_levels; whole volumes and
 // slab by slab, each slab levelled from grain_levels_reach() slices beyond
-// its own): where the grains
-// differ in brightness, i.e. the smoothed solid peak is at least
-// min_spread_ratio times as wide as the grey varies inside one grain (the
-// split repair's within-grain sigma, split_labels.hpp). Grains of one
-// brightness measure 0.8-1.2, cupping and textured grains 1.2-1.4, grain
-// contrast 0.85-1 2.6-3.8, 0.7-1 5-8, 0.5-1 11, 0.35-1 14 (blind scenes,
-// R 14-20). Elsewhere it would only raise partial-volume crumbs at the
-// faces and small blurred chips (their smoothed peak is below P), which
-// grow by it: on grains of one brightness at R 20 it cost F1 0.006.
+// its own): where the grains differ in brightness, by either of two signs
+// read from the split repair's smoothed sample histograms:
+//  * the grains' levels spread: the smoothed solid peak is at least
+//    min_spread_ratio times as wide as the grey varies inside one grain
+//    (the split repair's within-grain sigma, split_labels.hpp). Grains of one
+//    brightness measure 0.8-1.3, cupping and textured grains 1.2-2.2, grain
+//    contrast 0.85-1 2.1-3.8, 0.7-1 3.4-8.3, 0.5-1 11, 0.35-1 14-20 (blind
+//    scenes, R 8-20);
+//  * a population of darker grains (another mineral): a peak of its own
+//    between the void and the solid (dim_population, below), which leaves
+//    the solid peak as narrow as one brightness does.
+// Elsewhere it would only raise partial-volume crumbs at the faces and
+// small blurred chips (their smoothed peak is below P), which grow by it:
+// on grains of one brightness at R 20 it cost F1 0.006.
 //
 // Measured (bench/segmentation/RESULTS.md "Grains of different brightness:
 // each grain's own level").
@@ -46,6 +51,7 @@
 // two 16-bit volumes besides the scan (S, then M, which becomes grey').
 #pragma once
 #include <cstdint>
+#include <vector>
 
 #include "core/volume.hpp"
 
@@ -67,9 +73,32 @@ struct GrainLevelsInput {
   double smoothed_sigma = 0;  // s (the smoothed void's noise sigma)
 };
 
+// A population of grains darker than the rest (two minerals, say): a peak
+// of the smoothed grey's histogram between the void and the brightest
+// grains, which grains of one brightness do not have (there the partial
+// volume between the phases falls from the void and rises to the solid: no
+// interior maximum). The histogram in bins of 1/40 of (P - V), averaged
+// over 3 bins; searched between V + max(4 s, 0.15 (P - V)) and
+// P - max(4 s, 0.1 (P - V)); found where its fullest bin there is an
+// interior maximum at least min_prominence times the emptiest bin on either
+// side of it (between it and the void, and between it and P). Measured on
+// blind scenes (R 20, whole volumes): grains of one brightness have no
+// interior maximum; cupping 0.3 one of prominence 1.2; 5 % of the grains at
+// 0.45 of the contrast 2.1-2.6; 20 % 3.5-5.
+struct DimPopulation {
+  bool found = false;
+  double level = 0;       // its peak's grey
+  double prominence = 0;  // its peak over the deeper of the two floors beside it (0: no interior maximum)
+};
+inline constexpr double kDimPopulationProminence = 1.35;
+// in.solid_level: the smoothed solid's mode (segment.cpp).
+DimPopulation dim_population(const std::vector<int64_t>& smoothed_hist, const GrainLevelsInput& in,
+                             double min_prominence = kDimPopulationProminence);
+
 struct GrainLevelsResult {
   bool used = false;
   double spread_ratio = 0;       // the smoothed solid peak's sigma / the within-grain sigma
+  DimPopulation dim;             // a population of darker grains (dim_population)
   GrainLevelsInput levels;
   int64_t voxels_raised = 0;     // voxels with gain > 1
   int64_t voxels_from_smoothed = 0;  // voxels with w = 1

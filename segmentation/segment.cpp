@@ -166,6 +166,11 @@ void threshold_from_histogram(GreyDecisions& d, std::vector<int64_t>& hist,
         break;
       }
     d.levels_void_sigma = phase_levels(smoothed.back()).void_sigma;
+    // A darker population is looked for below the smoothed solid's mode (a
+    // broad solid peak, textured grains, puts its 99th percentile far above
+    // the mode, and the peak's own flank would read as a population).
+    const double mode = solid_peak(h, d.t.value).mode;
+    d.levels_dim = dim_population(h, {d.levels_void, std::min(mode, d.levels_solid), d.levels_void_sigma});
   }
   if ((o.noise_specks || o.face_slivers) && o.threshold != ThresholdMethod::local) {
     // The void's noise above t (noise_specks.hpp): the void peak's mode and
@@ -289,12 +294,13 @@ SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owne
   const GrainLevelsOptions glo;
   GrainLevelsResult gl;
   gl.spread_ratio = grain_spread_ratio(d);
+  gl.dim = d.levels_dim;
   Volume<uint16_t> levelled;
   const Volume<uint16_t>* src = &grey;
   if (grain_levels_wanted(d, opt)) {
-    const double ratio = gl.spread_ratio;
+    const GrainLevelsResult first = gl;
     levelled = normalise_grain_levels(grey, grain_levels_input(d), glo, &gl);
-    gl.spread_ratio = ratio;
+    gl.spread_ratio = first.spread_ratio, gl.dim = first.dim;
     if (owned) *owned = Volume<uint16_t>();  // the raw scan is read no more
     src = owned = &levelled;
     clock.lap("grain_levels");
@@ -319,7 +325,7 @@ double grain_spread_ratio(const GreyDecisions& d) {
 }
 
 bool grain_levels_wanted(const GreyDecisions& d, const SegmentOptions& opt) {
-  return opt.grain_levels && grain_spread_ratio(d) >= GrainLevelsOptions{}.min_spread_ratio &&
+  return opt.grain_levels && (grain_spread_ratio(d) >= GrainLevelsOptions{}.min_spread_ratio || d.levels_dim.found) &&
          d.levels_void_sigma > 0 && d.levels_solid > d.levels_void;
 }
 
@@ -329,7 +335,9 @@ GrainLevelsInput grain_levels_input(const GreyDecisions& d) {
 
 void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& opt, const Shape& whole) {
   const ThresholdResult& t = d.t;
-  if (!r.grain_levels.used) r.grain_levels.spread_ratio = grain_spread_ratio(d);
+  if (!r.grain_levels.used)
+    r.grain_levels.spread_ratio = grain_spread_ratio(d), r.grain_levels.dim = d.levels_dim,
+    r.grain_levels.levels = grain_levels_input(d);
   r.threshold = t;
   r.bright_value = d.bright;
   r.solid_noise_sigma = d.noise_sigma;
@@ -897,18 +905,23 @@ std::string summary_json(const SegmentResult& r, const SegmentOptions& opt_in) {
         {"used", g.used},
         {"spread_ratio", g.spread_ratio},
         {"min_spread_ratio", glo.min_spread_ratio},
+        {"dim_population", {{"found", g.dim.found}, {"level", g.dim.level}, {"prominence", g.dim.prominence},
+                            {"min_prominence", kDimPopulationProminence}}},
         {"void_level", g.levels.void_level},
         {"solid_level", g.levels.solid_level},
         {"smoothed_noise_sigma", g.levels.smoothed_sigma},
         {"voxels_raised", g.voxels_raised},
         {"voxels_from_smoothed", g.voxels_from_smoothed},
         {"rule", fmt::format("where the smoothed solid peak is >= {:g} times as wide as the grey varies inside a grain "
-                             "(grains of different brightness), each voxel's grey is raised by gain = (solid - void) "
+                             "(grains of different brightness), or the smoothed grey's histogram holds a peak between "
+                             "the void and the solid at least {:g} times its floors on either side (a population of "
+                             "darker grains), each voxel's grey is raised by gain = (solid - void) "
                              "/ (M - void), M the largest grey smoothed over {:g} voxel within {} voxels, gain <= {:.3g}, "
                              "read from the smoothed grey as the gain nears {:.3g}; left alone where M is the solid's "
                              "level or within {:g} smoothed noise sigmas of the void; the threshold and every grey "
                              "decision are then taken on the levelled scan (grain_levels.hpp)",
-                             glo.min_spread_ratio, glo.smoothing_sigma_vox, glo.reach_vox, glo.max_gain,
+                             glo.min_spread_ratio, kDimPopulationProminence, glo.smoothing_sigma_vox, glo.reach_vox,
+                             glo.max_gain,
                              glo.smooth_from_gain, glo.min_excess_sigmas)}};
   }
   j["noise_specks"] = {{"enabled", r.specks.used},

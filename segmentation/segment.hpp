@@ -315,6 +315,7 @@ struct GreyDecisions {
   // Grain levels (grain_levels.hpp), from the smoothest of the split
   // repair's sample histograms: its solid peak and void sigma (0: none).
   double levels_void = 0, levels_solid = 0, levels_void_sigma = 0;
+  DimPopulation levels_dim;  // a population of darker grains in that histogram
 };
 
 // The split repair's smoothing, chosen from the noise when not given

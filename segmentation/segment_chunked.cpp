@@ -130,6 +130,7 @@ ChunkedResult segment_chunked(const Shape& shape, const Geometry& geometry, cons
   GreySlabReader source = read;
   GrainLevelsResult gl;
   gl.spread_ratio = grain_spread_ratio(d);
+  gl.dim = d.levels_dim;
   if (grain_levels_wanted(d, opt)) {
     const GrainLevelsOptions glo;
     const GrainLevelsInput in = grain_levels_input(d);

@@ -14,7 +14,8 @@ supersampling, Gaussian PSF (sigma --psf, the z sigma over --z-scale),
 Gaussian noise at contrast-to-noise --cnr on a void/solid grey of
 10000/30000; with --grain-contrast LO,HI each grain (its halves alike) has
 its own contrast over the void, U(LO, HI) of the solid's (drawn from a
-stream of its own: the scene is otherwise the same). With --z-scale s the voxels are s times longer along z
+stream of its own: the scene is otherwise the same); --dim-grains FRAC,LEVEL
+puts that share of the grains at LEVEL (a second, darker mineral). With --z-scale s the voxels are s times longer along z
 (voxel_size_m (s x 12.3, 12.3, 12.3) um).
 
 Truth: the label covering most of a voxel's eight samples, where more than
@@ -52,6 +53,8 @@ def main():
     ap.add_argument("--z-scale", type=float, default=1.0, help="z voxel edge over the x, y edge (1)")
     ap.add_argument("--grain-contrast", default="1,1",
                     help="LO,HI: each grain's contrast over the void, U(LO, HI) of the solid's (1,1)")
+    ap.add_argument("--dim-grains", default="",
+                    help="FRAC,LEVEL: that share of the grains at LEVEL of the solid's contrast (another mineral)")
     ap.add_argument("--seed", type=int, default=1)
     a = ap.parse_args()
     rng = np.random.default_rng(a.seed)
@@ -120,8 +123,14 @@ def main():
     if not (0 < lo <= hi <= 1):
         raise SystemExit("--grain-contrast: 0 < LO <= HI <= 1")
     bright = solid
-    if (lo, hi) != (1.0, 1.0):
-        by_grain = np.random.default_rng(a.seed + 7919).uniform(lo, hi, max(g[1] for g in grains) + 1)
+    if (lo, hi) != (1.0, 1.0) or a.dim_grains:
+        rng_c = np.random.default_rng(a.seed + 7919)
+        by_grain = rng_c.uniform(lo, hi, max(g[1] for g in grains) + 1)
+        if a.dim_grains:
+            frac, level = (float(v) for v in a.dim_grains.split(","))
+            if not (0 <= frac <= 1 and 0 < level <= 1):
+                raise SystemExit("--dim-grains: 0 <= FRAC <= 1, 0 < LEVEL <= 1")
+            by_grain[rng_c.random(len(by_grain)) < frac] = level
         share = np.concatenate([[0.0], [by_grain[g[1]] for g in grains]])
         bright = share[blocks].mean(1).reshape(shape)
     grey = ndimage.gaussian_filter(10000 + 20000 * bright, [a.psf / zs, a.psf, a.psf])

@@ -127,6 +127,45 @@ TEST(GrainLevels, DimGrainsComeOutWholeAtHalfTheirOwnContrast) {
   }
 }
 
+// The dim-population detector on histograms made by hand: the void's and
+// the solid's Gaussian peaks with the partial volume between them falling
+// from the void and rising to the solid (grains of one brightness: no
+// interior maximum), with a Gaussian population at 0.45 of the contrast
+// added (found, at its level), and a broad bump that cupping leaves beside
+// the solid peak (not found).
+std::vector<int64_t> two_phase_histogram(double dim_share, double bump_share) {
+  std::vector<int64_t> h(65536, 0);
+  const double V = 10000, P = 30000, sv = 250, sp = 250;
+  for (int g = 0; g < 65536; ++g) {
+    const double x = g;
+    double f = 4e5 * std::exp(-0.5 * std::pow((x - V) / sv, 2)) + 6e5 * std::exp(-0.5 * std::pow((x - P) / sp, 2));
+    if (x > V && x < P) {
+      const double u = (x - V) / (P - V);  // partial volume: more near either phase
+      f += 300.0 * (1.0 + 3.0 * (std::pow(1 - u, 4) + std::pow(u, 4)));
+    }
+    f += dim_share * 6e5 * std::exp(-0.5 * std::pow((x - (V + 0.45 * (P - V))) / 300.0, 2));
+    f += bump_share * 6e5 * std::exp(-0.5 * std::pow((x - (V + 0.8 * (P - V))) / 3000.0, 2));
+    h[size_t(g)] = int64_t(std::llround(f));
+  }
+  return h;
+}
+
+TEST(GrainLevels, APopulationOfDarkerGrainsIsAPeakBetweenThePhases) {
+  const GrainLevelsInput in{10000, 30000, 250};
+  const DimPopulation none = dim_population(two_phase_histogram(0.0, 0.0), in);
+  EXPECT_FALSE(none.found) << none.prominence;
+  for (const double share : {0.05, 0.2, 0.5}) {
+    const DimPopulation d = dim_population(two_phase_histogram(share, 0.0), in);
+    EXPECT_TRUE(d.found) << share << ": prominence " << d.prominence;
+    EXPECT_NEAR(d.level, 19000, 500) << share;
+  }
+  // A broad shoulder below the solid peak (brightness falling off toward
+  // the scan's middle; blind scenes with cupping 0.3 measured prominence
+  // 1.2) is no population apart: its floor toward the solid is high.
+  const DimPopulation bump = dim_population(two_phase_histogram(0.0, 0.05), in);
+  EXPECT_FALSE(bump.found) << bump.prominence;
+}
+
 // Grains of one brightness: the solid peak is as wide as the noise inside a
 // grain, so the scan is not levelled (it would raise the partial volume of
 // crumbs at the faces and of blurred chips, and grow them).
@@ -137,6 +176,7 @@ TEST(GrainLevels, GrainsOfOneBrightnessAreLeftAlone) {
   o.grain_radius_vox = 9;
   const SegmentResult r = segment(s.grey, o);
   EXPECT_FALSE(r.grain_levels.used);
+  EXPECT_FALSE(r.grain_levels.dim.found) << r.grain_levels.dim.prominence;
   EXPECT_GT(r.grain_levels.spread_ratio, 0.5);
   EXPECT_LT(r.grain_levels.spread_ratio, 1.5);
 }

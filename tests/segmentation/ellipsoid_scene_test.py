@@ -122,6 +122,19 @@ def run(work):
           f"--grain-contrast 0.4,0.9: one contrast per grain in range, halves alike ({len(means)} grains, "
           f"{min(means):.3f} .. {max(means):.3f})")
     check(bool(np.all(dim[t_dim == 0] <= plain[t_dim == 0])), "the void is no brighter than the default scene's")
+    # --dim-grains: a share of the grains at one level, the rest at the solid's.
+    two, t_two, _, tab2 = scene(work, "two", *common, "--dim-grains", "0.3,0.45")
+    levels = []
+    for r in tab2:
+        lab = int(r["label"])
+        box = tuple(slice(max(0, b.start - 3), b.stop + 3) for b in boxes[lab - 1])
+        v = two[box][ndimage.distance_transform_edt(t_two[box] == lab) > 2.5]
+        if v.size:
+            levels.append(float((v.astype(float).mean() - 10000) / 20000))
+    dim_n = sum(abs(c - 0.45) < 2e-3 for c in levels)
+    bright_n = sum(abs(c - 1.0) < 2e-3 for c in levels)
+    check(dim_n + bright_n == len(levels) and 0.15 < dim_n / max(1, len(levels)) < 0.45,
+          f"--dim-grains 0.3,0.45: {dim_n} of {len(levels)} particles at 0.45, the rest at 1")
     if FAILS:
         print(f"{len(FAILS)} check(s) failed")
         return 1

@@ -142,9 +142,9 @@ void print_plan(const SegmentJob& o, const tg::SegmentOptions& s) {
   fmt::print("  grain levels: {}\n",
              s.grain_levels && s.split && s.threshold != tg::ThresholdMethod::local
                  ? fmt::format("where the grains differ in brightness (the smoothed solid peak >= {:g} x the grey's "
-                               "spread inside a grain), each grain's grey is raised to the solid's level before the "
-                               "threshold",
-                               tg::GrainLevelsOptions{}.min_spread_ratio)
+                               "spread inside a grain, or a darker population's own peak >= {:g} x its floors), each "
+                               "grain's grey is raised to the brightest grains' level before the threshold",
+                               tg::GrainLevelsOptions{}.min_spread_ratio, tg::kDimPopulationProminence)
                  : std::string("off"));
   fmt::print("  face slivers: {}\n", s.face_slivers && s.threshold != tg::ThresholdMethod::local
                                         ? "labels lying within 2 voxels of a scan face take the voxels beside them "
@@ -361,11 +361,13 @@ static tg::app::Registrar reg{{"segment", 30,
     "where it is dim (a volume imaged alone), its label (within 2 voxels of the face) takes the\n"
     "voxels beside it above half its own contrast over the void, before the size floor\n"
     "(--no-face-slivers).\n"
-    "Grain levels: where the grains differ in brightness (another mineral, porous grains: the\n"
-    "smoothed solid peak at least twice as wide as the grey varies inside a grain), each voxel's\n"
-    "grey is raised by (solid - void) / (M - void), M the brightest smoothed grey within 3 voxels,\n"
-    "so one threshold cuts every grain at half its own contrast; dim grains are read from the grey\n"
-    "smoothed over a voxel (their raw noise is too close to the void's) (--no-grain-levels).\n"
+    "Grain levels: where the grains differ in brightness (porous grains: the smoothed solid peak\n"
+    "at least twice as wide as the grey varies inside a grain; another mineral: a peak of its own\n"
+    "between the void and the solid), each voxel's grey is raised by (solid - void) / (M - void),\n"
+    "M the brightest smoothed grey within 3 voxels, so one threshold cuts every grain at half its\n"
+    "own contrast; dim grains are read from the grey smoothed over a voxel (their raw noise is too\n"
+    "close to the void's). A container's wall of intermediate grey is raised too: mask it or give\n"
+    "--no-grain-levels.\n"
     "Defaults derive from the expected grain radius R in voxels: pores up to 2 % of a grain's\n"
     "volume are filled (a pore the scan's face cuts too: the face closes it); marker depth\n"
     "h = max(0.5, 0.035 R) voxels (bumps grow with the grain;\n"

@@ -338,6 +338,14 @@ void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& o
   if (!r.grain_levels.used)
     r.grain_levels.spread_ratio = grain_spread_ratio(d), r.grain_levels.dim = d.levels_dim,
     r.grain_levels.levels = grain_levels_input(d);
+  else
+    r.notes.push_back(fmt::format(
+        "grain levels ran ({}): grains darker than the rest were raised to the solid's grey before the threshold; "
+        "anything else of intermediate grey inside the field of view (a container's wall) is raised with them: mask "
+        "it, or give --no-grain-levels",
+        r.grain_levels.dim.found ? fmt::format("a darker population at grey {:.0f}", r.grain_levels.dim.level)
+                                 : fmt::format("the solid peak {:.1f} x the grey's spread inside a grain",
+                                               r.grain_levels.spread_ratio)));
   r.threshold = t;
   r.bright_value = d.bright;
   r.solid_noise_sigma = d.noise_sigma;

@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <string>
 #include <vector>
 
 #include "core/errors.hpp"
+#include "segmentation/split_labels.hpp"
 
 namespace tg {
 namespace {
@@ -14,19 +14,8 @@ namespace {
 // passes round every voxel six times).
 inline uint16_t to_u16(float v) { return uint16_t(std::clamp(v, 0.0f, 65535.0f) + 0.5f); }
 
-// Normalised Gaussian weights, half-width ceil(3 sigma).
-std::vector<float> kernel(double sigma) {
-  const int r = std::max(1, int(std::ceil(3.0 * sigma)));
-  std::vector<double> w(size_t(2 * r + 1));
-  double sum = 0;
-  for (int k = -r; k <= r; ++k) sum += w[size_t(k + r)] = std::exp(-0.5 * double(k) * double(k) / (sigma * sigma));
-  std::vector<float> f(w.size());
-  for (size_t k = 0; k < w.size(); ++k) f[k] = float(w[k] / sum);
-  return f;
-}
-
-// Separable passes over a (z, y, x) volume, the faces repeated. `Op` folds
-// a line's taps: Gaussian (weighted sum) or maximum. z reads `in` and
+// Separable passes over a (z, y, x) volume, the faces repeated. `fold`
+// folds a line's taps: Gaussian (weighted sum) or maximum. z reads `in` and
 // writes `out` (slice by slice: whole slices stay in cache); y and x work
 // in place on `out` from a copy of the slice or row.
 template <class Fold>
@@ -116,7 +105,8 @@ DimPopulation dim_population(const std::vector<int64_t>& h, const GrainLevelsInp
     for (int64_t g = g0; g < g1 && g < int64_t(h.size()); ++g) c[size_t(k)] += double(h[size_t(g)]);
   }
   std::vector<double> a(c.size(), 0.0);  // 3-bin average
-  for (int k = 0; k < nb; ++k) a[size_t(k)] = (c[size_t(std::max(0, k - 1))] + c[size_t(k)] + c[size_t(std::min(nb - 1, k + 1))]) / 3.0;
+  for (int k = 0; k < nb; ++k)
+    a[size_t(k)] = (c[size_t(std::max(0, k - 1))] + c[size_t(k)] + c[size_t(std::min(nb - 1, k + 1))]) / 3.0;
   const int lo = int(std::ceil(std::max(4.0 * in.smoothed_sigma, 0.15 * span) / b));
   const int hi = int(std::floor((span - std::max(4.0 * in.smoothed_sigma, 0.1 * span)) / b)) - 1;
   if (hi - lo < 2) return out;
@@ -135,7 +125,7 @@ DimPopulation dim_population(const std::vector<int64_t>& h, const GrainLevelsInp
 }
 
 int64_t grain_levels_reach(const GrainLevelsOptions& opt) {
-  return int64_t(kernel(opt.smoothing_sigma_vox).size() / 2) + opt.reach_vox;
+  return int64_t(gaussian_kernel(opt.smoothing_sigma_vox).size() / 2) + opt.reach_vox;
 }
 
 Volume<uint16_t> normalise_grain_levels(const Volume<uint16_t>& grey, const GrainLevelsInput& in,
@@ -145,7 +135,7 @@ Volume<uint16_t> normalise_grain_levels(const Volume<uint16_t>& grey, const Grai
     throw UsageError("segment: grain levels need the void's grey below the solid's and a smoothed noise sigma > 0");
   if (!(opt.smoothing_sigma_vox > 0) || opt.reach_vox < 1 || !(opt.max_gain >= 1) || !(opt.smooth_from_gain > 1))
     throw UsageError("segment: grain levels: smoothing > 0, reach >= 1 voxel, max gain >= 1, smooth-from gain > 1");
-  const std::vector<float> w = kernel(opt.smoothing_sigma_vox);
+  const std::vector<float> w = gaussian_kernel(opt.smoothing_sigma_vox);
   const int rg = int(w.size() / 2);
   Volume<uint16_t> S(grey.shape(), grey.geometry());
   separable(grey, S, rg, GaussFold{w});

@@ -300,7 +300,8 @@ SegmentResult run_from_grey(const Volume<uint16_t>& grey, Volume<uint16_t>* owne
   if (grain_levels_wanted(d, opt)) {
     const GrainLevelsResult first = gl;
     levelled = normalise_grain_levels(grey, grain_levels_input(d), glo, &gl);
-    gl.spread_ratio = first.spread_ratio, gl.dim = first.dim;
+    gl.spread_ratio = first.spread_ratio;
+    gl.dim = first.dim;
     if (owned) *owned = Volume<uint16_t>();  // the raw scan is read no more
     src = owned = &levelled;
     clock.lap("grain_levels");
@@ -335,10 +336,11 @@ GrainLevelsInput grain_levels_input(const GreyDecisions& d) {
 
 void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& opt, const Shape& whole) {
   const ThresholdResult& t = d.t;
-  if (!r.grain_levels.used)
-    r.grain_levels.spread_ratio = grain_spread_ratio(d), r.grain_levels.dim = d.levels_dim,
+  if (!r.grain_levels.used) {
+    r.grain_levels.spread_ratio = grain_spread_ratio(d);
+    r.grain_levels.dim = d.levels_dim;
     r.grain_levels.levels = grain_levels_input(d);
-  else
+  } else {
     r.notes.push_back(fmt::format(
         "grain levels ran ({}): grains darker than the rest were raised to the solid's grey before the threshold; "
         "anything else of intermediate grey inside the field of view (a container's wall) is raised with them: mask "
@@ -346,6 +348,7 @@ void record_decisions(SegmentResult& r, GreyDecisions d, const SegmentOptions& o
         r.grain_levels.dim.found ? fmt::format("a darker population at grey {:.0f}", r.grain_levels.dim.level)
                                  : fmt::format("the solid peak {:.1f} x the grey's spread inside a grain",
                                                r.grain_levels.spread_ratio)));
+  }
   r.threshold = t;
   r.bright_value = d.bright;
   r.solid_noise_sigma = d.noise_sigma;

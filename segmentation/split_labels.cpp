@@ -17,18 +17,6 @@
 namespace tg {
 namespace {
 
-// Normalised Gaussian weights w[0..2r], r = ceil(3 sigma).
-std::vector<float> gaussian_kernel(double sigma) {
-  if (!(sigma > 0) || !std::isfinite(sigma)) throw UsageError("segment: the split repair's smoothing must be > 0 voxels");
-  const int r = int(std::ceil(3.0 * sigma));
-  std::vector<double> w(size_t(2 * r + 1));
-  double sum = 0;
-  for (int k = -r; k <= r; ++k) sum += w[size_t(k + r)] = std::exp(-0.5 * double(k * k) / (sigma * sigma));
-  std::vector<float> f(w.size());
-  for (size_t k = 0; k < w.size(); ++k) f[k] = float(w[k] / sum);
-  return f;
-}
-
 constexpr size_t kBins = 4096;  // flood levels per label (counting sort)
 constexpr size_t kConn = 6;  // the flood's neighbourhood (see the header)
 constexpr int64_t kScreenPiece = 24;  // the screen's piece: min_piece / 24 (split_one)
@@ -544,6 +532,17 @@ void smoothed_sample_histogram(const Volume<uint16_t>& slab, int64_t z0, int64_t
     for (size_t g = 0; g < hl.size(); ++g) hist[g] += hl[g];
   for (const auto& pl : pair_part)
     for (size_t g = 0; g < pl.size(); ++g) (*pairs)[g] += pl[g];
+}
+
+std::vector<float> gaussian_kernel(double sigma) {
+  if (!(sigma > 0) || !std::isfinite(sigma)) throw UsageError("segment: a Gaussian smoothing must be > 0 voxels");
+  const int r = int(std::ceil(3.0 * sigma));
+  std::vector<double> w(size_t(2 * r + 1));
+  double sum = 0;
+  for (int k = -r; k <= r; ++k) sum += w[size_t(k + r)] = std::exp(-0.5 * double(k * k) / (sigma * sigma));
+  std::vector<float> f(w.size());
+  for (size_t k = 0; k < w.size(); ++k) f[k] = float(w[k] / sum);
+  return f;
 }
 
 double white_noise_gain(double smoothing_sigma_vox) {

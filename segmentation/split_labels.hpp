@@ -300,4 +300,8 @@ WithinGrain within_grain_sigma(const std::vector<int64_t>& pairs, uint16_t t, in
 // (the separable kernel w of sigma_s voxels: (sum of w_k^2)^(3/2)).
 double white_noise_gain(double smoothing_sigma_vox);
 
+// Normalised Gaussian weights w[0..2r], r = ceil(3 sigma) (the split
+// repair's smoothing, its sample histograms, grain_levels.hpp's S).
+std::vector<float> gaussian_kernel(double sigma);
+
 }  // namespace tg

@@ -124,6 +124,7 @@ def run(work):
     check(bool(np.all(dim[t_dim == 0] <= plain[t_dim == 0])), "the void is no brighter than the default scene's")
     # --dim-grains: a share of the grains at one level, the rest at the solid's.
     two, t_two, _, tab2 = scene(work, "two", *common, "--dim-grains", "0.3,0.45")
+    check(np.array_equal(t_plain, t_two), "--dim-grains leaves the truth as it was (the boxes below are its)")
     levels = []
     for r in tab2:
         lab = int(r["label"])
